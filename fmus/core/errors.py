@@ -1,0 +1,34 @@
+"""Exceptions shared by models, solvers, FMU slaves and the master."""
+
+from __future__ import annotations
+
+
+class PantocosimError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class ParameterError(PantocosimError, ValueError):
+    """A parameter or data-file field has a bad value.
+
+    The message always names the source (file or object), the field and the offending value,
+    e.g. ``dsa380.toml: bars.m1 = -1.0: must be > 0``.
+    """
+
+    def __init__(self, field: str, value, reason: str, source: str | None = None):
+        self.field = field
+        self.value = value
+        self.reason = reason
+        self.source = source
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}{field} = {value!r}: {reason}")
+
+
+class ConvergenceError(PantocosimError, RuntimeError):
+    """Newton-Raphson did not converge; names time, step and residual."""
+
+    def __init__(self, message: str, time: float = float("nan"), step: int = -1,
+                 residual: float = float("nan")):
+        self.time = time
+        self.step = step
+        self.residual = residual
+        super().__init__(message)

@@ -1,0 +1,229 @@
+"""HHT-alpha time integration with Newton-Raphson (Hilber, Hughes & Taylor 1977).
+
+The one integrator of the project: it drives every pantograph model, the catenary, and the
+assembled monolithic system through :class:`pantocosim.core.model.SecondOrderModel`.
+
+Standard form (design README section 3; the thesis writes it with eta = -alpha in
+(3.16)-(3.24) with inconsistent signs):
+
+    f_inertia(q_{n+1}, a_{n+1}) + (1 + alpha) f_rest_{n+1} - alpha f_rest_n = 0,
+    q_{n+1} = q_n + h v_n + h^2 ((1/2 - beta) a_n + beta a_{n+1}),         (3.16)
+    v_{n+1} = v_n + h ((1 - gamma) a_n + gamma a_{n+1}),
+    alpha in [-1/3, 0],  gamma = 1/2 - alpha,  beta = (1 - alpha)^2 / 4.
+
+``f_rest`` holds damping, internal, external and coupling forces, so a force applied through
+a coupling port is weighted exactly like an internal force. Newton-Raphson iterates on
+q_{n+1} with v and a expressed through (3.18); convergence is checked with the energy norm
+|dq . R| (thesis 3.3.2) and with the residual relative to the size of the forces in it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ConvergenceError, ParameterError
+from .model import SecondOrderModel
+
+
+@dataclass
+class HHTSettings:
+    alpha: float = -0.05
+    #: residual test: ||R||_inf <= rtol * (size of the forces in R)
+    rtol: float = 1e-10
+    #: energy test: |dq_k . R_k| <= etol * |dq_0 . R_0|
+    etol: float = 1e-14
+    max_iterations: int = 30
+    #: modified Newton: keep the factorized Newton matrix across iterations and steps while
+    #: the model's structure_key and the step size are unchanged
+    reuse_factorization: bool = False
+    #: with reuse, refresh the factorization when a step needs more iterations than this
+    refresh_after: int = 6
+
+    def validate(self, source: str | None = None) -> None:
+        if not np.isfinite(self.alpha) or not (-1.0 / 3.0 <= self.alpha <= 0.0):
+            raise ParameterError("alpha", self.alpha, "HHT alpha must lie in [-1/3, 0]", source)
+        if not (self.rtol > 0) or not (self.etol >= 0):
+            raise ParameterError("rtol", self.rtol, "tolerances must be positive", source)
+        if int(self.max_iterations) < 1:
+            raise ParameterError("max_iterations", self.max_iterations, "must be >= 1", source)
+
+    @property
+    def gamma(self) -> float:
+        return 0.5 - self.alpha
+
+    @property
+    def beta(self) -> float:
+        return 0.25 * (1.0 - self.alpha) ** 2
+
+
+@dataclass
+class StepInfo:
+    iterations: int
+    residual: float
+    refactorizations: int
+
+
+class HHTIntegrator:
+    """Advances one :class:`SecondOrderModel` in time.
+
+    Usage::
+
+        integ = HHTIntegrator(model, HHTSettings(alpha=-0.05))
+        integ.initialize(t0, q0, v0, inputs0)          # computes a0 unless given
+        info = integ.step(h, inputs_at_t_plus_h)
+    """
+
+    def __init__(self, model: SecondOrderModel, settings: HHTSettings | None = None):
+        self.model = model
+        self.settings = settings or HHTSettings()
+        self.settings.validate()
+        self.t = 0.0
+        self.n_steps = 0
+        n = model.n_dofs
+        self.q = np.zeros(n)
+        self.v = np.zeros(n)
+        self.a = np.zeros(n)
+        self.f_rest = np.zeros(n)
+        self.inputs = None
+        self._factor = None  # (key, h, matrix, solve)
+        self.total_iterations = 0
+        self.total_factorizations = 0
+
+    # ------------------------------------------------------------------ setup
+    def initialize(self, t0: float, q0, v0=None, inputs0=None, a0=None) -> None:
+        """Set the initial state; a0 solves M(q0) a0 = -f_rest(t0, q0, v0) unless given."""
+        n = self.model.n_dofs
+        self.t = float(t0)
+        self.q = np.array(q0, dtype=float).reshape(n)
+        self.v = np.zeros(n) if v0 is None else np.array(v0, dtype=float).reshape(n)
+        self.inputs = None if inputs0 is None else np.array(inputs0, dtype=float)
+        zero = np.zeros(n)
+        ev = self.model.evaluate(self.t, self.q, self.v, zero, self.inputs, tangent=True)
+        if a0 is None:
+            solve = self.model.factorize(ev.mass)
+            self.a = -np.asarray(solve(ev.f_rest + ev.f_inertia), dtype=float).reshape(n)
+        else:
+            self.a = np.array(a0, dtype=float).reshape(n)
+        self.f_rest = np.array(ev.f_rest, dtype=float)
+        self.n_steps = 0
+        self._factor = None
+        self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, h: float, inputs=None) -> StepInfo:
+        """Advance from t to t + h with the coupling inputs valid at t + h."""
+        s = self.settings
+        alpha, beta, gamma = s.alpha, s.beta, s.gamma
+        c_a = 1.0 / (beta * h * h)
+        c_v = gamma / (beta * h)
+        c_f = 1.0 + alpha
+        model = self.model
+        t1 = self.t + h
+        inputs = None if inputs is None else np.asarray(inputs, dtype=float)
+
+        q_p = self.q + h * self.v + (0.5 - beta) * h * h * self.a
+        v_p = self.v + (1.0 - gamma) * h * self.a
+        q = q_p + beta * h * h * self.a  # predictor: a_{n+1} = a_n
+        hist = alpha * self.f_rest
+
+        factor = self._factor if s.reuse_factorization else None
+        if factor is not None and factor[1] != h:
+            factor = None
+        refactorizations = 0
+        e0 = None
+        e_prev = None
+        res_norm = np.inf
+        for k in range(s.max_iterations + 1):
+            dqp = q - q_p
+            a = c_a * dqp
+            v = v_p + c_v * dqp
+            need_tangent = factor is None or (k > s.refresh_after)
+            ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
+            if factor is not None and not need_tangent and ev.structure_key != factor[0]:
+                need_tangent = True
+                ev = model.evaluate(t1, q, v, a, inputs, tangent=True)
+            R = ev.f_inertia + c_f * ev.f_rest - hist
+            res_norm = float(np.max(np.abs(R))) if R.size else 0.0
+            scale = max(float(np.max(np.abs(ev.f_inertia))) if R.size else 0.0,
+                        c_f * float(np.max(np.abs(ev.f_rest))) if R.size else 0.0,
+                        float(np.max(np.abs(hist))) if R.size else 0.0, 1e-300)
+            if not np.isfinite(res_norm):
+                raise ConvergenceError(
+                    f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",
+                    time=t1, step=self.n_steps + 1, residual=res_norm)
+            converged = res_norm <= s.rtol * scale
+            if not converged and e_prev is not None and e0 is not None:
+                # energy norm, or a correction already at round-off level of q
+                converged = (e_prev <= s.etol * e0
+                             or dq_size <= 1e-15 * float(np.max(np.abs(q))))
+            if converged:
+                break
+            if k == s.max_iterations:
+                break
+            if need_tangent:
+                S = model.effective_matrix(ev, c_a, c_v, c_f)
+                factor = (ev.structure_key, h, S, model.factorize(S))
+                refactorizations += 1
+            dq = -np.asarray(factor[3](R), dtype=float).reshape(q.shape)
+            e = abs(float(dq @ R))
+            if e0 is None:
+                e0 = max(e, 1e-300)
+            e_prev = e
+            dq_size = float(np.max(np.abs(dq)))
+            q = q + dq
+        if not converged:
+            raise ConvergenceError(
+                f"HHT Newton-Raphson did not converge at t = {t1:.6g} s (step "
+                f"{self.n_steps + 1}, h = {h:.3g} s): residual {res_norm:.3e} after "
+                f"{s.max_iterations} iterations", time=t1, step=self.n_steps + 1,
+                residual=res_norm)
+        self.t = t1
+        self.q, self.v, self.a = q, v, a
+        self.f_rest = np.array(ev.f_rest, dtype=float)
+        self.inputs = None if inputs is None else inputs.copy()
+        self.n_steps += 1
+        self.total_iterations += k
+        self.total_factorizations += refactorizations
+        if s.reuse_factorization:
+            self._factor = factor
+        model.commit(self.t, self.q, self.v, self.a, self.inputs)
+        return StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
+
+    # ------------------------------------------------------------------ state
+    def get_state(self) -> dict:
+        """Everything the next step depends on (copies), for rollback."""
+        return {
+            "t": self.t, "n_steps": self.n_steps,
+            "q": self.q.copy(), "v": self.v.copy(), "a": self.a.copy(),
+            "f_rest": self.f_rest.copy(),
+            "inputs": None if self.inputs is None else self.inputs.copy(),
+            # the factorization is immutable once made: keep a reference (in-memory) and the
+            # matrix it came from (so a deserialized state refactorizes bitwise identically)
+            "factor": self._factor,
+            "model": self.model.get_internal_state(),
+        }
+
+    def set_state(self, state: dict) -> None:
+        self.t = float(state["t"])
+        self.n_steps = int(state["n_steps"])
+        self.q = np.array(state["q"], dtype=float)
+        self.v = np.array(state["v"], dtype=float)
+        self.a = np.array(state["a"], dtype=float)
+        self.f_rest = np.array(state["f_rest"], dtype=float)
+        self.inputs = None if state["inputs"] is None else np.array(state["inputs"], float)
+        factor = state.get("factor")
+        if factor is not None and (len(factor) < 4 or factor[3] is None):
+            factor = (factor[0], factor[1], factor[2], self.model.factorize(factor[2]))
+        self._factor = factor
+        self.model.set_internal_state(state.get("model"))
+
+    @staticmethod
+    def picklable_state(state: dict) -> dict:
+        """A copy of ``state`` without the (unpicklable) factorization object."""
+        out = dict(state)
+        if out.get("factor") is not None:
+            key, h, S, _ = out["factor"]
+            out["factor"] = (key, h, S, None)
+        return out

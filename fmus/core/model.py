@@ -1,0 +1,94 @@
+"""The interface every dynamic subsystem offers to the integrator (design README section 3).
+
+A model is a second-order system
+
+    f_inertia(q, a) + f_rest(t, q, v, inputs) = 0,
+    f_rest = f_damping(q, v) + f_internal(q) - f_external(t) - f_coupling(t, q, inputs),
+
+where ``inputs`` are the values of the model's coupling ports at time t (e.g. the contact
+force on a pantograph, or the forces of every pantograph on the catenary). The integrator
+needs the two force pieces and their tangents:
+
+    mass       = d f_inertia / d a
+    inertia_q  = d f_inertia / d q   (None when the mass matrix is constant)
+    damping    = d f_rest / d v
+    stiffness  = d f_rest / d q
+
+Matrices are dense ``numpy`` arrays for small models and ``scipy.sparse`` matrices for large
+ones; a model may also override :meth:`SecondOrderModel.effective_matrix` and
+:meth:`SecondOrderModel.solve` to exploit its structure (banded storage, factorization
+reuse). Models know nothing of integrators or FMI.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+
+@dataclass
+class Evaluation:
+    """Residual pieces of a model at (t, q, v, a) and, if requested, their tangents."""
+
+    f_inertia: np.ndarray
+    f_rest: np.ndarray
+    mass: Any = None
+    inertia_q: Any = None
+    damping: Any = None
+    stiffness: Any = None
+    #: Changes whenever the tangent's structure changes (e.g. a dropper slackens); solvers
+    #: that reuse a factorization refactorize when it changes.
+    structure_key: Any = None
+
+
+class SecondOrderModel:
+    """Base class of the models the HHT-alpha integrator (:mod:`pantocosim.core.hht`) drives."""
+
+    n_dofs: int = 0
+
+    def evaluate(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+                 inputs: np.ndarray | None, tangent: bool = True) -> Evaluation:
+        raise NotImplementedError
+
+    # --- hooks with generic default implementations -------------------------------------
+
+    def effective_matrix(self, ev: Evaluation, c_a: float, c_v: float, c_f: float):
+        """Newton matrix dR/dq = c_a*mass + inertia_q + c_f*(c_v*damping + stiffness)."""
+        S = c_a * ev.mass + c_f * (c_v * ev.damping + ev.stiffness)
+        if ev.inertia_q is not None:
+            S = S + ev.inertia_q
+        return S
+
+    def factorize(self, S):
+        """Return a callable ``solve(rhs)`` for the Newton matrix ``S``."""
+        if sp.issparse(S):
+            lu = spla.splu(sp.csc_matrix(S))
+            return lu.solve
+        lu = _dense_lu(np.asarray(S))
+        return lu
+
+    def commit(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
+               inputs: np.ndarray | None) -> None:
+        """Called once a step is accepted (e.g. to update history-dependent sets)."""
+
+    def get_internal_state(self) -> Any:
+        """Extra state beyond (t, q, v, a) that a step depends on (for FMU rollback)."""
+        return None
+
+    def set_internal_state(self, state: Any) -> None:
+        """Restore what :meth:`get_internal_state` returned."""
+
+
+def _dense_lu(S: np.ndarray):
+    import scipy.linalg as sla
+
+    lu_piv = sla.lu_factor(S, check_finite=False)
+
+    def solve(rhs):
+        return sla.lu_solve(lu_piv, rhs, check_finite=False)
+
+    return solve
