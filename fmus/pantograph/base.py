@@ -1,0 +1,177 @@
+"""What every pantograph model shares: the port contract, uplift, ramp raising, friction law.
+
+Port contract (design README section 4), identical for every variant:
+  input  ``contact_force`` F [N] >= 0, pushes the collector down (and the wire up);
+  output ``contact_height`` [m] above the rail and ``contact_velocity`` [m/s].
+
+A pantograph model is a :class:`~pantocosim.core.model.SecondOrderModel` whose ``inputs`` are
+``[F]``. The contact force enters ``f_rest`` as ``+F * dh/dq`` (a downward force does negative
+work on an upward height), so the integrator weights it like every other force.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from ..core.errors import ParameterError
+from ..core.model import SecondOrderModel
+from ..core.params import Table, check_number
+
+
+@dataclass
+class Ramp:
+    """Ramp raising (thesis 3.3.1): the uplift actuation grows linearly from its value at the
+    lowered height to the full value between ``start`` and ``start + duration`` [s]."""
+
+    start: float = 0.0
+    duration: float = 1.0
+    lowered_height: float = 4.5
+
+    def factor(self, t: float) -> float:
+        if self.duration <= 0.0:
+            return 1.0 if t >= self.start else 0.0
+        return min(1.0, max(0.0, (t - self.start) / self.duration))
+
+
+@dataclass
+class PantographOptions:
+    """Options common to every pantograph model (defaults: EN 50367 AC uplift, no friction)."""
+
+    #: static uplift [N]: contact force at standstill
+    static_force: float = 70.0
+    #: aerodynamic uplift F_aero = aero_c1 * v + aero_c2 * v^2, v in km/h (EN 50367 AC curve)
+    aero_c1: float = 0.0
+    aero_c2: float = 0.00097
+    #: train speed [km/h], used by the aerodynamic law only
+    speed_kmh: float = 0.0
+    #: collector friction (2.15)-(2.17): amplitude f_r [N] and smoothing k_t [m/s]
+    friction_force: float = 0.0
+    friction_smoothing: float = 1e-4
+    #: the damper acts only while the mechanism moves down
+    one_way_damper: bool = False
+    #: ramp raising; None = static start
+    ramp: Ramp | None = None
+
+    def validate(self, source: str | None = None) -> None:
+        check_number("static_force", self.static_force, source=source, nonnegative=True)
+        check_number("aero_c1", self.aero_c1, source=source)
+        check_number("aero_c2", self.aero_c2, source=source)
+        check_number("speed_kmh", self.speed_kmh, source=source, nonnegative=True)
+        check_number("friction_force", self.friction_force, source=source, nonnegative=True)
+        check_number("friction_smoothing", self.friction_smoothing, source=source, positive=True)
+        if self.ramp is not None:
+            check_number("ramp.start", self.ramp.start, source=source, nonnegative=True)
+            check_number("ramp.duration", self.ramp.duration, source=source, nonnegative=True)
+            check_number("ramp.lowered_height", self.ramp.lowered_height, source=source,
+                         positive=True)
+
+    @property
+    def aero_force(self) -> float:
+        """Aerodynamic uplift [N] at the train speed."""
+        v = self.speed_kmh
+        return self.aero_c1 * v + self.aero_c2 * v * v
+
+    @property
+    def mean_uplift(self) -> float:
+        """Static plus aerodynamic uplift: the mean contact force the pantograph aims for."""
+        return self.static_force + self.aero_force
+
+    @classmethod
+    def from_table(cls, table: Table) -> "PantographOptions":
+        """Read the ``[options]`` table of a parameter file (missing keys keep defaults)."""
+        known = {f.name for f in fields(cls)}
+        table.unknown_keys(known)
+        kwargs = {}
+        for f in fields(cls):
+            if f.name == "ramp" or not table.has(f.name):
+                continue
+            if f.type in ("bool",) or isinstance(f.default, bool):
+                kwargs[f.name] = table.boolean(f.name)
+            else:
+                kwargs[f.name] = table.number(f.name)
+        if table.has("ramp"):
+            r = table.sub("ramp")
+            r.unknown_keys({"start", "duration", "lowered_height"})
+            kwargs["ramp"] = Ramp(start=r.number("start", 0.0), duration=r.number("duration"),
+                                  lowered_height=r.number("lowered_height", positive=True))
+        opts = cls(**kwargs)
+        opts.validate(table.source)
+        return opts
+
+
+def smooth_friction(v_rel: float, f_r: float, k_t: float) -> tuple[float, float]:
+    """Smoothed Coulomb friction (2.16): F = f_r (2/pi) atan(v_rel / k_t) and dF/dv_rel."""
+    force = f_r * (2.0 / math.pi) * math.atan(v_rel / k_t)
+    dforce = f_r * (2.0 / math.pi) / (k_t + v_rel * v_rel / k_t)
+    return force, dforce
+
+
+def one_way_factor(v_down_positive: float) -> float:
+    """1 while the mechanism moves down (damper active), 0 while it moves up."""
+    return 1.0 if v_down_positive >= 0.0 else 0.0
+
+
+class PantographModel(SecondOrderModel):
+    """Base class of the pantograph variants (rigid DSA-380, lumped-mass chains, flexible)."""
+
+    #: preset name, e.g. "dsa380-rigid"
+    name: str = "pantograph"
+    #: one label per generalised coordinate (for plots, mode labels and CSV columns)
+    dof_names: tuple[str, ...] = ()
+
+    def __init__(self, options: PantographOptions | None = None):
+        self.options = options or PantographOptions()
+        self.options.validate()
+
+    # --- port contract -------------------------------------------------------------------
+    def contact_height(self, q: np.ndarray) -> float:
+        """Height of the contact point above the rail [m]."""
+        raise NotImplementedError
+
+    def contact_height_gradient(self, q: np.ndarray) -> np.ndarray:
+        """d(contact_height)/dq; the contact force F enters f_rest as +F * gradient."""
+        raise NotImplementedError
+
+    def contact_velocity(self, q: np.ndarray, v: np.ndarray) -> float:
+        return float(self.contact_height_gradient(q) @ v)
+
+    # --- initial states ------------------------------------------------------------------
+    def static_equilibrium(self, contact_force: float | None = None,
+                           height: float | None = None) -> np.ndarray:
+        """Equilibrium under ``contact_force`` (default: the mean uplift) with the contact
+        point at ``height`` (default: the preset working height). Sets the model's actuation
+        (uplift force or torque) so that this state is an equilibrium and returns q0."""
+        raise NotImplementedError
+
+    def lowered_equilibrium(self, height: float) -> np.ndarray:
+        """Equilibrium without contact at a lowered ``height`` (ramp-raising start)."""
+        raise NotImplementedError
+
+    # --- linearisation -------------------------------------------------------------------
+    def linearize(self, q0: np.ndarray, contact_force: float | None = None):
+        """M, C, K of the linearised model about (q0, v = 0) with a constant contact force
+        (thesis 2.1.2, annex B), from the model's analytic tangents."""
+        F = self.options.mean_uplift if contact_force is None else contact_force
+        n = self.n_dofs
+        ev = self.evaluate(0.0 if self.options.ramp is None else 1e9, np.asarray(q0, float),
+                           np.zeros(n), np.zeros(n), np.array([F]), tangent=True)
+        K = np.array(ev.stiffness, dtype=float)
+        if ev.inertia_q is not None:
+            K = K + np.asarray(ev.inertia_q, float)
+        return (np.array(ev.mass, dtype=float), np.array(ev.damping, dtype=float), K)
+
+    def mode_label(self, shape: np.ndarray, mass: np.ndarray) -> str:
+        """Name of a mode from its shape (dominant coordinate by kinetic energy)."""
+        energy = np.abs(np.real(shape) * (mass @ np.real(shape)))
+        return self.dof_names[int(np.argmax(energy))] if self.dof_names else "mode"
+
+
+def reject_nonfinite_force(F) -> float:
+    """Contact force input check used by every model (NaN/inf are bad input)."""
+    x = float(F)
+    if not math.isfinite(x):
+        raise ParameterError("contact_force", F, "must be finite")
+    return x

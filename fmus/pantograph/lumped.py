@@ -1,0 +1,226 @@
+"""Lumped-mass pantographs: a vertical chain of n masses (head first) on springs and dampers.
+
+    head m1 -k1/c1- m2 -k2/c2- ... - mn -kn/cn- ground (reference height h_ref(t))
+
+Coordinates are the absolute heights of the masses above the rail. Forces are net of the
+weights (as in EN 50318-type reference models): the uplift F_up(t) = ramp(t) * (static +
+aerodynamic) acts on the ``uplift_mass``, the contact force F pushes the head down. Options as
+the rigid model: collector friction between head and the mass below (2.16), one-way ground
+damper, ramp raising that weights the uplift and the reference height (thesis 3.3.1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import ParameterError
+from ..core.model import Evaluation
+from ..core.params import Table, load_toml
+from .base import PantographModel, PantographOptions, smooth_friction
+
+
+@dataclass
+class ChainParameters:
+    masses: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    names: tuple[str, ...]
+    uplift_mass: int = -1  # 0-based index
+    working_height: float = 5.3
+
+    def validate(self, source: str | None = None) -> None:
+        n = len(self.masses)
+        if n < 1:
+            raise ParameterError("chain.masses", list(self.masses), "needs at least one mass",
+                                 source)
+        for key, arr in (("stiffness", self.stiffness), ("damping", self.damping)):
+            if len(arr) != n:
+                raise ParameterError(f"chain.{key}", list(arr),
+                                     f"must have {n} entries (one per mass)", source)
+        for i, m in enumerate(self.masses):
+            if not np.isfinite(m) or m <= 0:
+                raise ParameterError(f"chain.masses[{i}]", float(m), "must be > 0", source)
+        for key, arr in (("stiffness", self.stiffness), ("damping", self.damping)):
+            for i, x in enumerate(arr):
+                if not np.isfinite(x) or x < 0:
+                    raise ParameterError(f"chain.{key}[{i}]", float(x), "must be >= 0", source)
+        for i, k in enumerate(self.stiffness[:-1]):
+            if k <= 0:
+                raise ParameterError(f"chain.stiffness[{i}]", float(k),
+                                     "springs between masses must be > 0", source)
+        if not (-n <= self.uplift_mass < n):
+            raise ParameterError("chain.uplift_mass", self.uplift_mass + 1,
+                                 f"must be between 1 and {n}", source)
+        if not np.isfinite(self.working_height) or self.working_height <= 0:
+            raise ParameterError("chain.working_height", self.working_height, "must be > 0",
+                                 source)
+
+
+class LumpedPantograph(PantographModel):
+    """n-mass chain pantograph on the common pantograph interface."""
+
+    def __init__(self, params: ChainParameters, options: PantographOptions | None = None,
+                 name: str = "lumped"):
+        super().__init__(options)
+        params.validate(name)
+        self.params = params
+        self.name = name
+        self.n_dofs = len(params.masses)
+        self.dof_names = tuple(params.names)
+        n = self.n_dofs
+        self._M = np.diag(np.asarray(params.masses, dtype=float))
+        k = np.asarray(params.stiffness, dtype=float)
+        self._K = _chain_matrix(k)
+        self._c = np.asarray(params.damping, dtype=float)
+        self._C_two_way = _chain_matrix(self._c)
+        c_up = self._c.copy()
+        c_up[-1] = 0.0
+        self._C_up = _chain_matrix(c_up)
+        self._gradient = np.zeros(n)
+        self._gradient[0] = 1.0
+        self._e_uplift = np.zeros(n)
+        self._e_uplift[params.uplift_mass] = 1.0
+        self._e_ground = np.zeros(n)
+        self._e_ground[-1] = 1.0
+        self.reference_height = params.working_height
+        self.lowered_reference = params.working_height
+
+    # --- port contract -------------------------------------------------------------------
+    def contact_height(self, q):
+        return float(q[0])
+
+    def contact_height_gradient(self, q):
+        return self._gradient
+
+    # --- loading -------------------------------------------------------------------------
+    def reference(self, t: float) -> float:
+        """Ground-spring reference height h_ref(t), weighted by the ramp factor (3.3.1)."""
+        ramp = self.options.ramp
+        if ramp is None:
+            return self.reference_height
+        f = ramp.factor(t)
+        return self.lowered_reference + f * (self.reference_height - self.lowered_reference)
+
+    def uplift_force(self, t: float) -> float:
+        ramp = self.options.ramp
+        f = 1.0 if ramp is None else ramp.factor(t)
+        return f * self.options.mean_uplift
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        F = 0.0 if inputs is None else float(inputs[0])
+        kn = self.params.stiffness[-1]
+        C = self._C_two_way
+        if self.options.one_way_damper and v[-1] > 0.0:
+            C = self._C_up  # ground damper idle while the mechanism moves up
+        f_rest = C @ v + self._K @ q
+        f_rest[-1] -= kn * self.reference(t)
+        f_rest -= self.uplift_force(t) * self._e_uplift
+        f_rest[0] += F
+        damping = C
+        fr = self.options.friction_force
+        if fr > 0.0 and self.n_dofs > 1:
+            force, dforce = smooth_friction(v[0] - v[1], fr, self.options.friction_smoothing)
+            f_rest[0] += force
+            f_rest[1] -= force
+            damping = C.copy()
+            damping[0, 0] += dforce
+            damping[0, 1] -= dforce
+            damping[1, 0] -= dforce
+            damping[1, 1] += dforce
+        return Evaluation(f_inertia=self._M @ a, f_rest=f_rest, mass=self._M, inertia_q=None,
+                          damping=damping, stiffness=self._K)
+
+    # --- initial states ------------------------------------------------------------------
+    def static_equilibrium(self, contact_force=None, height=None):
+        """Heights of the masses in equilibrium under the contact force F with the head at
+        ``height``; sets the reference height h_ref accordingly."""
+        F = self.options.mean_uplift if contact_force is None else float(contact_force)
+        h = self.params.working_height if height is None else float(height)
+        if not np.isfinite(F) or F < 0:
+            raise ParameterError("contact_force", contact_force, "must be finite and >= 0",
+                                 self.name)
+        if not np.isfinite(h) or h <= 0:
+            raise ParameterError("height", height, "must be > 0", self.name)
+        n = self.n_dofs
+        uplift = self.options.mean_uplift
+        k = np.asarray(self.params.stiffness, dtype=float)
+        # load carried by spring i (between mass i and the one below): contact force F above
+        # the uplift mass, F - uplift below it; the ground spring carries F - uplift.
+        u = self.params.uplift_mass % n
+        carried = np.where(np.arange(n) < u, F, F - uplift)
+        if k[-1] == 0.0:
+            if abs(F - uplift) > 1e-12 * max(1.0, uplift):
+                raise ParameterError("contact_force", F,
+                                     "no equilibrium: the ground spring is zero and F differs "
+                                     f"from the uplift {uplift:.6g} N", self.name)
+            carried[-1] = 0.0
+            k = k.copy()
+            k[-1] = 1.0
+        # spring i is compressed by carried[i]: z_i - z_{i+1} = -carried[i] / k_i
+        z = np.empty(n)
+        z[0] = h
+        for i in range(n - 1):
+            z[i + 1] = z[i] + carried[i] / k[i]
+        self.reference_height = z[-1] + carried[-1] / k[-1]
+        if self.options.ramp is None:
+            self.lowered_reference = self.reference_height
+        return z
+
+    def lowered_equilibrium(self, height):
+        """All masses at the lowered height with no load (ramp start, thesis 3.3.1)."""
+        h = float(height)
+        if not np.isfinite(h) or h <= 0:
+            raise ParameterError("ramp.lowered_height", height, "must be > 0", self.name)
+        self.lowered_reference = h
+        return np.full(self.n_dofs, h)
+
+
+def _chain_matrix(k: np.ndarray) -> np.ndarray:
+    """Tridiagonal matrix of a chain: element i joins mass i and i+1, the last joins ground."""
+    n = len(k)
+    K = np.zeros((n, n))
+    for i in range(n):
+        K[i, i] += k[i]
+        if i + 1 < n:
+            K[i + 1, i + 1] += k[i]
+            K[i, i + 1] -= k[i]
+            K[i + 1, i] -= k[i]
+    return K
+
+
+def load_chain(path: str | Path, options: PantographOptions | None = None,
+               option_overrides: dict | None = None) -> LumpedPantograph:
+    """Read a lumped-mass parameter file (``[chain]`` and ``[options]`` tables)."""
+    source = str(path)
+    data = load_toml(path)
+    root = Table(data, source)
+    root.unknown_keys({"name", "description", "chain", "options"})
+    chain = root.sub("chain")
+    chain.unknown_keys({"names", "masses", "stiffness", "damping", "uplift_mass",
+                        "working_height"})
+    masses = chain.numbers("masses", positive=True)
+    n = len(masses)
+    names = chain._get("names", [f"mass {i + 1}" for i in range(n)], required=False)
+    if not isinstance(names, list) or len(names) != n or not all(isinstance(s, str) for s in names):
+        raise ParameterError("chain.names", names, f"must be {n} strings", source)
+    uplift = chain.integer("uplift_mass", n, minimum=1)
+    if uplift > n:
+        raise ParameterError("chain.uplift_mass", uplift, f"must be between 1 and {n}", source)
+    params = ChainParameters(
+        masses=np.array(masses),
+        stiffness=np.array(chain.numbers("stiffness", length=n, nonnegative=True)),
+        damping=np.array(chain.numbers("damping", length=n, nonnegative=True)),
+        names=tuple(names), uplift_mass=uplift - 1,
+        working_height=chain.number("working_height", positive=True))
+    params.validate(source)
+    if options is None:
+        options = PantographOptions.from_table(root.sub("options", required=False))
+    if option_overrides:
+        for key, value in option_overrides.items():
+            setattr(options, key, value)
+        options.validate(source)
+    name = root.string("name", Path(path).stem)
+    return LumpedPantograph(params, options, name=name)

@@ -1,0 +1,57 @@
+"""Pantograph presets and loading by name or parameter-file path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..core.errors import ParameterError
+from ..core.params import load_toml
+from .base import PantographModel, PantographOptions
+
+DATA_DIR = Path(__file__).resolve().parent / "data"
+
+#: preset name -> parameter file in ``data/``
+PRESETS = {
+    "dsa380-rigid": "dsa380-rigid.toml",
+    "dsa380-lumped3": "dsa380-lumped3.toml",
+    "en50318-2mass": "en50318-2mass.toml",
+}
+
+
+def preset_path(name_or_path: str | Path) -> Path:
+    """File of a preset name, or the given path; unknown names raise a clear error."""
+    key = str(name_or_path)
+    if key in PRESETS:
+        return DATA_DIR / PRESETS[key]
+    p = Path(key)
+    if p.suffix == ".toml" or p.exists():
+        if not p.exists():
+            raise ParameterError("pantograph", key, "no such parameter file")
+        return p
+    raise ParameterError("pantograph", key,
+                         f"unknown preset (known: {', '.join(sorted(PRESETS))}) and not a file")
+
+
+def load_pantograph(name_or_path: str | Path, options: PantographOptions | None = None,
+                    **option_overrides) -> PantographModel:
+    """Build a pantograph model from a preset name or a parameter file.
+
+    ``option_overrides`` replace fields of the file's ``[options]`` (e.g. ``speed_kmh=300``).
+    """
+    path = preset_path(name_or_path)
+    data = load_toml(path)
+    if "chain" in data:
+        from .lumped import load_chain
+
+        return load_chain(path, options, option_overrides)
+    from .dsa380 import load_dsa380
+
+    model = load_dsa380(path, options)
+    if option_overrides:
+        for key, value in option_overrides.items():
+            if not hasattr(model.options, key):
+                raise ParameterError(f"options.{key}", value, "unknown pantograph option",
+                                     str(path))
+            setattr(model.options, key, value)
+        model.options.validate(str(path))
+    return model

@@ -1,0 +1,108 @@
+"""Stand-alone pantograph simulation under a prescribed contact force (thesis 2.3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from pantocosim.core.errors import ParameterError
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.linear_model import LinearModel
+from pantocosim.pantograph.base import PantographModel
+
+_ALLOWED = {name: getattr(np, name) for name in (
+    "sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sign", "tanh", "arctan", "minimum",
+    "maximum", "where", "heaviside")}
+_ALLOWED.update(pi=math.pi, e=math.e, nan=math.nan, inf=math.inf)
+
+
+def force_expression(expr: str) -> Callable[[float], float]:
+    """Compile a force law in ``t`` such as ``120 + 30*sin(4*pi*t)`` (numpy functions)."""
+    try:
+        code = compile(expr, "<force>", "eval")
+    except SyntaxError as exc:
+        raise ParameterError("--force", expr, f"not a valid expression: {exc.msg}") from None
+    for name in code.co_names:
+        if name != "t" and name not in _ALLOWED:
+            raise ParameterError("--force", expr, f"unknown name {name!r} (use t, pi and "
+                                 f"{', '.join(sorted(k for k in _ALLOWED if len(k) > 2))})")
+
+    def force(t: float) -> float:
+        try:
+            with np.errstate(all="ignore"):
+                value = float(eval(code, {"__builtins__": {}}, {**_ALLOWED, "t": np.float64(t)}))
+        except (ArithmeticError, ValueError, TypeError) as exc:
+            raise ParameterError("contact_force", expr, f"force law fails at t = {t:.6g} s: "
+                                 f"{exc}") from None
+        if not math.isfinite(value):
+            raise ParameterError("contact_force", value, f"force law {expr!r} is not finite at "
+                                 f"t = {t:.6g} s")
+        return value
+
+    force(0.0)
+    return force
+
+
+@dataclass
+class StandaloneResult:
+    time: np.ndarray
+    contact_force: np.ndarray
+    contact_height: np.ndarray
+    contact_velocity: np.ndarray
+    q: np.ndarray
+    iterations: np.ndarray
+
+    def columns(self, dof_names) -> dict:
+        cols = {"time": self.time, "contact_force": self.contact_force,
+                "contact_height": self.contact_height, "contact_velocity": self.contact_velocity}
+        for i, name in enumerate(dof_names):
+            cols["q_" + name.replace(" ", "_")] = self.q[:, i]
+        return cols
+
+
+def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
+                        duration: float, dt: float = 1e-3, alpha: float = -0.05,
+                        q0=None, linear: bool = False) -> StandaloneResult:
+    """Integrate the pantograph from static equilibrium under F(0) at its working height.
+
+    With ``linear=True`` the linearised model (M, C, K about that equilibrium, thesis 2.1.2)
+    is integrated instead, driven by F(t) - F(0).
+    """
+    if not (duration > 0 and dt > 0):
+        raise ParameterError("duration", duration, "duration and time step must be > 0")
+    F0 = force(0.0)
+    if q0 is None:
+        q0 = model.static_equilibrium(F0)
+    n_steps = int(round(duration / dt))
+    grad = np.asarray(model.contact_height_gradient(q0), dtype=float)
+    if linear:
+        M, C, K = model.linearize(q0, F0)
+        system = LinearModel(M, C, K, input_matrix=-grad[:, None], q_ref=q0)
+        to_input = lambda t: np.array([force(t) - F0])
+    else:
+        system = model
+        to_input = lambda t: np.array([force(t)])
+    integ = HHTIntegrator(system, HHTSettings(alpha=alpha))
+    integ.initialize(0.0, q0, np.zeros(model.n_dofs), to_input(0.0))
+    n = n_steps + 1
+    time = np.arange(n) * dt
+    qs = np.empty((n, model.n_dofs))
+    heights = np.empty(n)
+    vels = np.empty(n)
+    forces = np.empty(n)
+    iters = np.zeros(n, dtype=int)
+    for i in range(n):
+        if i > 0:
+            iters[i] = integ.step(dt, to_input(time[i])).iterations
+        qs[i] = integ.q
+        forces[i] = force(time[i])
+        if linear:
+            heights[i] = model.contact_height(q0) + grad @ (integ.q - q0)
+            vels[i] = grad @ integ.v
+        else:
+            heights[i] = model.contact_height(integ.q)
+            vels[i] = model.contact_velocity(integ.q, integ.v)
+    return StandaloneResult(time, forces, heights, vels, qs, iters)
