@@ -1,0 +1,187 @@
+"""Gradient-deficient 3D ANCF cable element (thesis 3.1.1, eqs. (3.2)-(3.3)).
+
+Nodal coordinates of one element (3.2)::
+
+    e = [r_i, r_i', r_j, r_j']          (12 entries; r' = dr/dchi, chi in [0, L])
+
+and r(chi) = S(chi) e with the cubic Hermite functions (3.12)-(3.13), xi = chi / L::
+
+    S1 = 1 - 3 xi^2 + 2 xi^3      S2 = L (xi - 2 xi^2 + xi^3)
+    S3 = 3 xi^2 - 2 xi^3          S4 = L (xi^3 - xi^2)
+
+Strain energy: U = int [N0 eps + EA eps^2 / 2] dchi + EI/2 int r''.r'' dchi, with the
+Green axial strain eps = (r'.r' - 1)/2. ``N0`` is the pre-tension of the reference
+(chi-parametrised) configuration, i.e. the element is stress-free when
+r'.r' = 1 - 2 N0 / EA; it is the unknown "pre-strain" of the initial-configuration problem
+(3.1.3). The section force transmitted by the cable is the vector N r' with
+N = N0 + EA eps (so the true tension is N |r'| and the horizontal tension N r'_x). The bending
+term is the usual linearised curvature, so its stiffness matrix is constant, as in the thesis.
+
+Mass matrix and gravity vector are constant (absolute nodal coordinates).
+All kernels are numba functions looping over every element at once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: 5-point Gauss-Legendre on [0, 1]: exact for the degree-8 integrands of force and tangent
+_GX, _GW = np.polynomial.legendre.leggauss(5)
+GAUSS_XI = 0.5 * (_GX + 1.0)
+GAUSS_W = 0.5 * _GW
+
+
+def shape(xi: float, L: float) -> np.ndarray:
+    """Hermite functions [S1, S2, S3, S4] at xi = chi/L, (3.12)-(3.13)."""
+    return np.array([1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3),
+                     3 * xi**2 - 2 * xi**3, L * (xi**3 - xi**2)])
+
+
+def shape_dxi(xi: float, L: float) -> np.ndarray:
+    """d[S1..S4]/dxi."""
+    return np.array([-6 * xi + 6 * xi**2, L * (1 - 4 * xi + 3 * xi**2),
+                     6 * xi - 6 * xi**2, L * (3 * xi**2 - 2 * xi)])
+
+
+def mass_matrix(mu: float, L: float) -> np.ndarray:
+    """Consistent 12x12 mass matrix rho A int S^T S dchi = kron(m4, I3)."""
+    m4 = mu * L / 420.0 * np.array([
+        [156.0, 22 * L, 54.0, -13 * L],
+        [22 * L, 4 * L * L, 13 * L, -3 * L * L],
+        [54.0, 13 * L, 156.0, -22 * L],
+        [-13 * L, -3 * L * L, -22 * L, 4 * L * L]])
+    return np.kron(m4, np.eye(3))
+
+
+def bending_matrix(EI: float, L: float) -> np.ndarray:
+    """Constant bending stiffness EI int S''^T S'' dchi = kron(k4, I3)."""
+    k4 = EI / L**3 * np.array([
+        [12.0, 6 * L, -12.0, 6 * L],
+        [6 * L, 4 * L * L, -6 * L, 2 * L * L],
+        [-12.0, -6 * L, 12.0, -6 * L],
+        [6 * L, 2 * L * L, -6 * L, 4 * L * L]])
+    return np.kron(k4, np.eye(3))
+
+
+def gravity_vector(mu: float, L: float, g: float) -> np.ndarray:
+    """External weight -mu g int S^T e_z dchi (12 entries)."""
+    f = np.zeros(12)
+    f[[2, 5, 8, 11]] = -mu * g * np.array([L / 2, L * L / 12, L / 2, -L * L / 12])
+    return f
+
+
+@njit(cache=True)
+def _dshape(xi, L):
+    # dS/dchi
+    return (np.array([(-6.0 * xi + 6.0 * xi * xi) / L, 1.0 - 4.0 * xi + 3.0 * xi * xi,
+                      (6.0 * xi - 6.0 * xi * xi) / L, 3.0 * xi * xi - 2.0 * xi]))
+
+
+@njit(cache=True)
+def cable_forces(E, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
+    """Internal forces f = dU/de (ne x 12) and, if want_K, the tangent dF/de (ne x 12 x 12).
+
+    E: element coordinates (ne x 12); Le, EA, EI, N0: per element.
+    """
+    ne = E.shape[0]
+    ng = gx.shape[0]
+    for e in range(ne):
+        L = Le[e]
+        ea = EA[e]
+        for i in range(12):
+            f_out[e, i] = 0.0
+        if want_K:
+            for i in range(12):
+                for j in range(12):
+                    K_out[e, i, j] = 0.0
+        for g in range(ng):
+            dS = _dshape(gx[g], L)
+            w = gw[g] * L
+            r0 = 0.0
+            r1 = 0.0
+            r2 = 0.0
+            for a in range(4):
+                r0 += dS[a] * E[e, 3 * a]
+                r1 += dS[a] * E[e, 3 * a + 1]
+                r2 += dS[a] * E[e, 3 * a + 2]
+            eps = 0.5 * (r0 * r0 + r1 * r1 + r2 * r2 - 1.0)
+            N = N0[e] + ea * eps
+            for a in range(4):
+                c = w * N * dS[a]
+                f_out[e, 3 * a] += c * r0
+                f_out[e, 3 * a + 1] += c * r1
+                f_out[e, 3 * a + 2] += c * r2
+            if want_K:
+                rp = (r0, r1, r2)
+                for a in range(4):
+                    for b in range(4):
+                        cab = w * dS[a] * dS[b]
+                        for k in range(3):
+                            K_out[e, 3 * a + k, 3 * b + k] += cab * N
+                            for l in range(3):
+                                K_out[e, 3 * a + k, 3 * b + l] += cab * ea * rp[k] * rp[l]
+        # bending: EI/L^3 kron(k4, I3) e
+        ei = EI[e]
+        if ei != 0.0:
+            c = ei / (L * L * L)
+            k4 = np.array([[12.0, 6 * L, -12.0, 6 * L],
+                           [6 * L, 4 * L * L, -6 * L, 2 * L * L],
+                           [-12.0, -6 * L, 12.0, -6 * L],
+                           [6 * L, 2 * L * L, -6 * L, 4 * L * L]])
+            for a in range(4):
+                for b in range(4):
+                    kab = c * k4[a, b]
+                    for k in range(3):
+                        f_out[e, 3 * a + k] += kab * E[e, 3 * b + k]
+                        if want_K:
+                            K_out[e, 3 * a + k, 3 * b + k] += kab
+
+
+@njit(cache=True)
+def cable_tension_measures(E, Le, EA, N0, gx, gw, h_out, dh_de, dh_dN0, df_dN0):
+    """Per element: h = int N r'_x dchi (horizontal force times length) with its gradients
+    dh/de, dh/dN0, and df/dN0 = int S'^T r' dchi (derivative of the internal force with
+    respect to the pre-tension). Used by the initial-configuration problem (3.1.3)."""
+    ne = E.shape[0]
+    ng = gx.shape[0]
+    for e in range(ne):
+        L = Le[e]
+        ea = EA[e]
+        h_out[e] = 0.0
+        dh_dN0[e] = 0.0
+        for i in range(12):
+            dh_de[e, i] = 0.0
+            df_dN0[e, i] = 0.0
+        for g in range(ng):
+            dS = _dshape(gx[g], L)
+            w = gw[g] * L
+            r0 = 0.0
+            r1 = 0.0
+            r2 = 0.0
+            for a in range(4):
+                r0 += dS[a] * E[e, 3 * a]
+                r1 += dS[a] * E[e, 3 * a + 1]
+                r2 += dS[a] * E[e, 3 * a + 2]
+            eps = 0.5 * (r0 * r0 + r1 * r1 + r2 * r2 - 1.0)
+            N = N0[e] + ea * eps
+            h_out[e] += w * N * r0
+            dh_dN0[e] += w * r0
+            for a in range(4):
+                dh_de[e, 3 * a] += w * dS[a] * (ea * r0 * r0 + N)
+                dh_de[e, 3 * a + 1] += w * dS[a] * ea * r0 * r1
+                dh_de[e, 3 * a + 2] += w * dS[a] * ea * r0 * r2
+                df_dN0[e, 3 * a] += w * dS[a] * r0
+                df_dN0[e, 3 * a + 1] += w * dS[a] * r1
+                df_dN0[e, 3 * a + 2] += w * dS[a] * r2
+
+
+def element_forces(E, Le, EA, EI, N0, want_K=True):
+    """Convenience wrapper: (f, K) for arrays of elements (K is None unless want_K)."""
+    E = np.ascontiguousarray(E, dtype=float).reshape(-1, 12)
+    ne = E.shape[0]
+    arr = lambda x: np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), (ne,)))
+    f = np.empty((ne, 12))
+    K = np.empty((ne, 12, 12) if want_K else (1, 12, 12))
+    cable_forces(E, arr(Le), arr(EA), arr(EI), arr(N0), GAUSS_XI, GAUSS_W, want_K, f, K)
+    return f, (K if want_K else None)
