@@ -1,0 +1,165 @@
+"""Scenario files: which pantographs run on which catenary, how fast, what is analysed.
+
+A scenario is a TOML file (presets in ``master/scenarios/``)::
+
+    name = "dsa380-ave-300"
+    catenary = "ave64"             # catenary preset or definition file
+    spans = 10                     # optional: override the catenary's number of spans
+    speed_kmh = 300.0
+
+    [[pantographs]]
+    model = "dsa380-rigid"         # pantograph preset or parameter file
+    fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings
+    position_m = 32.0              # x of the contact point at t = 0
+    start = "static"               # "static" (in contact, in equilibrium) or "ramp"
+    ramp = { start_m = 10.0, length_m = 20.0, lowered_height = 5.0 }   # start = "ramp"
+
+    [analysis]
+    window_supports = [5, 6]       # analyse between these supports (0 = first), or
+    # window_m = [320.0, 384.0]    # an explicit x range, applied to each pantograph's track
+
+    [simulation]
+    dt = 0.001                     # time step [s]
+    alpha = -0.05                  # HHT alpha
+    duration_s = 5.0               # optional; default: until the last pantograph leaves the
+                                   # analysis window
+
+    [contact]
+    stiffness = 50000.0            # k_H [N/m]
+    damping = 0.0                  # c_H [N s/m]
+
+Loading validates every field and names the file, the field and the value in its errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pantocosim.core.errors import ParameterError
+from pantocosim.core.params import Table, load_toml
+
+SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
+DEFAULT_SCENARIO = "dsa380-ave-300"
+
+
+@dataclass
+class RampSpec:
+    start_m: float
+    length_m: float
+    lowered_height: float
+
+
+@dataclass
+class PantographSpec:
+    model: str
+    position_m: float
+    start: str = "static"
+    ramp: RampSpec | None = None
+    fmu: str | None = None
+    options: dict = field(default_factory=dict)
+
+
+@dataclass
+class Scenario:
+    name: str
+    source: str
+    catenary: str
+    speed_kmh: float
+    pantographs: list[PantographSpec]
+    window_supports: tuple[int, int] | None
+    window_m: tuple[float, float] | None
+    dt: float = 1e-3
+    alpha: float = -0.05
+    duration_s: float | None = None
+    contact_stiffness: float = 50_000.0
+    contact_damping: float = 0.0
+    spans: int | None = None
+    description: str = ""
+
+    @property
+    def speed(self) -> float:
+        """Train speed [m/s]."""
+        return self.speed_kmh / 3.6
+
+
+def scenario_names() -> list[str]:
+    return sorted(p.stem for p in SCENARIO_DIR.glob("*.toml"))
+
+
+def scenario_path(name_or_path: str | Path | None) -> Path:
+    key = DEFAULT_SCENARIO if name_or_path is None else str(name_or_path)
+    candidate = SCENARIO_DIR / f"{key}.toml"
+    if candidate.exists():
+        return candidate
+    p = Path(key)
+    if p.exists():
+        return p
+    raise ParameterError("scenario", key, f"unknown scenario (presets: "
+                         f"{', '.join(scenario_names())}) and not a file")
+
+
+def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
+    path = scenario_path(name_or_path)
+    source = str(path)
+    root = Table(load_toml(path), source)
+    root.unknown_keys({"name", "description", "catenary", "spans", "speed_kmh", "pantographs",
+                       "analysis", "simulation", "contact"})
+    pans = root._get("pantographs", None, required=True)
+    if not isinstance(pans, list) or not pans:
+        raise ParameterError("pantographs", pans, "must be a non-empty array of tables", source)
+    specs = []
+    for i, raw in enumerate(pans):
+        t = Table(raw, source, f"pantographs[{i}]")
+        t.unknown_keys({"model", "fmu", "position_m", "start", "ramp", "options"})
+        start = t.string("start", "static", choices=("static", "ramp"))
+        ramp = None
+        if start == "ramp":
+            r = t.sub("ramp")
+            r.unknown_keys({"start_m", "length_m", "lowered_height"})
+            ramp = RampSpec(r.number("start_m"), r.number("length_m", nonnegative=True),
+                            r.number("lowered_height", positive=True))
+        elif t.has("ramp"):
+            raise ParameterError(f"pantographs[{i}].ramp", raw["ramp"],
+                                 'only allowed with start = "ramp"', source)
+        opts = raw.get("options", {})
+        if not isinstance(opts, dict):
+            raise ParameterError(f"pantographs[{i}].options", opts, "must be a table", source)
+        specs.append(PantographSpec(model=t.string("model"), position_m=t.number("position_m"),
+                                    start=start, ramp=ramp,
+                                    fmu=t.string("fmu") if t.has("fmu") else None,
+                                    options=dict(opts)))
+    analysis = root.sub("analysis")
+    analysis.unknown_keys({"window_supports", "window_m"})
+    window_supports = window_m = None
+    if analysis.has("window_supports"):
+        ws = analysis._get("window_supports", None, True)
+        if (not isinstance(ws, list) or len(ws) != 2
+                or not all(isinstance(x, int) and not isinstance(x, bool) for x in ws)
+                or ws[1] <= ws[0] or ws[0] < 0):
+            raise ParameterError("analysis.window_supports", ws,
+                                 "must be two increasing support indices", source)
+        window_supports = (ws[0], ws[1])
+    elif analysis.has("window_m"):
+        wm = analysis.numbers("window_m", length=2, increasing=True)
+        window_m = (wm[0], wm[1])
+    else:
+        raise ParameterError("analysis.window_supports", None,
+                             "missing field (or give analysis.window_m)", source)
+    sim = root.sub("simulation", required=False)
+    sim.unknown_keys({"dt", "alpha", "duration_s"})
+    contact = root.sub("contact", required=False)
+    contact.unknown_keys({"stiffness", "damping"})
+    sc = Scenario(
+        name=root.string("name", path.stem), source=source,
+        description=root.string("description", ""),
+        catenary=root.string("catenary"),
+        spans=root.integer("spans", minimum=2) if root.has("spans") else None,
+        speed_kmh=root.number("speed_kmh", positive=True),
+        pantographs=specs, window_supports=window_supports, window_m=window_m,
+        dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
+        alpha=sim.number("alpha", -0.05, minimum=-1.0 / 3.0, maximum=0.0),
+        duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
+        contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
+        contact_damping=contact.number("damping", 0.0, nonnegative=True))
+    return sc
