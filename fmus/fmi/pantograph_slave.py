@@ -1,0 +1,224 @@
+"""FMI 2.0 co-simulation adapter for every pantograph model (one port contract).
+
+Ports (identical for all variants, design README section 4):
+  input  ``contact_force`` [N] >= 0: pushes the collector down;
+  output ``contact_height`` [m] above the rail, ``contact_velocity`` [m/s].
+
+Timing of the force input: the value set before ``doStep(t, h)`` is the contact force at
+``t + h``; the force at ``t`` is the one of the previous accepted step, kept in the FMU state
+(at t0 it is the static force for a static start, 0 for a ramp start). Both enter the HHT-alpha
+step with the integrator's weights (1 + alpha) F(t+h) - alpha F(t), exactly as in the
+monolithic solver, so an iterating master reproduces the monolithic solution. With
+``n_substeps`` > 1 the force is interpolated linearly inside the communication step.
+
+The generated slave module of each FMU subclasses :class:`PantographSlave` and sets
+``preset``; ``parameter_file`` (a path, or a file name inside the FMU resources) replaces the
+preset's parameter set.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .slave_base import GuardedSlave
+
+FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
+                "force at t is the previous accepted step's (kept in the FMU state).")
+
+
+class PantographSlave(GuardedSlave):
+    preset = "dsa380-rigid"
+    description = "pantocosim pantograph"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.description = f"pantocosim pantograph '{self.preset}'. {FORCE_TIMING}"
+        # ports
+        self.real("contact_force", 0.0, "input", "N",
+                  "contact force [N] >= 0 pushing the collector down. " + FORCE_TIMING)
+        self.real("contact_height", 0.0, "output", "m", "height of the contact point above "
+                  "the rail")
+        self.real("contact_velocity", 0.0, "output", "m/s", "vertical velocity of the contact "
+                  "point")
+        # common parameters (defaults from the preset where one exists)
+        defaults = _preset_defaults(self.preset)
+        self.real("static_force", defaults["static_force"], "parameter", "N",
+                  "static uplift force")
+        self.real("aero_c1", defaults["aero_c1"], "parameter", "N.h/km",
+                  "aerodynamic uplift, linear coefficient: F = c1 v + c2 v^2, v in km/h")
+        self.real("aero_c2", defaults["aero_c2"], "parameter", "N.h2/km2",
+                  "aerodynamic uplift, quadratic coefficient")
+        self.real("speed_kmh", 0.0, "parameter", "km/h", "train speed (aerodynamic law)")
+        self.real("friction_force", defaults["friction_force"], "parameter", "N",
+                  "collector friction amplitude f_r (thesis 2.16)")
+        self.real("friction_smoothing", defaults["friction_smoothing"], "parameter", "m/s",
+                  "friction smoothing k_t (thesis 2.16)")
+        self.boolean("one_way_damper", defaults["one_way_damper"],
+                     "the damper acts only while the mechanism moves down")
+        self.real("hht_alpha", -0.05, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
+        self.real("initial_height", defaults["working_height"], "parameter", "m",
+                  "contact height at t0 (static start: equilibrium at this height)")
+        self.real("initial_contact_force", -1.0, "parameter", "N",
+                  "contact force at t0 for a static start; < 0 means static + aerodynamic "
+                  "uplift")
+        self.integer("start_mode", 0, "0 = static start in contact, 1 = ramp raising "
+                     "(thesis 3.3.1)")
+        self.real("ramp_start_time", 0.0, "parameter", "s", "ramp raising: start time")
+        self.real("ramp_duration", 1.0, "parameter", "s", "ramp raising: duration")
+        self.real("lowered_height", 5.0, "parameter", "m",
+                  "ramp raising: contact height of the lowered pantograph at t0")
+        self.integer("n_substeps", 1, "integration steps per communication step")
+        self.string("parameter_file", "", "parameter file (TOML) replacing the preset; a path "
+                    "or a file name in the FMU resources")
+        self.real("newton_iterations", 0.0, "local", None,
+                  "Newton iterations of the last communication step")
+        self._model = None
+        self._integ = None
+        self._force_prev = 0.0
+        self._state_attributes = ["_integ_state", "_force_prev"]
+
+    # ------------------------------------------------------------------ lifecycle
+    def exit_initialization_mode(self):
+        self.guarded("initialisation", self._initialise)
+        return True
+
+    def _initialise(self):
+        from pantocosim.core.errors import ParameterError
+        from pantocosim.core.hht import HHTIntegrator, HHTSettings
+        from pantocosim.pantograph.base import Ramp
+        from pantocosim.pantograph.presets import load_pantograph
+
+        self.check_build_stamp()
+        if self._error:
+            return
+        source = self.preset
+        if self.parameter_file:
+            p = Path(self.parameter_file)
+            if not p.is_absolute() and self.resources and (Path(self.resources) / p).exists():
+                p = Path(self.resources) / p
+            if not p.exists():
+                raise ParameterError("parameter_file", self.parameter_file, "no such file")
+            source = str(p)
+        overrides = {
+            "static_force": self.finite("static_force", self.static_force),
+            "aero_c1": self.finite("aero_c1", self.aero_c1),
+            "aero_c2": self.finite("aero_c2", self.aero_c2),
+            "speed_kmh": self.finite("speed_kmh", self.speed_kmh),
+            "friction_force": self.finite("friction_force", self.friction_force),
+            "friction_smoothing": self.finite("friction_smoothing", self.friction_smoothing),
+            "one_way_damper": bool(self.one_way_damper),
+        }
+        if self.start_mode not in (0, 1):
+            raise ParameterError("start_mode", self.start_mode, "must be 0 (static) or 1 (ramp)")
+        if self.n_substeps < 1:
+            raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
+        if self.start_mode == 1:
+            overrides["ramp"] = Ramp(start=self.finite("ramp_start_time", self.ramp_start_time),
+                                     duration=self.finite("ramp_duration", self.ramp_duration),
+                                     lowered_height=self.finite("lowered_height",
+                                                                self.lowered_height))
+        model = load_pantograph(source, **overrides)
+        alpha = self.finite("hht_alpha", self.hht_alpha)
+        height = self.finite("initial_height", self.initial_height)
+        F0 = self.finite("initial_contact_force", self.initial_contact_force)
+        if F0 < 0:
+            F0 = model.options.mean_uplift
+        q_static = model.static_equilibrium(F0, height)
+        if self.start_mode == 1:
+            q0 = model.lowered_equilibrium(self.lowered_height)
+            F0 = 0.0
+        else:
+            q0 = q_static
+        integ = HHTIntegrator(model, HHTSettings(alpha=alpha))
+        integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
+        self._model, self._integ = model, integ
+        self._force_prev = F0
+        self.contact_force = F0
+        self._update_outputs()
+
+    def setup_experiment(self, start_time, stop_time, tolerance):
+        self._t0 = float(start_time)
+
+    def do_step(self, current_time, step_size):
+        if self._error or self._integ is None:
+            self.log(self._error or "not initialised", Fmi2StatusDiscard())
+            return False
+        saved = self._integ.get_state()
+        try:
+            F = float(self.contact_force)
+            if not np.isfinite(F) or F < 0.0:
+                self.log(f"contact_force = {F!r}: must be finite and >= 0",
+                         Fmi2StatusDiscard())
+                return False
+            n = int(self.n_substeps)
+            h = step_size / n
+            F0 = self._force_prev
+            iters = 0
+            for i in range(1, n + 1):
+                Fi = F0 + (F - F0) * i / n
+                iters += self._integ.step(h, np.array([Fi])).iterations
+            self._force_prev = F
+            self.newton_iterations = float(iters)
+            self._update_outputs()
+            return True
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            self._integ.set_state(saved)
+            self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: {exc}",
+                     Fmi2StatusDiscard())
+            return False
+
+    def _update_outputs(self):
+        q, v = self._integ.q, self._integ.v
+        self.contact_height = float(self._model.contact_height(q))
+        self.contact_velocity = float(self._model.contact_velocity(q, v))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def _integ_state(self):
+        return None if self._integ is None else self._integ.get_state()
+
+    @_integ_state.setter
+    def _integ_state(self, state):
+        if state is not None and self._integ is not None:
+            self._integ.set_state(state)
+
+    def _copy_attribute(self, name):
+        if name == "_integ_state":
+            return self._integ_state  # get_state already copies
+        return super()._copy_attribute(name)
+
+    def _restore_attribute(self, name, value):
+        if name == "_integ_state":
+            self._integ_state = value  # set_state copies
+            return
+        super()._restore_attribute(name, value)
+
+
+def Fmi2StatusDiscard():
+    from pythonfmu.enums import Fmi2Status
+
+    return Fmi2Status.discard
+
+
+def _preset_defaults(preset: str) -> dict:
+    """Parameter defaults read from the preset's file (cheap: no model is built)."""
+    out = {"static_force": 70.0, "aero_c1": 0.0, "aero_c2": 0.00097, "friction_force": 0.0,
+           "friction_smoothing": 1e-4, "one_way_damper": False, "working_height": 5.3}
+    try:
+        from pantocosim.core.params import load_toml
+        from pantocosim.pantograph.presets import preset_path
+
+        data = load_toml(preset_path(preset))
+        for k, v in data.get("options", {}).items():
+            if k in out:
+                out[k] = v
+        for table in ("chain", "geometry", "equilibrium", "operation"):
+            if isinstance(data.get(table), dict) and "working_height" in data[table]:
+                out["working_height"] = data[table]["working_height"]
+        if "working_height" in data:
+            out["working_height"] = data["working_height"]
+    except Exception:  # noqa: BLE001 - defaults only; errors surface at initialisation
+        pass
+    return out

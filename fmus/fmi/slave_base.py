@@ -1,0 +1,200 @@
+"""Shared machinery of the project's pythonfmu slaves (thin adapters over model objects).
+
+Works around the pythonfmu 0.7.0 behaviour measured in design/fmi-toolchain.md:
+- no exception may escape a callback (the wrapper turns it into fmi2Fatal and may crash): every
+  callback is guarded; bad input is logged and reported as fmi2Discard from ``do_step``
+  (pythonfmu offers no other non-fatal error status);
+- the default FMU state holds registered variables only: the full internal state is saved
+  (deep copies) and serialised with pickle;
+- several FMUs bundle the same package ``pantocosim``; a process imports it once, so each
+  slave checks that the imported package is the one it was built with (build stamp);
+- units and a UnitDefinitions section are added to the model description;
+- outputs are declared ``initial="exact"`` so that ``fmpy validate`` passes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import pickle
+import traceback
+from pathlib import Path
+from typing import Any, Callable
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
+from pythonfmu.fmi2slave import Fmi2Slave
+from pythonfmu.variables import Boolean, Integer, Real, String
+
+STAMP_FILE = "pantocosim_build_stamp.txt"
+
+
+def package_stamp(package_dir: str | Path | None = None) -> str:
+    """SHA-256 over the package's source and data files (relative path + content)."""
+    if package_dir is None:
+        import pantocosim
+
+        package_dir = Path(pantocosim.__file__).resolve().parent
+    root = Path(package_dir)
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        if f.suffix in (".py", ".toml") and "__pycache__" not in f.parts and f.is_file():
+            h.update(f.relative_to(root).as_posix().encode())
+            h.update(b"\0")
+            h.update(f.read_bytes())
+            h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+class UnitReal(Real):
+    """A Real variable with a ``unit`` attribute."""
+
+    def __init__(self, name: str, unit: str | None = None, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self) -> Element:
+        node = super().to_xml()
+        if self.unit:
+            node.find("Real").set("unit", self.unit)
+        return node
+
+
+class GuardedSlave(Fmi2Slave):
+    """Base of the project's slaves: variable helpers, guarded callbacks, full state."""
+
+    author = "pantocosim"
+    license = "MIT"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._units: set[str] = set()
+        #: first error found in parameters or inputs; do_step reports it as a discard
+        self._error: str | None = None
+        #: names of internal attributes that make up the FMU state besides registered vars
+        self._state_attributes: list[str] = []
+
+    # ------------------------------------------------------------------ variables
+    def real(self, name: str, value: float, causality: str, unit: str | None = None,
+             description: str | None = None, tunable: bool = False) -> None:
+        setattr(self, name, float(value))
+        kwargs: dict[str, Any] = {"description": description}
+        if causality == "parameter":
+            kwargs.update(causality=Fmi2Causality.parameter,
+                          variability=Fmi2Variability.tunable if tunable
+                          else Fmi2Variability.fixed)
+        elif causality == "input":
+            kwargs.update(causality=Fmi2Causality.input, variability=Fmi2Variability.continuous)
+        elif causality == "output":
+            kwargs.update(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+                          initial=Fmi2Initial.exact)
+        else:
+            kwargs.update(causality=Fmi2Causality.local, variability=Fmi2Variability.continuous)
+        if unit:
+            self._units.add(unit)
+        self.register_variable(UnitReal(name, unit=unit, **kwargs))
+
+    def integer(self, name: str, value: int, description: str | None = None) -> None:
+        setattr(self, name, int(value))
+        self.register_variable(Integer(name, causality=Fmi2Causality.parameter,
+                                       variability=Fmi2Variability.fixed,
+                                       description=description))
+
+    def boolean(self, name: str, value: bool, description: str | None = None) -> None:
+        setattr(self, name, bool(value))
+        self.register_variable(Boolean(name, causality=Fmi2Causality.parameter,
+                                       variability=Fmi2Variability.fixed,
+                                       description=description))
+
+    def string(self, name: str, value: str, description: str | None = None) -> None:
+        setattr(self, name, str(value))
+        self.register_variable(String(name, causality=Fmi2Causality.parameter,
+                                      variability=Fmi2Variability.fixed,
+                                      description=description))
+
+    def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
+        root = super().to_xml(model_options)
+        if self._units:
+            units = Element("UnitDefinitions")
+            for u in sorted(self._units):
+                SubElement(units, "Unit", {"name": u})
+            index = [child.tag for child in root].index("CoSimulation") + 1
+            root.insert(index, units)
+        return root
+
+    # ------------------------------------------------------------------ errors
+    def fail(self, message: str, status: Fmi2Status = Fmi2Status.error) -> None:
+        """Record and log an error; the next do_step returns fmi2Discard."""
+        if self._error is None:
+            self._error = message
+        self.log(message, status)
+
+    def guarded(self, what: str, fn: Callable[[], Any]) -> bool:
+        """Run ``fn`` and turn any exception into a logged error (never escapes)."""
+        try:
+            fn()
+            return True
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            from pantocosim.core.errors import PantocosimError
+
+            if isinstance(exc, PantocosimError):
+                self.fail(f"{what}: {exc}")
+            else:
+                self.fail(f"{what}: {type(exc).__name__}: {exc}\n{traceback.format_exc()}")
+            return False
+
+    def check_build_stamp(self) -> None:
+        """The imported ``pantocosim`` must be the one bundled in this FMU (design §2)."""
+        if not self.resources:
+            return
+        stamp_file = Path(self.resources) / STAMP_FILE
+        if not stamp_file.exists():
+            return
+        built = stamp_file.read_text().strip()
+        here = package_stamp()
+        if built != here:
+            import pantocosim
+
+            self.fail(f"this FMU was built with pantocosim {built} but the process imported "
+                      f"pantocosim {here} from {Path(pantocosim.__file__).parent}: rebuild the "
+                      f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
+
+    @staticmethod
+    def finite(name: str, value: float) -> float:
+        x = float(value)
+        if not math.isfinite(x):
+            from pantocosim.core.errors import ParameterError
+
+            raise ParameterError(name, value, "must be finite")
+        return x
+
+    # ------------------------------------------------------------------ state
+    def _get_fmu_state(self) -> dict:
+        state = {"vars": {v.name: v.getter() for v in self.vars.values()},
+                 "error": self._error}
+        for name in self._state_attributes:
+            state[name] = self._copy_attribute(name)
+        return state
+
+    def _set_fmu_state(self, state: dict) -> None:
+        for v in self.vars.values():
+            if v.name in state["vars"] and v.setter is not None:
+                v.setter(state["vars"][v.name])
+        self._error = state.get("error")
+        for name in self._state_attributes:
+            self._restore_attribute(name, state[name])
+
+    def _copy_attribute(self, name: str):
+        """Deep copy of an internal attribute for the FMU state (override for big objects)."""
+        return pickle.loads(pickle.dumps(getattr(self, name)))
+
+    def _restore_attribute(self, name: str, value) -> None:
+        setattr(self, name, pickle.loads(pickle.dumps(value)))
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict) -> bytes:
+        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes) -> dict:
+        return pickle.loads(data)
