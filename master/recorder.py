@@ -1,0 +1,54 @@
+"""Streams the time series of a run to a CSV file while keeping the columns the statistics need.
+
+Rows are appended to disk in blocks (``flush_every`` steps), so a long run keeps what it has
+computed even if it stops with an error; the columns are also kept in memory (they are small
+next to the model: a few floats per step).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+class Recorder:
+    def __init__(self, path: Path | None, names: list[str], flush_every: int = 500):
+        self.names = list(names)
+        self.path = None if path is None else Path(path)
+        self._rows: list[np.ndarray] = []
+        self._pending: list[np.ndarray] = []
+        self.flush_every = flush_every
+        self._fh = None
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh = open(self.path, "w")
+            self._fh.write(",".join(self.names) + "\n")
+
+    def append(self, row) -> None:
+        row = np.asarray(row, dtype=float)
+        if row.size != len(self.names):
+            raise ValueError(f"row has {row.size} values, expected {len(self.names)}")
+        self._rows.append(row)
+        self._pending.append(row)
+        if len(self._pending) >= self.flush_every:
+            self.flush()
+
+    def flush(self) -> None:
+        if self._fh is not None and self._pending:
+            np.savetxt(self._fh, np.vstack(self._pending), delimiter=",", fmt="%.10g")
+            self._fh.flush()
+        self._pending = []
+
+    def close(self) -> None:
+        self.flush()
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+    def columns(self) -> dict[str, np.ndarray]:
+        data = np.vstack(self._rows) if self._rows else np.zeros((0, len(self.names)))
+        return {name: data[:, i] for i, name in enumerate(self.names)}
+
+    def __len__(self) -> int:
+        return len(self._rows)
