@@ -79,10 +79,13 @@ def _dshape(xi, L):
 
 
 @njit(cache=True)
-def cable_forces(E, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
+def cable_forces(E, dX, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
     """Internal forces f = dU/de (ne x 12) and, if want_K, the tangent dF/de (ne x 12 x 12).
 
-    E: element coordinates (ne x 12); Le, EA, EI, N0: per element.
+    E: element coordinates (ne x 12) relative to per-node position offsets whose
+    difference (node j - node i) is dX (ne x 3): the absolute coordinates are
+    E + [off_i, 0, off_j, 0]. Working on offsets keeps the strain free of the round-off of
+    large absolute x (a 600 m line). Le, EA, EI, N0: per element.
     """
     ne = E.shape[0]
     ng = gx.shape[0]
@@ -98,9 +101,9 @@ def cable_forces(E, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
         for g in range(ng):
             dS = _dshape(gx[g], L)
             w = gw[g] * L
-            r0 = 0.0
-            r1 = 0.0
-            r2 = 0.0
+            r0 = dS[2] * dX[e, 0]
+            r1 = dS[2] * dX[e, 1]
+            r2 = dS[2] * dX[e, 2]
             for a in range(4):
                 r0 += dS[a] * E[e, 3 * a]
                 r1 += dS[a] * E[e, 3 * a + 1]
@@ -133,13 +136,16 @@ def cable_forces(E, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
                 for b in range(4):
                     kab = c * k4[a, b]
                     for k in range(3):
-                        f_out[e, 3 * a + k] += kab * E[e, 3 * b + k]
+                        xb = E[e, 3 * b + k]
+                        if b == 2:
+                            xb += dX[e, k]   # k4[:, 0] = -k4[:, 2]: offsets enter as dX
+                        f_out[e, 3 * a + k] += kab * xb
                         if want_K:
                             K_out[e, 3 * a + k, 3 * b + k] += kab
 
 
 @njit(cache=True)
-def cable_tension_measures(E, Le, EA, N0, gx, gw, h_out, dh_de, dh_dN0, df_dN0):
+def cable_tension_measures(E, dX, Le, EA, N0, gx, gw, h_out, dh_de, dh_dN0, df_dN0):
     """Per element: h = int N r'_x dchi (horizontal force times length) with its gradients
     dh/de, dh/dN0, and df/dN0 = int S'^T r' dchi (derivative of the internal force with
     respect to the pre-tension). Used by the initial-configuration problem (3.1.3)."""
@@ -156,9 +162,9 @@ def cable_tension_measures(E, Le, EA, N0, gx, gw, h_out, dh_de, dh_dN0, df_dN0):
         for g in range(ng):
             dS = _dshape(gx[g], L)
             w = gw[g] * L
-            r0 = 0.0
-            r1 = 0.0
-            r2 = 0.0
+            r0 = dS[2] * dX[e, 0]
+            r1 = dS[2] * dX[e, 1]
+            r2 = dS[2] * dX[e, 2]
             for a in range(4):
                 r0 += dS[a] * E[e, 3 * a]
                 r1 += dS[a] * E[e, 3 * a + 1]
@@ -183,5 +189,5 @@ def element_forces(E, Le, EA, EI, N0, want_K=True):
     arr = lambda x: np.ascontiguousarray(np.broadcast_to(np.asarray(x, float), (ne,)))
     f = np.empty((ne, 12))
     K = np.empty((ne, 12, 12) if want_K else (1, 12, 12))
-    cable_forces(E, arr(Le), arr(EA), arr(EI), arr(N0), GAUSS_XI, GAUSS_W, want_K, f, K)
+    cable_forces(E, np.zeros((ne, 3)), arr(Le), arr(EA), arr(EI), arr(N0), GAUSS_XI, GAUSS_W, want_K, f, K)
     return f, (K if want_K else None)

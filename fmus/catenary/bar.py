@@ -25,13 +25,15 @@ def gravity_vector(mass: float, g: float) -> np.ndarray:
 
 
 @njit(cache=True)
-def bar_forces(X, l0, EA, tension_only, want_K, f_out, K_out, slack_out):
-    """Internal forces (nb x 6), tangents (nb x 6 x 6) and slack flags of all bars."""
+def bar_forces(X, dX, l0, EA, tension_only, want_K, f_out, K_out, slack_out):
+    """Internal forces (nb x 6), tangents (nb x 6 x 6) and slack flags of all bars.
+
+    X: coordinates relative to node offsets whose difference (j - i) is dX (nb x 3)."""
     nb = X.shape[0]
     for b in range(nb):
-        d0 = X[b, 3] - X[b, 0]
-        d1 = X[b, 4] - X[b, 1]
-        d2 = X[b, 5] - X[b, 2]
+        d0 = X[b, 3] - X[b, 0] + dX[b, 0]
+        d1 = X[b, 4] - X[b, 1] + dX[b, 1]
+        d2 = X[b, 5] - X[b, 2] + dX[b, 2]
         ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         u = (d0 / ln, d1 / ln, d2 / ln)
         N = EA[b] * (ln - l0[b]) / l0[b]
@@ -64,5 +66,5 @@ def element_forces(X, l0, EA, tension_only=False, want_K=True):
     f = np.empty((nb, 6))
     K = np.empty((nb, 6, 6) if want_K else (1, 6, 6))
     slack = np.empty(nb, dtype=np.bool_)
-    bar_forces(X, arr(l0), arr(EA), arr(tension_only, np.bool_), want_K, f, K, slack)
+    bar_forces(X, np.zeros((nb, 3)), arr(l0), arr(EA), arr(tension_only, np.bool_), want_K, f, K, slack)
     return f, (K if want_K else None), slack

@@ -1,0 +1,89 @@
+"""Points on the contact wire: element and local coordinate of a track position x,
+(3.11)-(3.13).
+
+The local coordinate chi_c of x inside a contact-wire element solves the cubic (3.12) on the
+*reference* configuration (the static equilibrium the locator is built from); as in the
+thesis, it is then kept fixed during the dynamics (the wire barely moves along x). The
+height of the wire there is (3.13)
+
+    z = S1 z_i + S2 z_i' + S3 z_j + S4 z_j' = w . x_full[dofs].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import ParameterError
+from .ancf_cable import shape, shape_dxi
+
+
+@dataclass
+class ContactPoint:
+    """z of the contact wire at one track position: ``weights @ q[dofs] + offset``.
+
+    ``dofs`` index the free coordinate vector q. ``offset`` gathers the part from fixed DOFs
+    (non-zero only in an element that touches an anchored line end). ``dweights_dx`` is
+    d(weights)/dx, for the convective part of the wire velocity under a moving point.
+    """
+
+    dofs: np.ndarray
+    weights: np.ndarray
+    offset: float
+    element: int
+    xi: float
+    dweights_dx: np.ndarray
+    doffset_dx: float = 0.0
+
+
+class ContactLocator:
+    """Locates track positions on the contact wire of a mesh at a reference configuration."""
+
+    def __init__(self, mesh, x_full_ref: np.ndarray):
+        S = mesh.structure
+        self.mesh = mesh
+        self.elems = np.asarray(mesh.contact_elems)
+        self.Le = S.cable_Le[self.elems]
+        E = S.absolute(x_full_ref)[S.cable_dofs[self.elems]]
+        self.E_x = E[:, [0, 3, 6, 9]]          # x, x', x_j, x_j'
+        self.x_start = E[:, 0]
+        self.x_end = E[:, 6]
+        zd = S.cable_dofs[self.elems][:, [2, 5, 8, 11]]
+        self.z_full_dofs = zd
+        self.z_free = S.fmap[zd]                 # -1 for fixed
+        self.x_full_ref = x_full_ref
+        self.x_min, self.x_max = float(self.x_start[0]), float(self.x_end[-1])
+
+    def locate(self, x: float) -> tuple[int, float]:
+        """(element position in the contact chain, xi in [0, 1]) of track position x."""
+        if not (self.x_min - 1e-9 <= x <= self.x_max + 1e-9):
+            raise ParameterError("pantograph position", float(x),
+                                 f"outside the contact wire [{self.x_min:g}, "
+                                 f"{self.x_max:g}] m")
+        k = int(np.clip(np.searchsorted(self.x_start, x, side="right") - 1, 0,
+                        len(self.elems) - 1))
+        L = self.Le[k]
+        c = self.E_x[k]
+        xi = (x - self.x_start[k]) / max(self.x_end[k] - self.x_start[k], 1e-300)
+        for _ in range(30):  # Newton on the cubic (3.12)
+            r = shape(xi, L) @ c - x
+            dr = shape_dxi(xi, L) @ c
+            step = r / dr
+            xi -= step
+            if abs(step) < 1e-15:
+                break
+        return k, float(min(max(xi, 0.0), 1.0))
+
+    def point(self, x: float) -> ContactPoint:
+        k, xi = self.locate(x)
+        L = self.Le[k]
+        w = shape(xi, L)
+        dxdxi = shape_dxi(xi, L) @ self.E_x[k]
+        dw = shape_dxi(xi, L) / dxdxi
+        free = self.z_free[k]
+        m = free >= 0
+        zfix = self.x_full_ref[self.z_full_dofs[k][~m]]
+        return ContactPoint(dofs=free[m], weights=w[m], offset=float(w[~m] @ zfix),
+                            element=int(self.elems[k]), xi=xi, dweights_dx=dw[m],
+                            doffset_dx=float(dw[~m] @ zfix))
