@@ -1,0 +1,504 @@
+"""Nonlinear rigid-body DSA-380 pantograph (thesis 2.1.1, annexes A-B).
+
+Generalised coordinates q = (theta, x10, y10, theta7) (2.1): lower-arm angle, position of the
+collector centre (point 10, the contact point) and collector pitch. Heights are measured from
+the rail: the fixed pivots sit on the roof frame whose origin (point 2) is at ``base_height``.
+
+The hot path (residual and exact tangents) is the numba kernel
+:func:`pantocosim.pantograph.dsa380_kinematics.evaluate_kernel`; this module holds the
+parameter set (TOML, validated on load), the static equilibrium (2.11)-(2.14), the
+ramp-raising torque (3.3.1) and the collector pitch lock (A.37).
+
+The thesis does not publish the DSA-380 data: the preset ``data/dsa380-rigid.toml`` is a
+constructed, calibrated set (see ``scripts/calibrate_dsa380.py`` and
+``docs/dsa380-calibration.md``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import ParameterError
+from ..core.model import Evaluation
+from ..core.params import Table, check_number, load_toml
+from . import dsa380_kinematics as kin
+from .base import PantographModel, PantographOptions, reject_nonfinite_force
+
+DATA_DIR = Path(__file__).resolve().parent / "data"
+PRESET_FILE = DATA_DIR / "dsa380-rigid.toml"
+
+#: mode labels by dominant coordinate (kinetic-energy sense)
+MODE_LABELS = {"theta": "mechanism", "x10": "collector horizontal",
+               "y10": "collector vertical", "theta7": "collector pitch"}
+
+_BAR_KEYS = ("L", "m", "I", "LG", "thetaG")
+
+
+@dataclass
+class Bar:
+    """One rigid bar: length L, mass m, inertia I about its centre of gravity, and the centre
+    of gravity at distance LG and angle thetaG from the bar's reference end (Fig. 2.5)."""
+
+    L: float
+    m: float
+    I: float
+    LG: float = 0.0
+    thetaG: float = 0.0
+
+
+@dataclass
+class Dsa380Parameters:
+    """Geometry, inertia, springs and damper of the rigid DSA-380 model (Fig. 2.2-2.5).
+
+    Fixed points (x, y) are relative to point 2 of the roof frame, which sits at
+    ``base_height`` above the rail. Bars 1-6 form the mechanism, bar 7 is the collector
+    (reference point 10, its centre)."""
+
+    base_height: float
+    p1: tuple[float, float]
+    p13: tuple[float, float]
+    bars: list[Bar]                 # bars 1..7
+    theta34: float                  # constant angle between bars 3 and 4 (A.1)
+    r: float                        # |1-6| on bar 1
+    theta_r: float                  # angle between bar 1 and 1-6
+    L1p: float                      # damper lever on bar 1 (A.13)
+    theta_1p: float
+    lower_branch: float = 1.0       # assembly mode of the lower loop (+1/-1)
+    upper_branch: float = 1.0       # assembly mode of the upper loop (+1/-1)
+    k_r: float = 0.0                # torsional spring at joint 1 [N m/rad]
+    theta_r0: float = 0.0           # its unloaded angle [rad]
+    k_l: float = 0.0                # each collector spring [N/m]
+    l0: float = 0.0                 # their unloaded length [m]
+    c: float = 0.0                  # damper constant [N s/m]
+    g: float = 9.81
+    theta_min: float = 0.2          # mechanical stops of the lower arm [rad]
+    theta_max: float = 1.2
+    working_height: float = 5.3     # default contact height above the rail [m]
+    source: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ vector
+    def vector(self) -> np.ndarray:
+        """Flat parameter vector of the numba kernels (layout in dsa380_kinematics)."""
+        P = np.zeros(kin.NPAR)
+        yb = self.base_height
+        P[kin.X1], P[kin.Y1] = self.p1[0], self.p1[1] + yb
+        P[kin.X2], P[kin.Y2] = 0.0, yb
+        P[kin.X13], P[kin.Y13] = self.p13[0], self.p13[1] + yb
+        for i, b in enumerate(self.bars):
+            P[kin.L1 + i] = b.L
+            P[kin.M_ + i] = b.m
+            P[kin.I_ + i] = b.I
+            P[kin.LG_ + i] = b.LG
+            P[kin.THG_ + i] = b.thetaG
+        P[kin.TH34] = self.theta34
+        P[kin.R6] = self.r
+        P[kin.THR] = self.theta_r
+        P[kin.L1P] = self.L1p
+        P[kin.TH1P] = self.theta_1p
+        P[kin.SIG_LO] = self.lower_branch
+        P[kin.SIG_UP] = self.upper_branch
+        P[kin.KR] = self.k_r
+        P[kin.THR0] = self.theta_r0
+        P[kin.KL] = self.k_l
+        P[kin.LL0] = self.l0
+        P[kin.CDAMP] = self.c
+        P[kin.GRAV] = self.g
+        return P
+
+    # ------------------------------------------------------------------ validation
+    def validate(self) -> None:
+        """Physical checks; errors name the source, the field and the value."""
+        src = self.source
+        check_number("frame.base_height", self.base_height, source=src, nonnegative=True)
+        for i, b in enumerate(self.bars):
+            n = f"bar{i + 1}"
+            check_number(f"{n}.L", b.L, source=src, positive=True)
+            check_number(f"{n}.m", b.m, source=src, positive=True)
+            check_number(f"{n}.I", b.I, source=src, nonnegative=True)
+            check_number(f"{n}.LG", b.LG, source=src, nonnegative=True)
+            check_number(f"{n}.thetaG", b.thetaG, source=src)
+        if self.bars[6].I + self.bars[6].m * self.bars[6].LG ** 2 <= 0.0:
+            raise ParameterError("bar7.I", self.bars[6].I, "collector pitch inertia must be > 0",
+                                 src)
+        for name in ("theta34", "theta_r", "theta_1p", "theta_r0"):
+            check_number(f"links.{name}" if name != "theta_r0" else "springs.theta_r0",
+                         getattr(self, name), source=src)
+        check_number("links.r", self.r, source=src, positive=True)
+        check_number("damper.L1p", self.L1p, source=src, positive=True)
+        check_number("springs.k_r", self.k_r, source=src, nonnegative=True)
+        check_number("springs.k_l", self.k_l, source=src, positive=True)
+        check_number("springs.l0", self.l0, source=src, nonnegative=True)
+        check_number("damper.c", self.c, source=src, nonnegative=True)
+        check_number("g", self.g, source=src, nonnegative=True)
+        for name in ("lower_branch", "upper_branch"):
+            v = getattr(self, name)
+            if v not in (1.0, -1.0, 1, -1):
+                raise ParameterError(f"links.{name}", v, "must be +1 or -1", src)
+        check_number("frame.theta_min", self.theta_min, source=src)
+        check_number("frame.theta_max", self.theta_max, source=src)
+        if not self.theta_min < self.theta_max:
+            raise ParameterError("frame.theta_max", self.theta_max,
+                                 f"must be > frame.theta_min = {self.theta_min}", src)
+        check_number("frame.working_height", self.working_height, source=src, positive=True)
+        # the loops must close, and point 5 must rise monotonically, over the stops' range
+        P = self.vector()
+        ths = np.linspace(self.theta_min, self.theta_max, 121)
+        y5p = np.empty_like(ths)
+        for k, th in enumerate(ths):
+            ok, A, V, p5 = kin.mechanism_terms(P, th)
+            if not ok > 0.0:
+                raise ParameterError("frame.theta_min/theta_max",
+                                     (self.theta_min, self.theta_max),
+                                     f"the loops (A.1) cannot be closed at theta = {th:.4f} rad: "
+                                     "check bar lengths and the fixed points", src)
+            y5p[k] = p5[3]
+        if not (np.all(y5p > 0.0) or np.all(y5p < 0.0)):
+            raise ParameterError("frame.theta_min/theta_max", (self.theta_min, self.theta_max),
+                                 "point 5 must move monotonically with theta over the range", src)
+        sep = np.hypot(self.p1[0], self.p1[1])
+        if sep <= 0.0:
+            raise ParameterError("frame.x1", self.p1, "points 1 and 2 must differ", src)
+
+
+def _read_bar(t: Table, name: str) -> Bar:
+    s = t.sub(name)
+    s.unknown_keys(set(_BAR_KEYS) | {"tube"})
+    return Bar(L=s.number("L", positive=True), m=s.number("m", positive=True),
+               I=s.number("I", nonnegative=True), LG=s.number("LG", 0.0, nonnegative=True),
+               thetaG=s.number("thetaG", 0.0))
+
+
+def read_parameters(path: str | Path) -> tuple[Dsa380Parameters, Table, dict]:
+    """Read and validate a DSA-380 parameter file (TOML)."""
+    source = str(path)
+    data = load_toml(path)
+    root = Table(data, source)
+    root.unknown_keys({"name", "description", "frame", "bars", "links", "springs", "damper",
+                       "options", "variant", "calibration"})
+    fr = root.sub("frame")
+    fr.unknown_keys({"base_height", "x1", "y1", "theta_min", "theta_max", "working_height", "g"})
+    bars_t = root.sub("bars")
+    bars_t.unknown_keys({f"bar{i}" for i in range(1, 8)})
+    bars = [_read_bar(bars_t, f"bar{i}") for i in range(1, 8)]
+    ln = root.sub("links")
+    ln.unknown_keys({"theta34", "r", "theta_r", "lower_branch", "upper_branch"})
+    sp = root.sub("springs")
+    sp.unknown_keys({"k_r", "theta_r0", "k_l", "l0"})
+    dp = root.sub("damper")
+    dp.unknown_keys({"c", "L1p", "theta_1p", "x13", "y13"})
+    params = Dsa380Parameters(
+        base_height=fr.number("base_height", nonnegative=True),
+        p1=(fr.number("x1"), fr.number("y1")),
+        p13=(dp.number("x13"), dp.number("y13")),
+        bars=bars,
+        theta34=ln.number("theta34"), r=ln.number("r", positive=True),
+        theta_r=ln.number("theta_r"),
+        L1p=dp.number("L1p", positive=True), theta_1p=dp.number("theta_1p"),
+        lower_branch=ln.number("lower_branch", 1.0), upper_branch=ln.number("upper_branch", 1.0),
+        k_r=sp.number("k_r", nonnegative=True), theta_r0=sp.number("theta_r0"),
+        k_l=sp.number("k_l", positive=True), l0=sp.number("l0", nonnegative=True),
+        c=dp.number("c", nonnegative=True), g=fr.number("g", 9.81, nonnegative=True),
+        theta_min=fr.number("theta_min"), theta_max=fr.number("theta_max"),
+        working_height=fr.number("working_height", positive=True),
+        source=source)
+    params.validate()
+    variant = root.sub("variant", required=False)
+    variant.unknown_keys({"pitch_lock"})
+    flags = {"pitch_lock": variant.boolean("pitch_lock", False)}
+    return params, root, flags
+
+
+class Dsa380Model(PantographModel):
+    """Rigid-body DSA-380 pantograph, q = (theta, x10, y10, theta7) (2.1).
+
+    ``pitch_lock=True`` removes theta7 (A.37: theta7 = 0 and its derivatives vanish), leaving
+    q = (theta, x10, y10). The actuation torque on bar 1 is set by :meth:`static_equilibrium`
+    ((2.14), stored in :attr:`torque`); with ``options.ramp`` it is
+    M_low + ramp.factor(t) (M0 - M_low) (thesis 3.3.1, only the torque is weighted)."""
+
+    name = "dsa380-rigid"
+
+    def __init__(self, params: Dsa380Parameters, options: PantographOptions | None = None,
+                 pitch_lock: bool = False, name: str = "dsa380-rigid"):
+        super().__init__(options)
+        params.validate()
+        self.params = params
+        self.name = name
+        self.pitch_lock = bool(pitch_lock)
+        self.n_dofs = 3 if self.pitch_lock else 4
+        self.dof_names = ("theta", "x10", "y10") if self.pitch_lock else \
+            ("theta", "x10", "y10", "theta7")
+        self._P = params.vector()
+        self._vec = np.zeros((3, 4))
+        self._mat = np.zeros((4, 4, 4))
+        self._q4 = np.zeros(4)
+        self._v4 = np.zeros(4)
+        self._a4 = np.zeros(4)
+        self._gradient = np.zeros(self.n_dofs)
+        self._gradient[2] = 1.0
+        self.torque = 0.0
+        self.torque_lowered = None
+        self.q_equilibrium = None
+        self.static_equilibrium()
+
+    # ------------------------------------------------------------------ kernel access
+    def _kernel(self, q, v, a, F, M_act, F_aero, f_r, k_t, one_way):
+        n = self.n_dofs
+        q4, v4, a4 = self._q4, self._v4, self._a4
+        q4[:n] = q
+        v4[:n] = v
+        a4[:n] = a
+        if n == 3:
+            q4[3] = v4[3] = a4[3] = 0.0
+        ok = kin.evaluate_kernel(self._P, q4, v4, a4, F, M_act, F_aero, f_r, k_t, one_way,
+                                 self._vec, self._mat)
+        if not ok > 0.0:
+            raise ParameterError("theta", float(q4[0]),
+                                 "the mechanism loops (A.1) cannot be closed at this angle",
+                                 self.name)
+        return self._vec, self._mat
+
+    def actuation_torque(self, t: float) -> float:
+        """Torque on bar 1 at time t (2.14), ramp-weighted (3.3.1)."""
+        ramp = self.options.ramp
+        if ramp is None or self.torque_lowered is None:
+            return self.torque
+        return self.torque_lowered + ramp.factor(t) * (self.torque - self.torque_lowered)
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        """Residual pieces and exact tangents (A.36), (3.27)-(3.34), (B.19)."""
+        F = 0.0 if inputs is None else reject_nonfinite_force(inputs[0])
+        o = self.options
+        vec, mat = self._kernel(np.asarray(q, float), np.asarray(v, float),
+                                np.asarray(a, float), F, self.actuation_torque(t),
+                                o.aero_force, o.friction_force, o.friction_smoothing,
+                                bool(o.one_way_damper))
+        n = self.n_dofs
+        if not tangent:
+            return Evaluation(f_inertia=vec[0, :n].copy(), f_rest=vec[1, :n].copy())
+        return Evaluation(f_inertia=vec[0, :n].copy(), f_rest=vec[1, :n].copy(),
+                          mass=mat[0, :n, :n].copy(), inertia_q=mat[1, :n, :n].copy(),
+                          damping=mat[2, :n, :n].copy(), stiffness=mat[3, :n, :n].copy())
+
+    # ------------------------------------------------------------------ port contract
+    def contact_height(self, q):
+        return float(q[2])
+
+    def contact_height_gradient(self, q):
+        return self._gradient
+
+    # ------------------------------------------------------------------ post-processing
+    def energies(self, q, v, inputs=None) -> dict:
+        """Kinetic energy T (A.7), potential V (A.10) (gravity from the rail and springs) and
+        the damper power -c v_a^2 (2.33) at (q, v); used by the energy balance (2.30)-(2.34)."""
+        n = self.n_dofs
+        F = 0.0 if inputs is None else float(inputs[0])
+        o = self.options
+        vec, _ = self._kernel(np.asarray(q, float), np.asarray(v, float), np.zeros(n), F, 0.0,
+                              0.0, o.friction_force, o.friction_smoothing,
+                              bool(o.one_way_damper))
+        return {"T": float(vec[2, 0]), "V": float(vec[2, 1]),
+                "damper_power": float(vec[2, 2]), "friction_force": float(vec[2, 3])}
+
+    def points(self, q) -> dict:
+        """Absolute positions of the named points (for plots and checks)."""
+        pts = kin.mechanism_points(self._P, float(q[0]))
+        names = ("1", "2", "3", "4", "5", "6", "5b", "1p")
+        out = {k: pts[i].copy() for i, k in enumerate(names)}
+        th7 = 0.0 if self.pitch_lock else float(q[3])
+        half = 0.5 * self.params.bars[6].L
+        p10 = np.array([q[1], q[2]], float)
+        e7 = np.array([math.cos(th7), math.sin(th7)])
+        out["10"] = p10
+        out["11"] = p10 - half * e7
+        out["12"] = p10 + half * e7
+        out["13"] = np.array([self._P[kin.X13], self._P[kin.Y13]])
+        return out
+
+    def point5(self, theta: float) -> np.ndarray:
+        """(x5, y5, x5', y5', x5'', y5'') at theta."""
+        ok, A, V, p5 = kin.mechanism_terms(self._P, float(theta))
+        return p5
+
+    def generalized_inertia(self, theta: float) -> np.ndarray:
+        """(A, A', A'') of the mechanism (A.7)."""
+        ok, A, V, p5 = kin.mechanism_terms(self._P, float(theta))
+        return A
+
+    def reachable_heights(self, contact_force: float | None = None) -> tuple[float, float]:
+        """Range of contact heights the mechanism can reach between its stops."""
+        F = self.options.mean_uplift if contact_force is None else float(contact_force)
+        dx, dy, th7 = self._collector_offset(F - self.options.aero_force)
+        ya = self.point5(self.params.theta_min)[1] + dy
+        yb = self.point5(self.params.theta_max)[1] + dy
+        return (min(ya, yb), max(ya, yb))
+
+    def mode_label(self, shape, mass) -> str:
+        """Dominant coordinate of a mode in the kinetic-energy sense, named as in Table 2.2."""
+        energy = np.abs(np.real(shape) * (np.asarray(mass) @ np.real(shape)))
+        return MODE_LABELS[self.dof_names[int(np.argmax(energy))]]
+
+    # ------------------------------------------------------------------ equilibrium
+    def _collector_offset(self, load: float):
+        """Collector equilibrium relative to point 5 under a net downward load on point 10
+        (contact force minus aero uplift): (x10 - x5, y10 - y5, theta7); (2.12) generalised
+        to the full collector (springs, weight and its offset L_G7)."""
+        p = self.params
+        th = 0.5 * (p.theta_min + p.theta_max)
+        p5 = self.point5(th)
+        half = 0.5 * p.bars[6].L
+        W = p.bars[6].m * p.g + load
+        # (2.12): 2 k_l (l - l0) z / l = W, l = sqrt(z^2 + (L7/2)^2); z = y5 - y10
+        z = self._solve_drop(W, half)
+        n = self.n_dofs
+        q = np.zeros(n)
+        q[0] = th
+        q[1] = p5[0]
+        q[2] = p5[1] - z
+        idx = [1, 2] if n == 3 else [1, 2, 3]
+        zero = np.zeros(n)
+        for it in range(60):
+            vec, mat = self._kernel(q, zero, zero, load, 0.0, 0.0, 0.0, 1.0, False)
+            r = vec[1, idx]
+            Kc = mat[3][np.ix_(idx, idx)]
+            dq = np.linalg.solve(Kc, -r)
+            # limit the pitch step (the collector is soft in pitch)
+            if n == 4 and abs(dq[2]) > 0.2:
+                dq *= 0.2 / abs(dq[2])
+            q[idx] += dq
+            if np.max(np.abs(dq)) < 1e-14 * (1.0 + np.max(np.abs(q[idx]))):
+                break
+        vec, mat = self._kernel(q, zero, zero, load, 0.0, 0.0, 0.0, 1.0, False)
+        res = np.max(np.abs(vec[1, idx]))
+        if not res < 1e-8 * max(1.0, abs(W)):
+            raise ParameterError("contact_force", load,
+                                 f"no collector equilibrium found (residual {res:.3g} N)",
+                                 self.name)
+        th7 = 0.0 if n == 3 else float(q[3])
+        return float(q[1] - p5[0]), float(q[2] - p5[1]), th7
+
+    def _solve_drop(self, W: float, half: float) -> float:
+        """Scalar (2.12) for the symmetric collector drop z = y5 - y10 (bisection).
+
+        Beyond the length where the springs are unloaded (|z| > z_s) the vertical spring force
+        grows monotonically, so the hanging root (|z| > z_s, sign of W) is unique."""
+        p = self.params
+        k, l0 = p.k_l, p.l0
+        zs = math.sqrt(max(l0 * l0 - half * half, 0.0))
+        if W == 0.0:
+            return zs
+
+        def fz(z):
+            ll = math.hypot(z, half)
+            return 2.0 * k * (ll - l0) * z / ll - W
+
+        s = 1.0 if W > 0 else -1.0
+        a, b = s * zs, s * (zs + 1.0)
+        while fz(b) * s < 0.0:
+            b = s * (abs(b) * 2.0)
+            if abs(b) > 1e3:
+                raise ParameterError("springs.k_l", k, "collector springs cannot carry the "
+                                     f"load {W:.6g} N", p.source)
+        for _ in range(200):
+            m = 0.5 * (a + b)
+            if fz(m) * s < 0.0:
+                a = m
+            else:
+                b = m
+        return 0.5 * (a + b)
+
+    def _theta_for_y5(self, y5: float, height: float, F: float) -> float:
+        p = self.params
+        ya = self.point5(p.theta_min)[1]
+        yb = self.point5(p.theta_max)[1]
+        if not (min(ya, yb) <= y5 <= max(ya, yb)):
+            lo, hi = self.reachable_heights(F)
+            raise ParameterError("height", height,
+                                 f"the mechanism cannot reach this contact height: reachable "
+                                 f"range {lo:.4f} .. {hi:.4f} m above the rail "
+                                 f"(lower-arm stops {p.theta_min:.4f} .. {p.theta_max:.4f} rad)",
+                                 self.name)
+        a, b = p.theta_min, p.theta_max
+        th = a + (b - a) * (y5 - ya) / (yb - ya)
+        for _ in range(100):
+            p5 = self.point5(th)
+            f = p5[1] - y5
+            if abs(f) < 1e-14:
+                break
+            if (f > 0) == (yb > ya):
+                b = th
+            else:
+                a = th
+            step = th - f / p5[3]
+            th = step if min(a, b) < step < max(a, b) else 0.5 * (a + b)
+        return th
+
+    def _equilibrium(self, F: float, height: float) -> tuple[np.ndarray, float]:
+        """(2.12)-(2.14): collector drop, theta from (2.13), torque M0 from (2.14)."""
+        o = self.options
+        net = F - o.aero_force
+        dx, dy, th7 = self._collector_offset(net)
+        theta = self._theta_for_y5(height - dy, height, F)
+        p5 = self.point5(theta)
+        n = self.n_dofs
+        q0 = np.zeros(n)
+        q0[0] = theta
+        q0[1] = p5[0] + dx
+        q0[2] = height
+        if n == 4:
+            q0[3] = th7
+        zero = np.zeros(n)
+        vec, _ = self._kernel(q0, zero, zero, F, 0.0, o.aero_force, 0.0, 1.0, False)
+        # (2.14) generalised: the torque balances gravity, springs and the transmitted load
+        M0 = float(vec[1, 0])
+        return q0, M0
+
+    def static_equilibrium(self, contact_force=None, height=None):
+        """Equilibrium under ``contact_force`` [N] (default: mean uplift) with point 10 at
+        ``height`` [m above rail] (default: the preset working height). Stores the actuation
+        torque M0 (2.14) in :attr:`torque` and returns q0 (2.11)-(2.13)."""
+        F = self.options.mean_uplift if contact_force is None else \
+            reject_nonfinite_force(contact_force)
+        h = self.params.working_height if height is None else float(height)
+        check_number("height", h, source=self.name, positive=True)
+        q0, M0 = self._equilibrium(F, h)
+        self.torque = M0
+        self.q_equilibrium = q0.copy()
+        self.static_contact_force = F
+        ramp = self.options.ramp
+        if ramp is not None:
+            self.lowered_equilibrium(ramp.lowered_height)
+        else:
+            self.torque_lowered = None
+        return q0
+
+    def lowered_equilibrium(self, height):
+        """Equilibrium without contact force at a lowered contact ``height`` (ramp start,
+        thesis 3.3.1): stores its torque M_low in :attr:`torque_lowered` and returns q."""
+        h = check_number("ramp.lowered_height", height, source=self.name, positive=True)
+        q, M_low = self._equilibrium(0.0, h)
+        self.torque_lowered = M_low
+        return q
+
+    def equilibrium_info(self) -> dict:
+        """Extra equilibrium data for reports (used by ``pantocosim modal``)."""
+        return {"actuation_torque_nm": float(self.torque),
+                "lowered_torque_nm": None if self.torque_lowered is None
+                else float(self.torque_lowered)}
+
+
+def load_dsa380(path: str | Path | None = None, options: PantographOptions | None = None,
+                pitch_lock: bool | None = None) -> Dsa380Model:
+    """Load a rigid DSA-380 parameter file (None: the preset ``dsa380-rigid.toml``)."""
+    path = PRESET_FILE if path is None else Path(path)
+    params, root, flags = read_parameters(path)
+    if options is None:
+        options = PantographOptions.from_table(root.sub("options", required=False))
+    lock = flags["pitch_lock"] if pitch_lock is None else bool(pitch_lock)
+    name = root.string("name", "dsa380-rigid")
+    return Dsa380Model(params, options, pitch_lock=lock, name=name)
