@@ -148,7 +148,7 @@ def construct() -> tuple[Dsa380Parameters, dict]:
                 best = (err, s_lo, s_up)
     params.lower_branch, params.upper_branch = best[1], best[2]
     notes["assembly_check_m"] = float(best[0])
-    # lower-arm stops: contact heights ~0.95 .. 2.75 m above the base
+    # lower-arm stops: point 5 at 0.58 .. 2.80 m above the base (contact ~0.55 .. 2.77 m)
     P = params.vector()
     yb = BASE_HEIGHT + p1[1]
     th_grid = np.linspace(0.05, 1.5, 2901)
@@ -157,7 +157,7 @@ def construct() -> tuple[Dsa380Parameters, dict]:
     th_grid, y5 = th_grid[ok], y5[ok]
     if not np.all(np.diff(y5) > 0):
         raise RuntimeError("constructed mechanism: point 5 not monotonic in theta")
-    params.theta_min = float(np.interp(BASE_HEIGHT + 0.95, y5, th_grid))
+    params.theta_min = float(np.interp(BASE_HEIGHT + 0.58, y5, th_grid))
     params.theta_max = float(np.interp(BASE_HEIGHT + 2.80, y5, th_grid))
     del yb
     # damper: lever L1p perpendicular to bar 1; point 13 so that the damper is perpendicular
@@ -266,7 +266,7 @@ description = "DSA-380 rigid-body model, constructed geometry calibrated to thes
 base_height = {p.base_height:.10g}     # point 2 (origin of the frame) above the rail [m]
 x1 = {p.p1[0]:.10g}             # point 1 (lower-arm pivot) relative to point 2 [m]
 y1 = {p.p1[1]:.10g}
-theta_min = {p.theta_min:.10g}      # lower-arm stops [rad] (contact height ~0.95 .. 2.8 m above base)
+theta_min = {p.theta_min:.10g}      # lower-arm stops [rad] (contact height ~0.55 .. 2.77 m above base)
 theta_max = {p.theta_max:.10g}
 working_height = {p.working_height:.10g}  # default contact height (point 10) above the rail [m]
 g = {p.g}

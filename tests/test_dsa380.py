@@ -295,6 +295,15 @@ def test_unknown_field_and_unreachable_height(tmp_path, model):
     model.static_equilibrium(120.0)
 
 
+def test_unreachable_working_height_in_file(tmp_path):
+    path = _write_variant(tmp_path, r"^working_height = [0-9.]+", "working_height = 9.25")
+    with pytest.raises(ParameterError) as exc:
+        load_dsa380(path)
+    msg = str(exc.value)
+    assert "dsa380-bad.toml" in msg and "frame.working_height" in msg and "9.25" in msg
+    assert "reachable range" in msg
+
+
 def test_nonfinite_force_is_rejected(model):
     z = np.zeros(4)
     for bad in (np.nan, np.inf):
