@@ -1,0 +1,251 @@
+"""The catenary as a second-order model on the shared HHT-alpha integrator (thesis 3.3.3).
+
+    f_inertia = M a                                   (constant mass, (3.25))
+    f_rest    = C v + F_elast(q) - F_weight - sum_k N_k^T F_k      ((3.26), (3.12)-(3.13))
+
+with C = alpha M + beta K0 (Rayleigh (3.1); K0 the tangent at the static configuration) and
+F_k >= 0 the contact force of pantograph k pushing the contact wire up at
+x_k(t) = x0_k + V t (3.11). The force enters ``f_rest``, so the integrator weights it like
+any internal force.
+
+Coordinates ``q`` (free DOFs, numbered along the track): y, z and the slopes are absolute;
+x positions are stored relative to each node's station (absolute x = station + q) to keep
+round-off small on long lines. Heights are from the rail, so z_wire = N @ q[dofs] exactly.
+
+Slack droppers (thesis 3.1.2, 3.3.3): the elastic force of a dropper follows the tension-only
+law at the current Newton iterate (the force is continuous: zero at the unstretched length),
+so the set used by the elastic force and tangent is updated *within* the iterations; the
+dropper's share of the Rayleigh damping (beta K0_d) is removed according to the slack set
+*committed* at the end of the previous accepted step (keeps the residual continuous within a
+step). Both sets are deterministic functions of the iterate / the committed state; the
+committed set is the model's internal state (:meth:`get_internal_state`), and
+``Evaluation.structure_key`` changes whenever either set changes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..core.errors import ParameterError
+from ..core.model import Evaluation, SecondOrderModel
+from .contact import ContactLocator, ContactPoint
+from .definition import CatenaryDefinition, load_catenary
+from .mesh import CatenaryMesh, build_mesh
+from .statics import (InitialConfiguration, point_load_vector, solve_initial_configuration,
+                      solve_static)
+from .structure import scatter_add
+
+
+class CatenaryModel(SecondOrderModel):
+    """Finite-element catenary with moving point loads.
+
+    ``CatenaryModel(catenary, x0=(x_1, ...), speed=V)``: ``catenary`` is a preset name, a
+    path, a :class:`CatenaryDefinition` or a prepared :class:`CatenaryMesh`. Construction
+    solves the initial-configuration problem (definitions) or the static equilibrium
+    (bare meshes), which becomes the reference configuration.
+    """
+
+    def __init__(self, catenary, x0=(0.0,), speed: float = 0.0, *,
+                 element_size: float | None = None, rayleigh: tuple | None = None):
+        if isinstance(catenary, CatenaryMesh):
+            mesh = catenary
+        else:
+            d = catenary if isinstance(catenary, CatenaryDefinition) else load_catenary(catenary)
+            mesh = build_mesh(d, element_size)
+        self.mesh = mesh
+        self.definition = mesh.definition
+        S = self.structure = mesh.structure
+        self.n_dofs = S.n_free
+        self.speed = float(speed)
+        self.x0 = np.atleast_1d(np.asarray(x0, dtype=float))
+        if not np.all(np.isfinite(self.x0)) or not np.isfinite(self.speed):
+            raise ParameterError("x0", list(self.x0), "positions and speed must be finite")
+        # reference (static) configuration
+        self.initial_configuration: InitialConfiguration | None = None
+        if mesh.definition is not None and mesh.dropper_bars.size:
+            self.initial_configuration = solve_initial_configuration(mesh)
+            self.q_static = self.initial_configuration.q
+        else:
+            self.q_static = solve_static(S, S.x_full[S.free]).q
+        self.x_static = S.full(self.q_static)
+        self.locator = ContactLocator(mesh, self.x_static)
+        for x in self.x0:
+            self.locator.locate(float(x))   # validates the start positions
+        # matrices on the shared pattern
+        f, K0, _ = S.internal(self.x_static, True, tension_only=False)
+        self.K0_data = K0
+        if rayleigh is None:
+            rayleigh = self.definition.rayleigh() if self.definition is not None else (0.0, 0.0)
+        self.alpha_r, self.beta_r = float(rayleigh[0]), float(rayleigh[1])
+        self.M = S.mass
+        self.weight = S.weight
+        self._C_base = self.alpha_r * S.M_data + self.beta_r * K0
+        _, Kb, _ = S.bar_tangent_blocks(self.x_static)
+        db = mesh.dropper_bars
+        self._dropper_C = self.beta_r * Kb[db].reshape(len(db), 36)
+        self._dropper_pos = S.pos_bar_blocks[db]
+        self._slack_committed = np.zeros(len(db), dtype=bool)
+        self._C_data = self._C_base.copy()
+        self._C_key = self._slack_committed.tobytes()
+        self._cp_cache: tuple | None = None
+
+    # ------------------------------------------------------------------ geometry
+    def positions(self, t: float) -> np.ndarray:
+        """Track positions x_k(t) = x0_k + V t of the pantographs, (3.11)."""
+        return self.x0 + self.speed * float(t)
+
+    def contact_points(self, t: float) -> list[ContactPoint]:
+        """For each pantograph, the contact-wire point under it: z_wire = weights @ q[dofs]
+        (+ offset, zero except in an element touching an anchored line end). The local
+        coordinate comes from the reference (static) configuration (3.12) and is not
+        updated with the motion, as in the thesis."""
+        t = float(t)
+        if self._cp_cache is None or self._cp_cache[0] != t:
+            self._cp_cache = (t, [self.locator.point(x) for x in self.positions(t)])
+        return self._cp_cache[1]
+
+    def wire_height(self, t: float, q: np.ndarray) -> np.ndarray:
+        """Height of the contact wire above the rail at each pantograph, (3.13)."""
+        return np.array([cp.weights @ q[cp.dofs] + cp.offset for cp in self.contact_points(t)])
+
+    def wire_velocity(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """d/dt of :meth:`wire_height`: the wire's vertical velocity plus the convective
+        term V dz/dx seen by the moving pantograph."""
+        out = []
+        for cp in self.contact_points(t):
+            dzdx = cp.dweights_dx @ q[cp.dofs] + cp.doffset_dx
+            out.append(cp.weights @ v[cp.dofs] + self.speed * dzdx)
+        return np.array(out)
+
+    def contact_wire_height(self, q: np.ndarray, x) -> np.ndarray:
+        """Contact-wire height at arbitrary track positions x (same interpolation)."""
+        out = []
+        for xx in np.atleast_1d(x):
+            cp = self.locator.point(float(xx))
+            out.append(cp.weights @ q[cp.dofs] + cp.offset)
+        return np.array(out)
+
+    @property
+    def support_x(self) -> np.ndarray:
+        return self.mesh.support_x
+
+    def support_uplift(self, q: np.ndarray) -> np.ndarray:
+        """Uplift of the contact wire at every support (steady arm) relative to the static
+        configuration; zero at the two anchored line ends."""
+        dz = self.mesh.node_dofs[self.mesh.support_contact_nodes, 2]
+        return self.structure.full(q)[dz] - self.x_static[dz]
+
+    def dropper_forces(self, q: np.ndarray) -> np.ndarray:
+        """Axial force of every dropper (N, tension positive, zero when slack)."""
+        return self.structure.bar_axial_forces(self.structure.full(q))[self.mesh.dropper_bars]
+
+    # ------------------------------------------------------------------ statics
+    def static_solution(self, point_loads=(), tol: float = 1e-10):
+        """Static equilibrium (3.5)-(3.8) with upward point loads [(x, F), ...] on the
+        contact wire (droppers tension-only); returns a StaticResult."""
+        P = point_load_vector(self.structure, self.locator, point_loads)
+        return solve_static(self.structure, self.q_static, P, tol=tol)
+
+    def static_state(self, forces=None, t: float = 0.0) -> np.ndarray:
+        """q0 for the integrator: static equilibrium with the pantographs' static contact
+        forces (one per pantograph, at x_k(t)); ``None`` gives the unloaded configuration."""
+        if forces is None:
+            return self.q_static.copy()
+        forces = np.broadcast_to(np.asarray(forces, float), self.x0.shape)
+        return self.static_solution(list(zip(self.positions(t), forces))).q
+
+    def elasticity(self, x, force: float = 100.0) -> np.ndarray:
+        """Static uplift per unit force (m/N) under an upward force at each x."""
+        z0 = self.contact_wire_height(self.q_static, x)
+        out = []
+        for xx, z in zip(np.atleast_1d(x), z0):
+            q = self.static_solution([(float(xx), force)]).q
+            out.append((self.contact_wire_height(q, [xx])[0] - z) / force)
+        return np.array(out)
+
+    def equilibrium_residual(self, q: np.ndarray) -> float:
+        """max |F_elast - F_weight| / max |F_weight| at q (static, droppers tension-only)."""
+        f, _, _ = self.structure.internal(self.structure.full(q), False)
+        R = f[self.structure.free] - self.weight
+        return float(np.max(np.abs(R)) / np.max(np.abs(self.weight)))
+
+    # ------------------------------------------------------------------ modal analysis
+    def modes(self, count: int = 10, shift: float = 0.0):
+        """Lowest ``count`` natural frequencies (Hz) and mode shapes (columns) about the
+        static configuration: K0 phi = omega^2 M phi (eigsh, shift-invert)."""
+        K = self.structure.csr(self.K0_data)
+        count = int(count)
+        if count < 1 or count >= self.n_dofs:
+            raise ParameterError("count", count, f"must be in [1, {self.n_dofs - 1}]")
+        lam, phi = spla.eigsh(sp.csc_matrix(K), k=count, M=sp.csc_matrix(self.M),
+                              sigma=shift, which="LM")
+        order = np.argsort(lam)
+        lam, phi = lam[order], phi[:, order]
+        return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), phi
+
+    # ------------------------------------------------------------------ dynamics
+    def _damping_data(self, slack):
+        key = slack.tobytes()
+        if key != self._C_key:
+            C = self._C_base.copy()
+            if slack.any():
+                scatter_add(C, self._dropper_pos[slack].ravel(), -self._dropper_C[slack].ravel())
+            self._C_data, self._C_key = C, key
+        return self._C_data
+
+    def input_vector(self, t: float, inputs) -> np.ndarray:
+        """sum_k N_k^T F_k on the free DOFs (upward contact forces)."""
+        P = np.zeros(self.n_dofs)
+        if inputs is None:
+            return P
+        F = np.atleast_1d(np.asarray(inputs, dtype=float))
+        if F.shape != self.x0.shape:
+            raise ParameterError("inputs", F.tolist(),
+                                 f"needs one contact force per pantograph ({self.x0.size})")
+        if not np.all(np.isfinite(F)):
+            raise ParameterError("inputs", F.tolist(), "contact forces must be finite")
+        for cp, Fk in zip(self.contact_points(t), F):
+            if Fk != 0.0:
+                np.add.at(P, cp.dofs, Fk * cp.weights)
+        return P
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
+        S = self.structure
+        f, K, slack_now = S.internal(S.full(q), tangent)
+        db = self.mesh.dropper_bars
+        slack_now = slack_now[db]
+        Cd = self._damping_data(self._slack_committed)
+        C = S.csr(Cd)
+        f_rest = C @ v + f[S.free] - self.weight - self.input_vector(t, inputs)
+        ev = Evaluation(f_inertia=self.M @ a, f_rest=f_rest,
+                        structure_key=(slack_now.tobytes(), self._C_key))
+        if tangent:
+            ev.mass = self.M
+            ev.damping = C
+            ev.stiffness = S.csr(K)
+        return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """c_a M + c_f (c_v C + K) on the shared pattern (adds data arrays only)."""
+        data = c_a * ev.mass.data + c_f * (c_v * ev.damping.data + ev.stiffness.data)
+        return self.structure.csr(data)
+
+    def factorize(self, S):
+        lu = spla.splu(sp.csc_matrix(S))
+        return lu.solve
+
+    def commit(self, t, q, v, a, inputs) -> None:
+        S = self.structure
+        N = S.bar_axial_forces(S.full(q), tension_only=False)[self.mesh.dropper_bars]
+        self._slack_committed = N < 0.0
+
+    def get_internal_state(self):
+        return {"slack": self._slack_committed.copy()}
+
+    def set_internal_state(self, state) -> None:
+        if state is None:
+            self._slack_committed = np.zeros(len(self.mesh.dropper_bars), dtype=bool)
+        else:
+            self._slack_committed = np.array(state["slack"], dtype=bool).copy()
