@@ -6,9 +6,11 @@ inertias. This script builds them in two steps and records the result:
 
 1. Construction (assumptions, documented in the generated TOML and docs):
    - single-arm geometry: lower arm L1, upper arm L4 with its lever L3 below the elbow
-     (bars 3-4 colinear, theta34 = pi), lower control rod L2 from the fixed point 2 chosen so
-     that point 5 moves as nearly vertically as possible over the working range (least-squares
-     circle through the trajectory point 3 must follow for a vertical head path);
+     (bars 3-4 first colinear), lower control rod L2 from the fixed point 2 first chosen so
+     that point 5 moves vertically (least-squares circle through the trajectory point 3 must
+     follow for a vertical head path), then point 1, L2, L3 and theta34 refined so that the
+     lever dy5/dtheta is nearly constant (a nearly linear mechanism, as the thesis finds in
+     2.3.2) with a small drift of point 5 along the track and well-conditioned loops;
    - head-levelling parallelogram: point 6 on bar 1 near the elbow, bar 5 parallel to bar 4,
      bar 6 the short head bracket;
    - bar masses from the tube sections of thesis Table 2.1 (m = rho pi L (r_ext^2 - r_int^2),
@@ -90,6 +92,50 @@ def uniform_bar(i: int, L: float) -> Bar:
                thetaG=0.0)
 
 
+def refine_linkage(params: Dsa380Parameters) -> dict:
+    """Least squares on (x1, y1, L2, L3, theta34) and the angles at the ends of the range:
+    uniform lever y5'(theta), small drift of x5, loops well conditioned (h >= 0.1 m)."""
+    base = params.base_height
+    P0 = params.vector()
+
+    def unpack(z):
+        P = P0.copy()
+        P[kin.X1], P[kin.Y1], P[kin.L2], P[kin.L3], P[kin.TH34] = z[0], z[1] + base, z[2], \
+            z[3], z[4]
+        return P, z[5], z[6]
+
+    def res(z):
+        P, ta, tb = unpack(z)
+        y5p, x5, hh = [], [], []
+        for t in np.linspace(ta, tb, 25):
+            ok, A, V, p5 = kin.mechanism_terms(P, t)
+            if not ok > 1e-6:
+                return np.full(53, 10.0)
+            y5p.append(p5[3])
+            x5.append(p5[0])
+            hh.append(math.sqrt(ok))
+        y5p, x5 = np.array(y5p), np.array(x5)
+        ya = kin.mechanism_terms(P, ta)[3][1] - base
+        yb = kin.mechanism_terms(P, tb)[3][1] - base
+        return np.concatenate([y5p / y5p.mean() - 1.0, x5 - x5.mean(),
+                               [10 * (ya - FIT_HEIGHTS[0]), 10 * (yb - FIT_HEIGHTS[1]),
+                                10 * max(0.0, 0.1 - min(hh))]])
+
+    z0 = [params.p1[0], params.p1[1], params.bars[1].L, params.bars[2].L, params.theta34,
+          0.32, 0.8]
+    lb = [-0.7, 0.1, 0.8, 0.2, math.pi - 0.6, 0.1, 0.3]
+    ub = [0.3, 0.5, 2.5, 0.45, math.pi + 0.6, 1.2, 1.4]
+    sol = least_squares(res, np.clip(z0, lb, ub), bounds=(lb, ub))
+    x1, y1, L2, L3, th34 = (float(v) for v in sol.x[:5])
+    params.p1 = (x1, y1)
+    params.bars[1] = uniform_bar(2, L2)
+    params.bars[2] = uniform_bar(3, L3)
+    params.theta34 = th34
+    r = res(sol.x)
+    return {"lever_max_relative_deviation": float(np.max(np.abs(r[:25]))),
+            "head_drift_max_m": float(np.max(np.abs(r[25:50])))}
+
+
 def construct() -> tuple[Dsa380Parameters, dict]:
     """Step 1: geometry, masses, damper lever (see the module docstring)."""
     notes = {}
@@ -148,25 +194,36 @@ def construct() -> tuple[Dsa380Parameters, dict]:
                 best = (err, s_lo, s_up)
     params.lower_branch, params.upper_branch = best[1], best[2]
     notes["assembly_check_m"] = float(best[0])
+    # refinement: move point 1 and size the rod L2, the lever L3 and theta34 so that point 5
+    # rises with a nearly constant lever dy5/dtheta (a nearly linear mechanism) while its
+    # horizontal drift stays small, between point-5 heights FIT_HEIGHTS above the base
+    refine = refine_linkage(params)
+    notes.update(refine)
     # lower-arm stops: point 5 at 0.58 .. 2.80 m above the base (contact ~0.55 .. 2.77 m)
     P = params.vector()
-    yb = BASE_HEIGHT + p1[1]
-    th_grid = np.linspace(0.05, 1.5, 2901)
+    th_grid = np.linspace(-0.4, 1.5, 3801)
     y5 = np.array([kin.mechanism_terms(P, t)[3][1] for t in th_grid])
     ok = np.isfinite(y5)
     th_grid, y5 = th_grid[ok], y5[ok]
-    if not np.all(np.diff(y5) > 0):
-        raise RuntimeError("constructed mechanism: point 5 not monotonic in theta")
+    # the branch on which point 5 rises with theta, around the working height
+    up = np.diff(y5) > 0
+    k0 = int(np.argmin(np.abs(y5 - WORKING_HEIGHT)))
+    a = k0
+    while a > 0 and up[a - 1]:
+        a -= 1
+    b = k0
+    while b < len(up) and up[b]:
+        b += 1
+    th_grid, y5 = th_grid[a:b + 1], y5[a:b + 1]
     params.theta_min = float(np.interp(BASE_HEIGHT + 0.58, y5, th_grid))
     params.theta_max = float(np.interp(BASE_HEIGHT + 2.80, y5, th_grid))
-    del yb
     # damper: lever L1p perpendicular to bar 1; point 13 so that the damper is perpendicular
     # to the lever at the working height; c l_a'^2 / y5'^2 = C_HEAD there
     th_w = float(np.interp(WORKING_HEIGHT + 0.02, y5, th_grid))
     y5p = kin.mechanism_terms(P, th_w)[3][3]
     L1p = abs(y5p) * math.sqrt(C_HEAD / C_DAMPER)
     params.L1p = float(L1p)
-    p1p = np.array(p1) + L1p * e(th_w + THETA_1P)
+    p1p = np.array(params.p1) + L1p * e(th_w + THETA_1P)
     p13 = p1p - DAMPER_LENGTH * e(th_w + THETA_1P + math.pi / 2)
     params.p13 = (float(p13[0]), float(p13[1]))
     params.theta_r0 = th_w
@@ -384,14 +441,20 @@ m = rho pi L (r_ext^2 - r_int^2), rho = 7850 kg/m3), the damper constant c = 42 
 
 Assumed (engineering choices, all in the script's header and the TOML comments):
 - base (point 2) {BASE_HEIGHT} m above the rail; default working height {WORKING_HEIGHT} m;
-- lower arm L1 = {L1_} m, upper arm L4 = {L4_} m, lever L3 = {L3_} m, bars 3-4 colinear;
-  lower control rod and point 2 fitted so that point 5 moves nearly vertically
-  (max rod-fit residual {out['construction']['rod_fit_max_residual_m'] * 1000:.1f} mm);
+- lower arm L1 = {L1_} m, upper arm L4 = {L4_} m; point 1 (relative to point 2), the
+  lower control rod L2, the upper-arm lever L3 and the angle theta34 fitted so that point 5
+  rises with a nearly constant lever dy5/dtheta (max deviation
+  {100 * out['construction']['lever_max_relative_deviation']:.1f} %) and drifts little along
+  the track (max {1000 * out['construction']['head_drift_max_m']:.0f} mm from its mean) between
+  {FIT_HEIGHTS[0]} and {FIT_HEIGHTS[1]} m above the base;
 - head-levelling parallelogram: point 6 on bar 1, {W6} m behind the elbow, bar 5 = L4;
 - uniform bars (CoG at mid-length, tube inertia); masses [kg] bars 1-7: {m};
 - collector L7 = {L7_} m (m7 from its tube section), CoG at point 10 (L_G7 = 0);
 - damper lever L1p so that the damper gives {C_HEAD:g} N s/m at point 5 (as the frame damper of
   the 3-mass DSA380 model); it then gives {out['damper_theta_damping_nms']:.1f} N m s on theta;
+- the torsional spring k_r that the mechanism mode needs is stiff ({out['calibrated']['springs.k_r']:.0f} N m/rad,
+  i.e. {out['calibrated']['springs.k_r'] / out['point5_lever_dy5_dtheta_m'] ** 2:.0f} N/m at point 5): with a constant torsional
+  stiffness the mechanism frequency therefore grows with the working height;
 - torsional spring unloaded at the working-height angle (the actuation torque M0 = 
   {out['actuation_torque_nm']:.2f} N m carries the static load).
 

@@ -104,13 +104,17 @@ def test_loops_close_and_inertia_matches_numerical_velocities(model):
         assert A[2] == pytest.approx((Ap[1] - Am[1]) / 2e-5, rel=1e-6)
 
 
-def test_head_moves_nearly_vertically_over_the_working_range(model):
-    xs = []
-    for h in (5.0, 5.3, 6.0, 6.5):
+def test_head_moves_nearly_vertically_with_a_nearly_constant_lever(model):
+    """Constructed geometry: over 1.0 .. 2.6 m above the base the collector drifts < 5 cm
+    along the track and dy5/dtheta varies < 5 % (a nearly linear mechanism, thesis 2.3.2)."""
+    xs, levers = [], []
+    for h in np.linspace(4.9, 6.5, 9):
         q = model.static_equilibrium(120.0, h)
         xs.append(q[1])
+        levers.append(model.point5(q[0])[3])
         assert q[2] == pytest.approx(h, abs=1e-12)
-    assert np.ptp(xs) < 0.03
+    assert np.ptp(xs) < 0.05
+    assert np.ptp(levers) < 0.05 * np.mean(levers)
     model.static_equilibrium(120.0)
 
 
