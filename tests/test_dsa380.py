@@ -258,6 +258,76 @@ def test_energy_balance_over_10_s():
     assert abs(integ.q[0] - q_eq[0]) < 1e-3 and abs(integ.q[2] - q_eq[2]) < 2e-3
 
 
+def test_linear_and_nonlinear_responses_agree():
+    """Thesis Fig. 2.18: collector height under F = 120 + 200 sin(4 pi t) N, nonlinear model
+    vs the model linearised about the 120 N equilibrium (same HHT settings)."""
+    from pantocosim.core.linear_model import LinearModel
+
+    m = load_dsa380(None, PantographOptions(static_force=120.0))
+    q0 = m.static_equilibrium(120.0)
+    M, C, K = m.linearize(q0, 120.0)
+    B = np.zeros((4, 1))
+    B[2, 0] = -1.0
+    lin = LinearModel(M, C, K, input_matrix=B)
+    s = HHTSettings(alpha=-0.05)
+    nl_i, li_i = HHTIntegrator(m, s), HHTIntegrator(lin, s)
+    nl_i.initialize(0.0, q0, None, np.array([120.0]))
+    li_i.initialize(0.0, np.zeros(4), None, np.array([0.0]))
+    h = 1e-3
+    y_nl, y_li = [], []
+    for k in range(int(round(6.0 / h))):
+        dF = 200.0 * math.sin(4 * math.pi * (k + 1) * h)
+        nl_i.step(h, np.array([120.0 + dF]))
+        li_i.step(h, np.array([dF]))
+        y_nl.append(nl_i.q[2] - q0[2])
+        y_li.append(li_i.q[2])
+    y_nl, y_li = np.array(y_nl), np.array(y_li)
+    amplitude = 0.5 * np.ptp(y_li)
+    diff = np.max(np.abs(y_nl - y_li))
+    late = slice(len(y_li) // 2, None)
+    diff_late = np.max(np.abs(y_nl[late] - y_li[late])) / (0.5 * np.ptp(y_li[late]))
+    print(f"linear vs nonlinear: max diff {1000 * diff:.2f} mm = {100 * diff / amplitude:.2f} % "
+          f"of the amplitude {1000 * amplitude:.1f} mm; last 3 s: {100 * diff_late:.2f} %")
+    assert amplitude > 0.03
+    assert diff < 0.05 * amplitude
+
+
+# ------------------------------------------------------------------------- friction
+
+def _steady_response(friction_force, T=8.0, h=1e-3):
+    """Collector height under F = 120 + 30 sin(10 pi t) N (thesis Figs. 2.16-2.17): amplitude
+    and phase of the 5 Hz component over the last 2 s, and max |v_r| (2.17)."""
+    m = load_dsa380(None, PantographOptions(static_force=120.0, friction_force=friction_force,
+                                            friction_smoothing=5e-4))
+    q0 = m.static_equilibrium(120.0)
+    w = 10 * math.pi
+    integ = HHTIntegrator(m, HHTSettings(alpha=-0.05))
+    integ.initialize(0.0, q0, None, np.array([120.0]))
+    ts, ys, vr = [], [], []
+    for k in range(int(round(T / h))):
+        t = (k + 1) * h
+        integ.step(h, np.array([120.0 + 30.0 * math.sin(w * t)]))
+        ts.append(t)
+        ys.append(integ.q[2] - q0[2])
+        vr.append(integ.v[2] - m.point5(integ.q[0])[3] * integ.v[0])
+    ts, ys = np.array(ts), np.array(ys)
+    late = ts >= T - 2.0
+    X = np.c_[np.sin(w * ts[late]), np.cos(w * ts[late]), np.ones(late.sum())]
+    c, *_ = np.linalg.lstsq(X, ys[late], rcond=None)
+    return math.hypot(c[0], c[1]), math.degrees(math.atan2(c[1], c[0])), np.max(np.abs(vr))
+
+
+def test_collector_friction_reduces_amplitude_and_shifts_phase():
+    """f_r = 10 N, k_t = 5e-4 m/s (thesis 2.3.2): smaller steady amplitude, phase shift."""
+    a0, p0, v0 = _steady_response(0.0)
+    a1, p1, v1 = _steady_response(10.0)
+    print(f"friction: amplitude {1000 * a0:.3f} -> {1000 * a1:.3f} mm "
+          f"(ratio {a1 / a0:.3f}), phase shift {p1 - p0:+.2f} deg, max|v_r| {v0:.4f} m/s")
+    assert 0.3 < v0 < 2.0  # thesis: 0.7554 m/s without friction
+    assert a1 < 0.95 * a0
+    assert abs(p1 - p0) > 5.0
+
+
 # ------------------------------------------------------------------------- bad input
 
 def _write_variant(tmp_path, pattern, replacement):
