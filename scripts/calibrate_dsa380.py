@@ -400,8 +400,6 @@ def report(model: Dsa380Model, x, notes) -> dict:
         "target_labels": tl,
         "relative_errors": [float(a / b - 1.0) for a, b in zip(f, target)],
         "damped_ratios": [float(z) for z in res.damping_ratios],
-        "damped_abs_lambda_hz": [float(abs(lam) / (2 * math.pi))
-                                 for lam in res.eigenvalues[::2]] if False else None,
         "masses_kg": [b.m for b in p.bars],
         "mechanism_inertia_A_kgm2": float(A[0]),
         "point5_lever_dy5_dtheta_m": float(p5[3]),
@@ -411,7 +409,6 @@ def report(model: Dsa380Model, x, notes) -> dict:
         "reachable_contact_heights_m": list(model.reachable_heights(CALIBRATION_FORCE)),
         "construction": notes,
     }
-    del out["damped_abs_lambda_hz"]
     return out
 
 

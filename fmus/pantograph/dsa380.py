@@ -470,6 +470,8 @@ class Dsa380Model(PantographModel):
         torque M0 (2.14) in :attr:`torque` and returns q0 (2.11)-(2.13)."""
         F = self.options.mean_uplift if contact_force is None else \
             reject_nonfinite_force(contact_force)
+        if F < 0.0:
+            raise ParameterError("contact_force", contact_force, "must be >= 0", self.name)
         h = self.params.working_height if height is None else float(height)
         check_number("height", h, source=self.name, positive=True)
         q0, M0 = self._equilibrium(F, h)
