@@ -89,17 +89,32 @@ def cable_forces(E, dX, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
     """
     ne = E.shape[0]
     ng = gx.shape[0]
+    # shape-function derivatives at the Gauss points, without the 1/L of S1', S3'
+    tab = np.empty((ng, 4))
+    for g in range(ng):
+        xi = gx[g]
+        tab[g, 0] = -6.0 * xi + 6.0 * xi * xi
+        tab[g, 1] = 1.0 - 4.0 * xi + 3.0 * xi * xi
+        tab[g, 2] = 6.0 * xi - 6.0 * xi * xi
+        tab[g, 3] = 3.0 * xi * xi - 2.0 * xi
+    dS = np.empty(4)
+    A = np.empty((4, 4))           # sum_g w N dS_a dS_b
+    B = np.empty((4, 4, 3, 3))     # sum_g w EA dS_a dS_b r'_k r'_l
     for e in range(ne):
         L = Le[e]
+        iL = 1.0 / L
         ea = EA[e]
+        n0 = N0[e]
         for i in range(12):
             f_out[e, i] = 0.0
         if want_K:
-            for i in range(12):
-                for j in range(12):
-                    K_out[e, i, j] = 0.0
+            A[:, :] = 0.0
+            B[:, :, :, :] = 0.0
         for g in range(ng):
-            dS = _dshape(gx[g], L)
+            dS[0] = tab[g, 0] * iL
+            dS[1] = tab[g, 1]
+            dS[2] = tab[g, 2] * iL
+            dS[3] = tab[g, 3]
             w = gw[g] * L
             r0 = dS[2] * dX[e, 0]
             r1 = dS[2] * dX[e, 1]
@@ -109,39 +124,64 @@ def cable_forces(E, dX, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
                 r1 += dS[a] * E[e, 3 * a + 1]
                 r2 += dS[a] * E[e, 3 * a + 2]
             eps = 0.5 * (r0 * r0 + r1 * r1 + r2 * r2 - 1.0)
-            N = N0[e] + ea * eps
+            N = n0 + ea * eps
             for a in range(4):
                 c = w * N * dS[a]
                 f_out[e, 3 * a] += c * r0
                 f_out[e, 3 * a + 1] += c * r1
                 f_out[e, 3 * a + 2] += c * r2
             if want_K:
-                rp = (r0, r1, r2)
+                wea = w * ea
+                r00 = wea * r0 * r0
+                r01 = wea * r0 * r1
+                r02 = wea * r0 * r2
+                r11 = wea * r1 * r1
+                r12 = wea * r1 * r2
+                r22 = wea * r2 * r2
                 for a in range(4):
                     for b in range(4):
-                        cab = w * dS[a] * dS[b]
-                        for k in range(3):
-                            K_out[e, 3 * a + k, 3 * b + k] += cab * N
-                            for l in range(3):
-                                K_out[e, 3 * a + k, 3 * b + l] += cab * ea * rp[k] * rp[l]
-        # bending: EI/L^3 kron(k4, I3) e
+                        s = dS[a] * dS[b]
+                        A[a, b] += w * N * s
+                        B[a, b, 0, 0] += s * r00
+                        B[a, b, 0, 1] += s * r01
+                        B[a, b, 0, 2] += s * r02
+                        B[a, b, 1, 1] += s * r11
+                        B[a, b, 1, 2] += s * r12
+                        B[a, b, 2, 2] += s * r22
+        # bending: EI/L^3 kron(k4, I3) e (offsets enter as dX since k4[:, 0] = -k4[:, 2])
         ei = EI[e]
+        c = ei * iL * iL * iL
+        k00 = 12.0 * c
+        k01 = 6.0 * L * c
+        k11 = 4.0 * L * L * c
+        k13 = 2.0 * L * L * c
         if ei != 0.0:
-            c = ei / (L * L * L)
-            k4 = np.array([[12.0, 6 * L, -12.0, 6 * L],
-                           [6 * L, 4 * L * L, -6 * L, 2 * L * L],
-                           [-12.0, -6 * L, 12.0, -6 * L],
-                           [6 * L, 2 * L * L, -6 * L, 4 * L * L]])
+            for k in range(3):
+                x0 = E[e, k]
+                s0 = E[e, 3 + k]
+                x1 = E[e, 6 + k] + dX[e, k]
+                s1 = E[e, 9 + k]
+                dx = x0 - x1
+                f_out[e, k] += k00 * dx + k01 * (s0 + s1)
+                f_out[e, 3 + k] += k01 * dx + k11 * s0 + k13 * s1
+                f_out[e, 6 + k] += -k00 * dx - k01 * (s0 + s1)
+                f_out[e, 9 + k] += k01 * dx + k13 * s0 + k11 * s1
+        if want_K:
             for a in range(4):
                 for b in range(4):
-                    kab = c * k4[a, b]
                     for k in range(3):
-                        xb = E[e, 3 * b + k]
-                        if b == 2:
-                            xb += dX[e, k]   # k4[:, 0] = -k4[:, 2]: offsets enter as dX
-                        f_out[e, 3 * a + k] += kab * xb
-                        if want_K:
-                            K_out[e, 3 * a + k, 3 * b + k] += kab
+                        for l in range(3):
+                            v = B[a, b, k, l] if k <= l else B[a, b, l, k]
+                            if k == l:
+                                v += A[a, b]
+                            K_out[e, 3 * a + k, 3 * b + l] = v
+            if ei != 0.0:
+                kb = ((k00, k01, -k00, k01), (k01, k11, -k01, k13),
+                      (-k00, -k01, k00, -k01), (k01, k13, -k01, k11))
+                for a in range(4):
+                    for b in range(4):
+                        for k in range(3):
+                            K_out[e, 3 * a + k, 3 * b + k] += kb[a][b]
 
 
 @njit(cache=True)

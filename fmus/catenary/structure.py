@@ -101,6 +101,12 @@ class Structure:
         self.indices = (uk % n).astype(np.int32)
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(uk // n, minlength=n))]
                                      ).astype(np.int32)
+        # lower band storage of the symmetric pattern (for banded Cholesky)
+        ur, uc = uk // n, uk % n
+        low = ur >= uc
+        self.bandwidth = int(np.max(ur - uc)) if uk.size else 0
+        self.band_src = np.flatnonzero(low)
+        self.band_dst = ((ur[low] - uc[low]) * n + uc[low]).astype(np.int64)
         nc, nb = rc.size, rb.size
         self.pos_cable = pos[:nc]
         self.pos_bar = pos[nc:nc + nb]
@@ -155,6 +161,12 @@ class Structure:
         x = self.x_full.copy()
         x[self.free] = q
         return x
+
+    def lower_band(self, data) -> np.ndarray:
+        """(bandwidth + 1, n) lower band storage (LAPACK 'L') of pattern data."""
+        ab = np.zeros((self.bandwidth + 1) * self.n_free)
+        ab[self.band_dst] = data[self.band_src]
+        return ab.reshape(self.bandwidth + 1, self.n_free)
 
     @property
     def mass(self) -> sp.csr_matrix:
