@@ -7,7 +7,9 @@ station, the contact-wire node, the messenger node and (near supports) the stitc
 their 6 DOFs (position, slope) in turn. Every element then couples DOFs of neighbouring
 stations only, so the bandwidth stays about 3 stations x 6 DOFs whatever the line length.
 A stitch wire ends on the messenger: its end node shares the messenger node's position DOFs
-but has its own slope DOFs (a pinned joint, not a C1 one).
+but has its own slope DOFs (a pinned joint, not a C1 one). The messenger is hinged the same
+way over every intermediate support, where it has a real kink (a C1 node there would smear
+the kink over the neighbouring elements and make the sag depend on the mesh).
 
 The node positions built here are only the start of the initial-configuration Newton solve
 (:mod:`pantocosim.catenary.statics`): contact wire at the design heights, messenger and stitch
@@ -130,7 +132,7 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
     node_dofs = []
     node_pos = []   # guessed position
     node_slope = []
-    contact_nodes, messenger_nodes = [], []
+    contact_nodes, messenger_nodes, messenger_right = [], [], []
     stitch_nodes = [[] for _ in stitch_ranges]
     ndof = 0
 
@@ -153,9 +155,22 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
         node_dofs.append(list(range(ndof, ndof + 6)))
         ndof += 6
         node_pos.append([x, y_of(x), zm(x)])
-        node_slope.append(tangent(x, zm))
         mnode = len(node_dofs) - 1
         messenger_nodes.append(mnode)
+        messenger_right.append(mnode)
+        if any(abs(x - xsup) < 1e-9 for xsup in xs[1:-1]):
+            # hinge over an intermediate support: the right span gets its own slopes
+            hh = 1e-6
+            tl = np.array([hh, y_of(x) - y_of(x - hh), zm(x) - zm(x - hh)])
+            tr = np.array([hh, y_of(x + hh) - y_of(x), zm(x + hh) - zm(x)])
+            node_slope.append(tl / np.linalg.norm(tl))
+            node_dofs.append(node_dofs[mnode][:3] + list(range(ndof, ndof + 3)))
+            ndof += 3
+            node_pos.append(node_pos[mnode])
+            node_slope.append(tr / np.linalg.norm(tr))
+            messenger_right[-1] = len(node_dofs) - 1
+        else:
+            node_slope.append(tangent(x, zm))
         # stitch
         for k, rng in enumerate(stitch_ranges):
             a, c, b = rng
@@ -210,10 +225,11 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
     group_elems, group_T, group_names, N0 = [], [], [], []
     contact_elems = []
 
-    def add_chain(nodes, wire, name_of_span):
-        # nodes in x order; one group per span (name_of_span(i) -> key)
+    def add_chain(nodes, wire, name_of_span, starts=None):
+        # nodes in x order; one group per span (name_of_span(i) -> key); an element starts
+        # at ``starts[i]`` instead of ``nodes[i]`` when given (hinges)
         groups = {}
-        for a, b in zip(nodes[:-1], nodes[1:]):
+        for a, b in zip(nodes[:-1] if starts is None else starts[:-1], nodes[1:]):
             key = name_of_span(0.5 * (node_pos[a][0] + node_pos[b][0]))
             if key not in groups:
                 groups[key] = len(group_T)
@@ -237,7 +253,7 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
     add_chain(list(contact_nodes), d.contact, lambda xm: f"contact span {span_of(xm) + 1}")
     contact_elems = np.arange(n0, len(cable_dofs))
     add_chain(list(messenger_nodes), d.messenger,
-              lambda xm: f"messenger span {span_of(xm) + 1}")
+              lambda xm: f"messenger span {span_of(xm) + 1}", starts=messenger_right)
     for k, nodes in enumerate(stitch_nodes):
         add_chain(nodes, d.stitch, lambda xm, k=k: f"stitch wire at support {k + 2}")
     S.cable_dofs = np.array(cable_dofs, dtype=np.int64)
