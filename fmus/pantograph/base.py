@@ -12,7 +12,7 @@ work on an upward height), so the integrator weights it like every other force.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -28,7 +28,7 @@ class Ramp:
 
     start: float = 0.0
     duration: float = 1.0
-    lowered_height: float = 4.5
+    lowered_height: float = 5.0
 
     def factor(self, t: float) -> float:
         if self.duration <= 0.0:
@@ -67,6 +67,17 @@ class PantographOptions:
             check_number("ramp.duration", self.ramp.duration, source=source, nonnegative=True)
             check_number("ramp.lowered_height", self.ramp.lowered_height, source=source,
                          positive=True)
+
+    def replaced(self, source: str | None = None, **changes) -> "PantographOptions":
+        """A validated copy with some fields changed; unknown names raise ParameterError."""
+        known = {f.name for f in fields(self)}
+        for key, value in changes.items():
+            if key not in known:
+                raise ParameterError(f"options.{key}", value, "unknown pantograph option",
+                                     source)
+        out = replace(self, **changes)
+        out.validate(source)
+        return out
 
     @property
     def aero_force(self) -> float:

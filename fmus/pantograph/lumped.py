@@ -191,8 +191,8 @@ def _chain_matrix(k: np.ndarray) -> np.ndarray:
     return K
 
 
-def load_chain(path: str | Path, options: PantographOptions | None = None,
-               option_overrides: dict | None = None) -> LumpedPantograph:
+def load_chain(path: str | Path, options: PantographOptions | None = None
+               ) -> LumpedPantograph:
     """Read a lumped-mass parameter file (``[chain]`` and ``[options]`` tables)."""
     source = str(path)
     data = load_toml(path)
@@ -218,9 +218,5 @@ def load_chain(path: str | Path, options: PantographOptions | None = None,
     params.validate(source)
     if options is None:
         options = PantographOptions.from_table(root.sub("options", required=False))
-    if option_overrides:
-        for key, value in option_overrides.items():
-            setattr(options, key, value)
-        options.validate(source)
     name = root.string("name", Path(path).stem)
     return LumpedPantograph(params, options, name=name)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..core.errors import ParameterError
-from ..core.params import load_toml
+from ..core.params import Table, load_toml
 from .base import PantographModel, PantographOptions
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -36,22 +36,19 @@ def load_pantograph(name_or_path: str | Path, options: PantographOptions | None 
                     **option_overrides) -> PantographModel:
     """Build a pantograph model from a preset name or a parameter file.
 
-    ``option_overrides`` replace fields of the file's ``[options]`` (e.g. ``speed_kmh=300``).
+    ``option_overrides`` replace fields of the file's ``[options]`` (e.g. ``speed_kmh=300``)
+    before the model is built, so its equilibrium and actuation account for them.
     """
     path = preset_path(name_or_path)
     data = load_toml(path)
+    if options is None:
+        options = PantographOptions.from_table(Table(data.get("options", {}), str(path),
+                                                     "options"))
+    options = options.replaced(source=str(path), **option_overrides)
     if "chain" in data:
         from .lumped import load_chain
 
-        return load_chain(path, options, option_overrides)
+        return load_chain(path, options)
     from .dsa380 import load_dsa380
 
-    model = load_dsa380(path, options)
-    if option_overrides:
-        for key, value in option_overrides.items():
-            if not hasattr(model.options, key):
-                raise ParameterError(f"options.{key}", value, "unknown pantograph option",
-                                     str(path))
-            setattr(model.options, key, value)
-        model.options.validate(str(path))
-    return model
+    return load_dsa380(path, options)
