@@ -11,6 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = Path(__file__).with_name("fmu_probe.py")
 LUMPED = ["dsa380-lumped3", "en50318-2mass"]
+ALL = LUMPED + ["dsa380-rigid"]
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +20,7 @@ def fmus(tmp_path_factory):
     import build_fmus
 
     out = tmp_path_factory.mktemp("fmus")
-    paths = build_fmus.build(out, only=LUMPED, quiet=True)
+    paths = build_fmus.build(out, only=ALL, quiet=True)
     return {p.stem: p for p in paths}
 
 
@@ -51,7 +52,7 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
                      ("contact_velocity", "output", "m/s")]
 
 
-@pytest.mark.parametrize("name", LUMPED)
+@pytest.mark.parametrize("name", ALL)
 def test_fmu_matches_standalone_and_rolls_back_bitwise(fmus, name):
     from pantocosim.master.standalone import simulate_pantograph
     from pantocosim.pantograph.presets import load_pantograph

@@ -214,7 +214,7 @@ def _preset_defaults(preset: str) -> dict:
         for k, v in data.get("options", {}).items():
             if k in out:
                 out[k] = v
-        for table in ("chain", "geometry", "equilibrium", "operation"):
+        for table in ("chain", "frame"):
             if isinstance(data.get(table), dict) and "working_height" in data[table]:
                 out["working_height"] = data[table]["working_height"]
         if "working_height" in data:
