@@ -1,0 +1,14 @@
+"""Catenary finite-element model (thesis 3.1, 3.3.3).
+
+- :mod:`.definition`: TOML definition format, validation, presets (``load_catenary``)
+- :mod:`.ancf_cable`, :mod:`.bar`: element kernels (numba, vectorised over elements)
+- :mod:`.structure`: sparse assembly on one CSR pattern; :mod:`.mesh`: DOF numbering
+- :mod:`.statics`: static equilibrium and the initial-configuration problem (3.1.3)
+- :mod:`.model`: :class:`CatenaryModel`, the model the HHT-alpha integrator drives
+- :mod:`.contact`: contact-wire points under the pantographs (3.12)-(3.13)
+"""
+
+from .definition import CatenaryDefinition, load_catenary, preset_names
+from .model import CatenaryModel
+
+__all__ = ["CatenaryDefinition", "CatenaryModel", "load_catenary", "preset_names"]
