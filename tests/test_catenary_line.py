@@ -79,6 +79,9 @@ def test_equilibrium_and_tensions(en):
     H = group_horizontal_tensions(en.mesh, x)
     assert np.max(np.abs(H / en.mesh.group_tension - 1)) < 1e-9
     assert np.all(en.dropper_forces(en.q_static) > 0)
+    # droppers keep the defined axial stiffness k = EA / l0 = 1e5 N/m at their final length
+    db = en.mesh.dropper_bars
+    assert np.allclose(S.bar_EA[db] / S.bar_l0[db], 1.0e5, rtol=1e-12)
     # an independent static solve from the *initial guess* geometry with the found
     # dropper lengths and pre-tensions (droppers tension-only) lands on the same state
     res = solve_static(S, S.x_full[S.free])

@@ -54,6 +54,9 @@ class CatenaryMesh:
     dropper_x: np.ndarray
     dropper_contact_nodes: np.ndarray
     dropper_design_z: np.ndarray
+    #: axial stiffness k [N/m] of each dropper when the definition gives one (EA then
+    #: follows the unstretched length, EA = k l0, so that N = k (l - l0)); NaN: EA given
+    dropper_k: np.ndarray = field(default_factory=lambda: np.zeros(0))
     group_elems: list = field(default_factory=list)
     group_tension: np.ndarray = field(default_factory=lambda: np.zeros(0))
     group_names: list = field(default_factory=list)
@@ -373,7 +376,9 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
         dropper_design_z=np.array(dropper_z),
         group_elems=[np.array(g_, dtype=np.int64) for g_ in group_elems],
         group_tension=np.array(group_T), group_names=group_names, anchors=anchors,
-        arms=arms, definition=d, messenger_nodes=messenger_nodes)
+        arms=arms, definition=d, messenger_nodes=messenger_nodes,
+        dropper_k=np.full(len(dropper_bars), np.nan if d.dropper_stiffness is None
+                          else d.dropper_stiffness))
 
 
 def straight_wire(length: float, n_elements: int, mass_per_length: float, EA: float,
@@ -407,5 +412,5 @@ def straight_wire(length: float, n_elements: int, mass_per_length: float, EA: fl
         dropper_bars=np.zeros(0, dtype=np.int64), dropper_x=np.zeros(0),
         dropper_contact_nodes=np.zeros(0, dtype=np.int64), dropper_design_z=np.zeros(0),
         group_elems=[np.arange(n)], group_tension=np.array([tension]),
-        group_names=["wire"], anchors=[], arms=[], definition=None,
+        dropper_k=np.zeros(0), group_names=["wire"], anchors=[], arms=[], definition=None,
         messenger_nodes=np.zeros(0, dtype=np.int64))

@@ -129,6 +129,9 @@ def _set_params(mesh, p) -> None:
     S = mesh.structure
     nd, ng = mesh.dropper_bars.size, S.N0_group.size
     S.bar_l0[mesh.dropper_bars] = p[:nd]
+    k = mesh.dropper_k
+    if k.size and np.all(np.isfinite(k)):
+        S.bar_EA[mesh.dropper_bars] = k * p[:nd]      # N = k (l - l0)
     S.N0_group[:] = p[nd:nd + ng]
     for k, a in enumerate(mesh.anchors):
         if a.kind == "pin":
@@ -192,7 +195,11 @@ def _augmented(mesh, q, want_J=True):
     ln = np.linalg.norm(dvec, axis=1)
     u = dvec / ln[:, None]
     l0 = S.bar_l0[mesh.dropper_bars]
-    dN = -S.bar_EA[mesh.dropper_bars] * ln / l0**2
+    kd = mesh.dropper_k
+    if kd.size and np.all(np.isfinite(kd)):
+        dN = -kd * np.ones_like(ln)                      # N = k (l - l0)
+    else:
+        dN = -S.bar_EA[mesh.dropper_bars] * ln / l0**2   # N = EA (l - l0) / l0
     dF = np.hstack([-u, u]) * dN[:, None]
     add(fm[bd], n + np.arange(nd)[:, None], dF)
     add(fm[S.cable_dofs], n + nd + S.cable_group[:, None], dfN)
