@@ -10,7 +10,8 @@ import pytest
 
 from pantocosim.catenary.definition import DATA_DIR, load_catenary, parse_definition
 from pantocosim.catenary.model import CatenaryModel
-from pantocosim.catenary.statics import group_horizontal_tensions, solve_static
+from pantocosim.catenary.statics import (element_tensions, group_horizontal_tensions,
+                                         solve_static)
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.core.params import load_toml
@@ -78,6 +79,10 @@ def test_equilibrium_and_tensions(en):
     # every wire span carries its design horizontal tension; true axial tension close
     H = group_horizontal_tensions(en.mesh, x)
     assert np.max(np.abs(H / en.mesh.group_tension - 1)) < 1e-9
+    Te = element_tensions(S, x)
+    design = en.mesh.group_tension[S.cable_group]
+    assert np.max(np.abs(Te / design - 1)) < 0.005           # true tension, every element
+    assert np.all(Te >= design * (1 - 1e-6))                 # >= horizontal component
     assert np.all(en.dropper_forces(en.q_static) > 0)
     # droppers keep the defined axial stiffness k = EA / l0 = 1e5 N/m at their final length
     db = en.mesh.dropper_bars

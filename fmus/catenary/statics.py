@@ -148,6 +148,17 @@ def group_horizontal_tensions(mesh, x_full) -> np.ndarray:
     return np.bincount(S.cable_group, h, minlength=S.N0_group.size) / Lsum
 
 
+def element_tensions(S, x_full) -> np.ndarray:
+    """True axial tension N |r'| at the mid-point of every cable element."""
+    E = x_full[S.cable_dofs]
+    L = S.cable_Le
+    d = ancf_cable.shape_dxi(0.5, 1.0)            # [dS1, dS2/L, dS3, dS4/L] / dxi
+    rp = (d[0] * E[:, 0:3] + d[1] * L[:, None] * E[:, 3:6] + d[2] * E[:, 6:9]
+          + d[3] * L[:, None] * E[:, 9:12] + d[2] * S.cable_dX) / L[:, None]
+    lam2 = np.einsum("ij,ij->i", rp, rp)
+    return (S.cable_N0() + S.cable_EA * 0.5 * (lam2 - 1.0)) * np.sqrt(lam2)
+
+
 def _tension_measures(S, x_full):
     E = x_full[S.cable_dofs]
     ne = E.shape[0]
