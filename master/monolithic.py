@@ -46,21 +46,24 @@ class CoupledSystem(SecondOrderModel):
                                 for k in range(len(self.pantographs))]
 
     def contact_state(self, t: float, q: np.ndarray, v: np.ndarray):
-        """Per pantograph: (F, z_p, z_w, v_p, v_w, dofs, N, gradient, dF/dgap, dF/dvrel)."""
+        """Per pantograph: (F, z_p, z_w, v_p, v_w, contact point, gradient, dF/dgap, dF/dvrel).
+
+        The wire velocity seen by the moving pantograph includes the convective term
+        V dz_w/dx, as in :meth:`CatenaryModel.wire_velocity`."""
         qc, qps = self.split(q)
         vc, vps = self.split(v)
+        speed = float(getattr(self.catenary, "speed", 0.0))
         out = []
-        offsets = getattr(self.catenary, "contact_offsets", None)
-        offsets = offsets(t) if offsets is not None else np.zeros(len(self.pantographs))
-        for k, (pant, (dofs, N)) in enumerate(zip(self.pantographs,
-                                                  self.catenary.contact_points(t))):
-            z_w = float(N @ qc[dofs]) + float(offsets[k])
-            v_w = float(N @ vc[dofs])
+        for k, (pant, cp) in enumerate(zip(self.pantographs, self.catenary.contact_points(t))):
+            z_w = float(cp.weights @ qc[cp.dofs]) + float(cp.offset)
+            v_w = float(cp.weights @ vc[cp.dofs])
+            if speed:
+                v_w += speed * (float(cp.dweights_dx @ qc[cp.dofs]) + float(cp.doffset_dx))
             g = np.asarray(pant.contact_height_gradient(qps[k]), dtype=float)
             z_p = pant.contact_height(qps[k])
             v_p = float(g @ vps[k])
             F, dF, cF = self.contact.force_and_derivatives(z_p, z_w, v_p, v_w)
-            out.append((F, z_p, z_w, v_p, v_w, dofs, N, g, dF, cF))
+            out.append((F, z_p, z_w, v_p, v_w, cp, g, dF, cF))
         return out
 
     def contact_forces(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -77,46 +80,130 @@ class CoupledSystem(SecondOrderModel):
                 for k, p in enumerate(self.pantographs)]
         f_in = np.concatenate([ev_c.f_inertia] + [e.f_inertia for e in ev_p])
         f_rest = np.concatenate([ev_c.f_rest] + [e.f_rest for e in ev_p])
-        contacts = self.contact_state(t, q, v)
-        rows, cols, kvals, cvals = [], [], [], []
-        key = []
-        for k, (F, z_p, z_w, v_p, v_w, dofs, N, g, dF, cF) in enumerate(contacts):
+        speed = float(getattr(self.catenary, "speed", 0.0))
+        lin = []
+        for k, (F, z_p, z_w, v_p, v_w, cp, g, dF, cF) in enumerate(
+                self.contact_state(t, q, v)):
             o = self.offsets[k]
-            pdofs = np.arange(o, o + g.size)
-            f_rest[pdofs] += F * g
-            f_rest[dofs] -= F * N
-            key.append(F > 0.0)
-            if tangent and (dF != 0.0 or cF != 0.0):
-                # F depends on u = [q_p, q_c[dofs]] through w = [g, -N]
-                idx = np.concatenate([pdofs, dofs])
-                w = np.concatenate([g, -N])
-                s = np.concatenate([g, -N])  # force direction on [pantograph, wire]
-                rows.append(np.repeat(idx, idx.size))
-                cols.append(np.tile(idx, idx.size))
-                outer = np.outer(s, w).ravel()
-                kvals.append(dF * outer)
-                cvals.append(cF * outer)
-        ev = Evaluation(f_inertia=f_in, f_rest=f_rest,
-                        structure_key=(ev_c.structure_key, tuple(key)))
-        if not tangent:
-            return ev
-        ev.mass = _block_diag(ev_c.mass, [e.mass for e in ev_p])
-        ev.damping = _block_diag(ev_c.damping, [e.damping for e in ev_p])
-        ev.stiffness = _block_diag(ev_c.stiffness, [e.stiffness for e in ev_p])
-        iq = [e.inertia_q for e in ev_p]
-        if ev_c.inertia_q is not None or any(x is not None for x in iq):
-            zc = ev_c.inertia_q if ev_c.inertia_q is not None else sp.csr_matrix(
-                (self.n_cat, self.n_cat))
-            ev.inertia_q = _block_diag(zc, [x if x is not None else np.zeros((p.n_dofs,) * 2)
-                                            for x, p in zip(iq, self.pantographs)])
-        if rows:
-            r = np.concatenate(rows)
-            c = np.concatenate(cols)
-            shape = (self.n_dofs, self.n_dofs)
-            ev.stiffness = ev.stiffness + sp.csr_matrix((np.concatenate(kvals), (r, c)), shape)
-            if any(np.any(x) for x in cvals):
-                ev.damping = ev.damping + sp.csr_matrix((np.concatenate(cvals), (r, c)), shape)
+            f_rest[o:o + g.size] += F * g
+            if cp.dofs.size:
+                np.add.at(f_rest, cp.dofs, -F * cp.weights)
+            if dF != 0.0 or cF != 0.0:
+                # F depends on the gap through w = [g on q_p, -N on q_c] and, with contact
+                # damping, on the convective wire velocity V dN/dx . q_c
+                wq_c = -dF * cp.weights
+                if cF and speed:
+                    wq_c = wq_c - cF * speed * cp.dweights_dx
+                lin.append((k, cp, g, dF, cF, wq_c))
+        ev = Evaluation(f_inertia=f_in, f_rest=f_rest, structure_key=(
+            ev_c.structure_key, tuple(e.structure_key for e in ev_p)))
+        ev.parts = (ev_c, ev_p)
+        # contact linearisation of the latest evaluation: the Newton solve adds it to the
+        # (possibly reused) factorization as a low-rank update
+        self._contact_lin = (t, lin)
+        if tangent:
+            ev.mass = _LazyBlocks(self, "mass")
+            ev.damping = _LazyBlocks(self, "damping")
+            ev.stiffness = _LazyBlocks(self, "stiffness")
         return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """The block-diagonal part (catenary, pantographs) of the Newton matrix; the contact
+        terms are added in :meth:`factorize`'s solve by the Woodbury identity."""
+        ev_c, ev_p = ev.parts
+        return _BlockNewton(
+            self.catenary.effective_matrix(ev_c, c_a, c_v, c_f),
+            [p.effective_matrix(e, c_a, c_v, c_f) for p, e in zip(self.pantographs, ev_p)],
+            c_v, c_f)
+
+    def factorize(self, S):
+        """Factorize the subsystem blocks once (catenary: banded Cholesky); each solve adds the
+        current contact linearisation U V^T (rank = contacts in touch) exactly:
+        (A + U V^T)^-1 r = A^-1 r - A^-1 U (I + V^T A^-1 U)^-1 V^T A^-1 r."""
+        cat_solve = self.catenary.factorize(S.cat)
+        pan_solves = [p.factorize(Sp) for p, Sp in zip(self.pantographs, S.pans)]
+        cache: dict = {}
+        n_cat = self.n_cat
+
+        def block_solve(r):
+            x = np.empty_like(r)
+            x[:n_cat] = cat_solve(r[:n_cat])
+            for k, ps in enumerate(pan_solves):
+                o, e = self.offsets[k], self.offsets[k + 1]
+                x[o:e] = ps(r[o:e])
+            return x
+
+        def solve(r):
+            r = np.asarray(r, dtype=float)
+            x = block_solve(r)
+            t, lin = self._contact_lin
+            if not lin:
+                return x
+            m = len(lin)
+            AU = np.empty((self.n_dofs, m))
+            Vt = np.zeros((m, self.n_dofs))
+            for j, (k, cp, g, dF, cF, wq_c) in enumerate(lin):
+                o = self.offsets[k]
+                key = (t, k, g.tobytes())
+                col = cache.get(key)
+                if col is None:
+                    u = np.zeros(self.n_dofs)
+                    u[o:o + g.size] = g
+                    np.add.at(u, cp.dofs, -cp.weights)
+                    col = block_solve(u)
+                    if len(cache) > 64:
+                        cache.clear()
+                    cache[key] = col
+                AU[:, j] = col
+                # V_j = c_f (dF w + c_v cF w + convective part)
+                vj = np.zeros(self.n_dofs)
+                vj[o:o + g.size] = (dF + S.c_v * cF) * g
+                np.add.at(vj, cp.dofs, wq_c - S.c_v * cF * cp.weights)
+                Vt[j] = S.c_f * vj
+            small = np.eye(m) + Vt @ AU
+            return x - AU @ np.linalg.solve(small, Vt @ x)
+
+        return solve
+
+    def assembled(self, ev, c_a=0.0, c_v=0.0, c_f=1.0):
+        """The full Newton matrix c_a M + inertia_q + c_f (c_v C + K) including contact, as a
+        sparse matrix (for checks; the solver never assembles it)."""
+        ev_c, ev_p = ev.parts
+        blocks = [sp.csr_matrix(self.catenary.effective_matrix(ev_c, c_a, c_v, c_f))]
+        blocks += [sp.csr_matrix(np.asarray(p.effective_matrix(e, c_a, c_v, c_f)))
+                   for p, e in zip(self.pantographs, ev_p)]
+        S = sp.block_diag(blocks, format="lil")
+        t, lin = self._contact_lin
+        for k, cp, g, dF, cF, wq_c in lin:
+            o = self.offsets[k]
+            u = np.zeros(self.n_dofs)
+            u[o:o + g.size] = g
+            np.add.at(u, cp.dofs, -cp.weights)
+            vj = np.zeros(self.n_dofs)
+            vj[o:o + g.size] = (dF + c_v * cF) * g
+            np.add.at(vj, cp.dofs, wq_c - c_v * cF * cp.weights)
+            S = S + sp.csr_matrix(np.outer(u, c_f * vj))
+        return sp.csr_matrix(S)
+
+    def static_solve(self, q0, t: float = 0.0, tol: float = 1e-10, max_iter: int = 60):
+        """Static equilibrium f_rest(t, q, 0) = 0 of the coupled system by Newton-Raphson
+        (the static start: pantographs and catenary in equilibrium in contact)."""
+        from pantocosim.core.errors import ConvergenceError
+
+        q = np.array(q0, dtype=float)
+        zero = np.zeros(self.n_dofs)
+        for it in range(max_iter):
+            ev = self.evaluate(t, q, zero, zero, None, tangent=True)
+            R = ev.f_rest
+            scale = max(float(np.max(np.abs(ev.parts[0].f_rest + self.catenary.weight)))
+                        if hasattr(self.catenary, "weight") else 1.0, 1.0)
+            if float(np.max(np.abs(R))) <= tol * scale:
+                return q
+            dq = -self.factorize(self.effective_matrix(ev, 0.0, 0.0, 1.0))(R)
+            q = q + dq
+        raise ConvergenceError(f"static start did not converge: residual "
+                               f"{float(np.max(np.abs(R))):.3e} N after {max_iter} iterations",
+                               time=t, residual=float(np.max(np.abs(R))))
 
     def commit(self, t, q, v, a, inputs):
         qc, qps = self.split(q)
@@ -160,12 +247,30 @@ class RigidWire(SecondOrderModel):
                           stiffness=empty, structure_key=None)
 
     def contact_points(self, t):
-        return [(np.zeros(0, dtype=int), np.zeros(0))] * self.n_pantographs
+        from types import SimpleNamespace
 
-    def contact_offsets(self, t):
         if self.catenary is None:
-            return np.full(self.n_pantographs, float(self.height))
-        return np.array([float(N @ self.q[dofs]) for dofs, N in self.catenary.contact_points(t)])
+            heights = np.full(self.n_pantographs, float(self.height))
+        else:
+            heights = self.catenary.wire_height(t, self.q)
+        empty_i, empty_f = np.zeros(0, dtype=int), np.zeros(0)
+        return [SimpleNamespace(dofs=empty_i, weights=empty_f, offset=float(z),
+                                dweights_dx=empty_f, doffset_dx=0.0) for z in heights]
+
+
+class _BlockNewton:
+    """Block-diagonal Newton matrix of the coupled system (contact terms excluded)."""
+
+    def __init__(self, cat, pans, c_v, c_f):
+        self.cat, self.pans, self.c_v, self.c_f = cat, pans, c_v, c_f
+
+
+class _LazyBlocks:
+    """Placeholder for a global tangent the coupled solver never assembles; use
+    :meth:`CoupledSystem.assembled` when a full matrix is needed."""
+
+    def __init__(self, system, name):
+        self.system, self.name = system, name
 
 
 def _block_diag(first, rest):

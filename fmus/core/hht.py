@@ -102,7 +102,8 @@ class HHTIntegrator:
         zero = np.zeros(n)
         ev = self.model.evaluate(self.t, self.q, self.v, zero, self.inputs, tangent=True)
         if a0 is None:
-            solve = self.model.factorize(ev.mass)
+            # at a = 0 the Newton matrix with c_a = 1, c_v = c_f = 0 is the mass matrix
+            solve = self.model.factorize(self.model.effective_matrix(ev, 1.0, 0.0, 0.0))
             self.a = -np.asarray(solve(ev.f_rest + ev.f_inertia), dtype=float).reshape(n)
         else:
             self.a = np.array(a0, dtype=float).reshape(n)

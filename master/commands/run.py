@@ -1,0 +1,78 @@
+"""``pantocosim run``: the main job, a pantograph-catenary simulation of a scenario."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+
+def add_parser(sub):
+    p = sub.add_parser("run", help="simulate a scenario and print EN 50317 statistics",
+                       description="Simulate SCENARIO (preset name or TOML file; default "
+                       "dsa380-ave-300) and write the time series (CSV), a JSON summary with "
+                       "the EN 50317 contact-force statistics, and plots.")
+    p.add_argument("scenario", nargs="?", default=None, help="scenario preset or file")
+    p.add_argument("--coupling", default="monolithic",
+                   choices=["monolithic", "explicit", "jacobi", "gauss-seidel", "implicit"],
+                   help="monolithic reference solve, or co-simulation of the FMUs: explicit "
+                   "(= jacobi), gauss-seidel, implicit (iterative with rollback)")
+    p.add_argument("--accelerator", default="iqn-ils", choices=["iqn-ils", "aitken"],
+                   help="interface acceleration of the implicit coupling")
+    p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING)")
+    p.add_argument("--json", action="store_true", help="print the JSON summary")
+    p.add_argument("--force", action="store_true",
+                   help="run even above 0.7 of the wave speed")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def print_statistics(summary: dict) -> None:
+    print(f"scenario {summary['scenario']} ({summary['coupling']}), "
+          f"{summary['speed_kmh']:g} km/h on {summary['catenary']}, window "
+          f"{summary['analysis_window_m'][0]:g}-{summary['analysis_window_m'][1]:g} m")
+    for p in summary["pantographs"]:
+        s = p["statistics"]
+        if s is None:
+            continue
+        print(f"  pantograph {p['index']} ({p['model']}): mean {s['mean_n']:.2f} N, "
+              f"sigma {s['std_n']:.2f} N, stat max {s['stat_max_n']:.1f} N, stat min "
+              f"{s['stat_min_n']:.1f} N, max {s['max_n']:.1f} N, min {s['min_n']:.1f} N, "
+              f"loss of contact {s['loss_of_contact_percent']:.2f} %, max uplift at "
+              f"support {1000 * s['max_uplift_at_support_m']:.1f} mm")
+    extra = ""
+    if "coupling_iterations_mean" in summary:
+        extra = (f", coupling iterations mean {summary['coupling_iterations_mean']:.2f} "
+                 f"max {summary['coupling_iterations_max']}")
+    print(f"  simulated {summary['simulated_time_s']:.3f} s in {summary['wall_time_s']:.1f} s "
+          f"wall (real-time factor {summary['wall_time_s'] / max(summary['simulated_time_s'], 1e-9):.2f})"
+          f"{extra}")
+    if "files" in summary:
+        print(f"  results in {Path(summary['files']['summary']).parent}")
+
+
+def run(args) -> int:
+    from pantocosim.core.errors import PantocosimError
+    from pantocosim.master.run import finish, prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    coupling = "jacobi" if args.coupling == "explicit" else args.coupling
+    out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
+    prep = prepare(scenario, force=args.force)
+    if coupling == "monolithic":
+        result = run_monolithic(prep, out, progress=None if not args.quiet else False)
+    else:
+        from pantocosim.master.cosim import run_cosim
+
+        result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
+                           progress=None if not args.quiet else False)
+    result.coupling = args.coupling
+    summary = finish(result, out, plots=not args.no_plots)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print_statistics(summary)
+    if result.error is not None:
+        raise PantocosimError(f"run stopped: {result.error} (results so far kept in {out})")
+    return 0

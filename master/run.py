@@ -1,0 +1,325 @@
+"""Running a scenario: set-up shared by every coupling, the monolithic reference run, outputs.
+
+``prepare(scenario)`` validates the scenario against the catenary (speed below 0.7 of the wave
+speed, analysis window inside the model, start positions on the line), builds the catenary
+and pantograph models and the static start. ``run_monolithic`` integrates the assembled
+system with the one HHT-alpha integrator. ``finish`` computes the EN 50317 statistics and
+writes the CSV time series, the JSON summary and the plots; the co-simulation couplings reuse
+``prepare`` and ``finish``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pantocosim.core.errors import ParameterError, PantocosimError
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.master.contact import PenaltyContact
+from pantocosim.master.recorder import Recorder
+from pantocosim.master.results import write_json
+from pantocosim.master.scenario import Scenario, load_scenario
+from pantocosim.master.statistics import contact_statistics, window_mask
+
+#: EN 50119: operating speed at most 0.7 of the contact-wire wave speed
+MAX_WAVE_SPEED_RATIO = 0.7
+
+
+@dataclass
+class Prepared:
+    scenario: Scenario
+    definition: object
+    catenary: object            # CatenaryModel
+    pantographs: list           # PantographModel per pantograph
+    contact: PenaltyContact
+    window_m: tuple[float, float]
+    duration: float
+    n_steps: int
+    q_cat0: np.ndarray
+    q_pan0: list
+    static_forces: np.ndarray
+    wave_speed: float
+    support_x: np.ndarray
+    dropper_x: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def speed(self) -> float:
+        return self.scenario.speed
+
+
+def with_spans(definition, n_spans: int):
+    """The definition repeated/truncated to ``n_spans`` spans (span data cycled)."""
+    lengths = [definition.span_lengths[i % definition.n_spans] for i in range(n_spans)]
+    droppers = [definition.dropper_positions[i % len(definition.dropper_positions)]
+                for i in range(n_spans)]
+    return dataclasses.replace(definition, span_lengths=lengths, dropper_positions=droppers)
+
+
+def prepare(scenario: Scenario | str | None, force: bool = False,
+            element_size: float | None = None) -> Prepared:
+    """Validate ``scenario`` and build the models and the static start."""
+    from pantocosim.catenary.definition import load_catenary
+    from pantocosim.catenary.model import CatenaryModel
+    from pantocosim.pantograph.base import Ramp
+    from pantocosim.pantograph.presets import load_pantograph
+
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    src = sc.source
+    definition = load_catenary(sc.catenary)
+    if sc.spans:
+        definition = with_spans(definition, sc.spans)
+    wave = math.sqrt(definition.contact.tension / definition.contact.mass_per_length)
+    if sc.speed > MAX_WAVE_SPEED_RATIO * wave and not force:
+        raise ParameterError("speed_kmh", sc.speed_kmh,
+                             f"exceeds {MAX_WAVE_SPEED_RATIO} of the contact-wire wave speed "
+                             f"c = {wave * 3.6:.0f} km/h (EN 50119 limit "
+                             f"{MAX_WAVE_SPEED_RATIO * wave * 3.6:.0f} km/h); use --force to "
+                             f"run anyway", src)
+    support_x = definition.support_x
+    length = float(support_x[-1])
+    if sc.window_supports is not None:
+        i, j = sc.window_supports
+        if j > definition.n_spans:
+            raise ParameterError("analysis.window_supports", list(sc.window_supports),
+                                 f"the model has supports 0..{definition.n_spans}", src)
+        window = (float(support_x[i]), float(support_x[j]))
+        wfield = "analysis.window_supports"
+    else:
+        window = sc.window_m
+        wfield = "analysis.window_m"
+        if window[0] < 0 or window[1] > length:
+            raise ParameterError(wfield, list(window),
+                                 f"outside the model (0 .. {length:g} m)", src)
+    if sc.duration_s is None:
+        duration = max((window[1] - p.position_m) / sc.speed for p in sc.pantographs) + 0.2
+    else:
+        duration = sc.duration_s
+    for k, p in enumerate(sc.pantographs):
+        if not (0.0 < p.position_m < length):
+            raise ParameterError(f"pantographs[{k}].position_m", p.position_m,
+                                 f"must lie on the line (0 .. {length:g} m)", src)
+        if p.position_m > window[0]:
+            raise ParameterError(wfield, list(window), f"starts before pantograph {k + 1} "
+                                 f"(at x = {p.position_m:g} m) reaches it", src)
+        end = p.position_m + sc.speed * duration
+        if end >= length:
+            raise ParameterError(wfield, list(window),
+                                 f"pantograph {k + 1} would run past the end of the model "
+                                 f"(x = {end:.0f} m > {length:g} m) before the run ends", src)
+        if end < window[1]:
+            raise ParameterError("simulation.duration_s", duration,
+                                 f"too short: pantograph {k + 1} does not reach the end of "
+                                 f"the analysis window", src)
+    contact = PenaltyContact(sc.contact_stiffness, sc.contact_damping)
+    pantographs = []
+    for k, p in enumerate(sc.pantographs):
+        overrides = dict(p.options)
+        overrides["speed_kmh"] = sc.speed_kmh
+        if p.ramp is not None:
+            overrides["ramp"] = Ramp(start=(p.ramp.start_m - p.position_m) / sc.speed,
+                                     duration=p.ramp.length_m / sc.speed,
+                                     lowered_height=p.ramp.lowered_height)
+        try:
+            pantographs.append(load_pantograph(p.model, **overrides))
+        except ParameterError as exc:
+            raise ParameterError(f"pantographs[{k}].model", p.model, str(exc), src) from None
+    x0 = [p.position_m for p in sc.pantographs]
+    catenary = CatenaryModel(definition, x0=x0, speed=sc.speed, element_size=element_size)
+    # The actuation of every pantograph is set so that it delivers its mean uplift at the mean
+    # height of the loaded contact wire over the analysis window (quasi-static, linear
+    # elasticity); the static start then solves catenary + pantographs + contacts together,
+    # so a pantograph that starts where the wire is higher or lower than the mean starts with
+    # the matching force.
+    F0 = np.array([pan.options.mean_uplift for pan in pantographs])
+    x_samples = np.linspace(window[0], window[1], 16 * max(1, int(round(
+        (window[1] - window[0]) / np.mean(definition.span_lengths)))) + 1)
+    z_mean = mean_loaded_height(catenary, x_samples, F0)
+    q_cat_guess = catenary.static_state(np.where(
+        [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
+    q_pan_guess = []
+    for k, (pan, spec) in enumerate(zip(pantographs, sc.pantographs)):
+        pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+        if spec.start == "static":
+            q = pan.static_equilibrium(F0[k], catenary.wire_height(0.0, q_cat_guess)[k]
+                                       + F0[k] / contact.stiffness)
+            pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+            q_pan_guess.append(q)
+        else:
+            q_pan_guess.append(pan.lowered_equilibrium(spec.ramp.lowered_height))
+    from pantocosim.master.monolithic import CoupledSystem
+
+    system = CoupledSystem(catenary, pantographs, contact)
+    q0 = system.static_solve(np.concatenate([q_cat_guess] + q_pan_guess))
+    q_cat0, q_pan0 = system.split(q0)
+    q_pan0 = [x.copy() for x in q_pan0]
+    static = system.contact_forces(0.0, q0, np.zeros_like(q0))
+    dropper_x = np.concatenate([support_x[s] + np.asarray(pos)
+                                for s, pos in enumerate(definition.dropper_positions)])
+    return Prepared(scenario=sc, definition=definition, catenary=catenary,
+                    pantographs=pantographs, contact=contact, window_m=window,
+                    duration=float(duration), n_steps=int(math.ceil(duration / sc.dt - 1e-9)),
+                    q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
+                    support_x=np.asarray(support_x, float), dropper_x=dropper_x)
+
+
+def mean_loaded_height(catenary, x_samples, forces) -> np.ndarray:
+    """Mean over ``x_samples`` of the contact-wire height under a static upward force F at x,
+    z(x) + F e(x), with the elasticity e(x) = N(x)^T K0^-1 N(x) of the static configuration
+    (one banded factorization, one solve per sample); one value per force."""
+    st = catenary.structure
+    solve = catenary.factorize(st.csr(catenary.K0_data))
+    z0 = catenary.contact_wire_height(catenary.q_static, x_samples)
+    e = np.empty(len(x_samples))
+    for i, x in enumerate(x_samples):
+        cp = catenary.locator.point(float(x))
+        u = np.zeros(catenary.n_dofs)
+        np.add.at(u, cp.dofs, cp.weights)
+        e[i] = float(u @ solve(u))
+    return np.array([float(np.mean(z0 + F * e)) for F in np.atleast_1d(forces)])
+
+
+def column_names(n_pantographs: int, n_supports: int) -> list[str]:
+    names = ["time"]
+    for k in range(1, n_pantographs + 1):
+        names += [f"x_{k}", f"contact_force_{k}", f"contact_height_{k}", f"wire_height_{k}"]
+    names += [f"support_uplift_{j}" for j in range(n_supports)]
+    names += ["iterations"]
+    return names
+
+
+def progress_bar(total: int, label: str, enabled: bool | None = None):
+    from tqdm import tqdm
+
+    if enabled is None:
+        enabled = sys.stderr.isatty()
+    return tqdm(total=total, desc=label, unit="step", disable=not enabled, mininterval=0.5,
+                smoothing=0.1)
+
+
+def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None = None
+                   ) -> "RunResult":
+    """Integrate catenary + pantographs + penalty contacts monolithically (reference)."""
+    from pantocosim.master.monolithic import CoupledSystem
+
+    sc = prep.scenario
+    system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
+    q0 = np.concatenate([prep.q_cat0] + list(prep.q_pan0))
+    integ = HHTIntegrator(system, HHTSettings(alpha=sc.alpha, reuse_factorization=True))
+    integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
+    n_p = len(prep.pantographs)
+    names = column_names(n_p, len(prep.support_x))
+    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
+    t_wall = _time.perf_counter()
+
+    def record(iterations):
+        st = system.contact_state(integ.t, integ.q, integ.v)
+        row = [integ.t]
+        for k in range(n_p):
+            F, z_p, z_w = st[k][0], st[k][1], st[k][2]
+            row += [prep.catenary.positions(integ.t)[k], F, z_p, z_w]
+        row += list(prep.catenary.support_uplift(integ.q[:system.n_cat]))
+        row.append(iterations)
+        rec.append(row)
+
+    error = None
+    record(0)
+    bar = progress_bar(prep.n_steps, f"{sc.name} monolithic", progress)
+    try:
+        for _ in range(prep.n_steps):
+            info = integ.step(sc.dt)
+            record(info.iterations)
+            bar.update(1)
+    except PantocosimError as exc:
+        error = exc
+    finally:
+        bar.close()
+        rec.close()
+    wall = _time.perf_counter() - t_wall
+    result = RunResult(prep=prep, coupling="monolithic", columns=rec.columns(),
+                       wall_time_s=wall, error=error)
+    return result
+
+
+@dataclass
+class RunResult:
+    prep: Prepared
+    coupling: str
+    columns: dict
+    wall_time_s: float
+    error: Exception | None = None
+    summary: dict = field(default_factory=dict)
+    coupling_iterations: np.ndarray | None = None
+
+    def statistics(self):
+        prep = self.prep
+        c = self.columns
+        n_p = len(prep.pantographs)
+        uplift = np.column_stack([c[f"support_uplift_{j}"] for j in range(len(prep.support_x))])
+        return [contact_statistics(c["time"], c[f"contact_force_{k}"], c[f"x_{k}"],
+                                   prep.window_m, uplift, prep.support_x)
+                for k in range(1, n_p + 1)]
+
+
+def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
+    """Statistics, JSON summary and plots of a finished (or stopped) run."""
+    prep = result.prep
+    sc = prep.scenario
+    c = result.columns
+    stats = result.statistics() if result.error is None else []
+    summary = {
+        "scenario": sc.name,
+        "coupling": result.coupling,
+        "catenary": prep.definition.name,
+        "speed_kmh": sc.speed_kmh,
+        "dt_s": sc.dt,
+        "wall_time_s": result.wall_time_s,
+        "simulated_time_s": float(c["time"][-1]) if len(c["time"]) else 0.0,
+        "steps": int(len(c["time"]) - 1),
+        "analysis_window_m": list(prep.window_m),
+        "target_mean_n": [float(p.options.mean_uplift) for p in prep.pantographs],
+        "statistics": stats[0].as_dict() if stats else None,
+        "pantographs": [{"index": k + 1, "model": spec.model, "position_m": spec.position_m,
+                         "start": spec.start,
+                         "statistics": stats[k].as_dict() if stats else None}
+                        for k, spec in enumerate(sc.pantographs)],
+        "newton_iterations_mean": float(np.mean(c["iterations"][1:])) if len(c["time"]) > 1
+        else 0.0,
+    }
+    if result.coupling_iterations is not None and len(result.coupling_iterations):
+        summary["coupling_iterations_mean"] = float(np.mean(result.coupling_iterations))
+        summary["coupling_iterations_max"] = int(np.max(result.coupling_iterations))
+    if result.error is not None:
+        summary["error"] = str(result.error)
+    summary.update(result.summary)
+    if out_dir is not None:
+        out = Path(out_dir)
+        summary["files"] = {"timeseries": str(out / "timeseries.csv"),
+                            "summary": str(out / "summary.json")}
+        if plots and stats:
+            from pantocosim.master import plots as P
+
+            n_p = len(prep.pantographs)
+            labels = [f"pantograph {k}" for k in range(1, n_p + 1)]
+            forces = [c[f"contact_force_{k}"] for k in range(1, n_p + 1)]
+            positions = [c[f"x_{k}"] for k in range(1, n_p + 1)]
+            title = f"{sc.name} ({result.coupling}, {sc.speed_kmh:g} km/h)"
+            P.plot_contact_force(out / "contact_force.png", c["time"], positions, forces,
+                                 prep.window_m, prep.support_x, prep.dropper_x, labels, title)
+            masks = [window_mask(x, *prep.window_m) for x in positions]
+            P.plot_spectrum(out / "spectrum.png", c["time"], forces, masks, labels, title)
+            uplift = np.column_stack([c[f"support_uplift_{j}"]
+                                      for j in range(len(prep.support_x))])
+            P.plot_support_uplift(out / "support_uplift.png", c["time"], uplift,
+                                  prep.support_x, title)
+            summary["files"].update(contact_force=str(out / "contact_force.png"),
+                                    spectrum=str(out / "spectrum.png"),
+                                    support_uplift=str(out / "support_uplift.png"))
+        write_json(out / "summary.json", summary)
+    return summary
