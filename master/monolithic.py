@@ -61,7 +61,7 @@ class CoupledSystem(SecondOrderModel):
                 v_w += speed * (float(cp.dweights_dx @ qc[cp.dofs]) + float(cp.doffset_dx))
             g = np.asarray(pant.contact_height_gradient(qps[k]), dtype=float)
             z_p = pant.contact_height(qps[k])
-            v_p = float(g @ vps[k])
+            v_p = float(pant.contact_velocity(qps[k], vps[k]))
             F, dF, cF = self.contact.force_and_derivatives(z_p, z_w, v_p, v_w)
             out.append((F, z_p, z_w, v_p, v_w, cp, g, dF, cF))
         return out
