@@ -153,7 +153,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
             q_pan_guess.append(q)
         else:
             q_pan_guess.append(pan.lowered_equilibrium(spec.ramp.lowered_height))
-    from pantocosim.master.monolithic import CoupledSystem
+    from pantocosim.core.coupled import CoupledSystem
 
     system = CoupledSystem(catenary, pantographs, contact)
     q0 = system.static_solve(np.concatenate([q_cat_guess] + q_pan_guess))
@@ -206,7 +206,7 @@ def progress_bar(total: int, label: str, enabled: bool | None = None):
 def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None = None
                    ) -> "RunResult":
     """Integrate catenary + pantographs + penalty contacts monolithically (reference)."""
-    from pantocosim.master.monolithic import CoupledSystem
+    from pantocosim.core.coupled import CoupledSystem
 
     sc = prep.scenario
     system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)

@@ -1,0 +1,278 @@
+"""Catenary + pantographs + penalty contacts assembled into one model (thesis 3.2-3.3).
+
+The catenary and any number of pantographs are assembled into one
+:class:`~pantocosim.core.model.SecondOrderModel` coupled by penalty contact elements
+(:mod:`pantocosim.core.contact`). The monolithic reference solver (``master/run.py``)
+advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once. Contact is lost and recovered through the penalty
+law; droppers slacken inside the catenary model.
+
+DOF layout: ``[catenary | pantograph 1 | pantograph 2 | ...]``.
+
+Contact element k (3.9)-(3.13): z_w = N_k(t) . q_c[dofs_k] (Hermite interpolation at the
+pantograph's position x_k(t) = x0_k + v t), z_p = h_k(q_p), F = law(z_p - z_w). The force acts
+as +F dh/dq_p on the pantograph (down) and -F N_k on the wire (up), and enters f_rest, so it is
+weighted by the integrator exactly as a force through an FMU port.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from .model import Evaluation, SecondOrderModel
+from .contact import PenaltyContact
+
+
+
+class CoupledSystem(SecondOrderModel):
+    """Catenary + pantographs + penalty contacts as one second-order system."""
+
+    def __init__(self, catenary, pantographs: Sequence,
+                 contact: PenaltyContact):
+        self.catenary = catenary
+        self.pantographs = list(pantographs)
+        self.contact = contact
+        self.n_cat = int(catenary.n_dofs)
+        sizes = [p.n_dofs for p in self.pantographs]
+        self.offsets = np.concatenate([[self.n_cat], self.n_cat + np.cumsum(sizes)]).astype(int)
+        self.n_dofs = int(self.offsets[-1])
+
+    # ------------------------------------------------------------------ helpers
+    def split(self, x: np.ndarray):
+        """(catenary part, [pantograph parts]) views of a global vector."""
+        return x[:self.n_cat], [x[self.offsets[k]:self.offsets[k + 1]]
+                                for k in range(len(self.pantographs))]
+
+    def contact_state(self, t: float, q: np.ndarray, v: np.ndarray):
+        """Per pantograph: (F, z_p, z_w, v_p, v_w, contact point, gradient, dF/dgap, dF/dvrel).
+
+        The wire velocity seen by the moving pantograph includes the convective term
+        V dz_w/dx, as in :meth:`CatenaryModel.wire_velocity`."""
+        qc, qps = self.split(q)
+        vc, vps = self.split(v)
+        speed = float(getattr(self.catenary, "speed", 0.0))
+        out = []
+        for k, (pant, cp) in enumerate(zip(self.pantographs, self.catenary.contact_points(t))):
+            z_w = float(cp.weights @ qc[cp.dofs]) + float(cp.offset)
+            v_w = float(cp.weights @ vc[cp.dofs])
+            if speed:
+                v_w += speed * (float(cp.dweights_dx @ qc[cp.dofs]) + float(cp.doffset_dx))
+            g = np.asarray(pant.contact_height_gradient(qps[k]), dtype=float)
+            z_p = pant.contact_height(qps[k])
+            v_p = float(pant.contact_velocity(qps[k], vps[k]))
+            F, dF, cF = self.contact.force_and_derivatives(z_p, z_w, v_p, v_w)
+            out.append((F, z_p, z_w, v_p, v_w, cp, g, dF, cF))
+        return out
+
+    def contact_forces(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.array([c[0] for c in self.contact_state(t, q, v)])
+
+    # ------------------------------------------------------------------ model interface
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        qc, qps = self.split(q)
+        vc, vps = self.split(v)
+        ac, aps = self.split(a)
+        n_p = len(self.pantographs)
+        ev_c = self.catenary.evaluate(t, qc, vc, ac, np.zeros(n_p), tangent=tangent)
+        ev_p = [p.evaluate(t, qps[k], vps[k], aps[k], np.zeros(1), tangent=tangent)
+                for k, p in enumerate(self.pantographs)]
+        f_in = np.concatenate([ev_c.f_inertia] + [e.f_inertia for e in ev_p])
+        f_rest = np.concatenate([ev_c.f_rest] + [e.f_rest for e in ev_p])
+        speed = float(getattr(self.catenary, "speed", 0.0))
+        lin = []
+        for k, (F, z_p, z_w, v_p, v_w, cp, g, dF, cF) in enumerate(
+                self.contact_state(t, q, v)):
+            o = self.offsets[k]
+            f_rest[o:o + g.size] += F * g
+            if cp.dofs.size:
+                np.add.at(f_rest, cp.dofs, -F * cp.weights)
+            if dF != 0.0 or cF != 0.0:
+                # F depends on the gap through w = [g on q_p, -N on q_c] and, with contact
+                # damping, on the convective wire velocity V dN/dx . q_c
+                wq_c = -dF * cp.weights
+                if cF and speed:
+                    wq_c = wq_c - cF * speed * cp.dweights_dx
+                lin.append((k, cp, g, dF, cF, wq_c))
+        ev = Evaluation(f_inertia=f_in, f_rest=f_rest, structure_key=(
+            ev_c.structure_key, tuple(e.structure_key for e in ev_p)))
+        ev.parts = (ev_c, ev_p)
+        # contact linearisation of the latest evaluation: the Newton solve adds it to the
+        # (possibly reused) factorization as a low-rank update
+        self._contact_lin = (t, lin)
+        if tangent:
+            ev.mass = _LazyBlocks(self, "mass")
+            ev.damping = _LazyBlocks(self, "damping")
+            ev.stiffness = _LazyBlocks(self, "stiffness")
+        return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """The block-diagonal part (catenary, pantographs) of the Newton matrix; the contact
+        terms are added in :meth:`factorize`'s solve by the Woodbury identity."""
+        ev_c, ev_p = ev.parts
+        return _BlockNewton(
+            self.catenary.effective_matrix(ev_c, c_a, c_v, c_f),
+            [p.effective_matrix(e, c_a, c_v, c_f) for p, e in zip(self.pantographs, ev_p)],
+            c_v, c_f)
+
+    def factorize(self, S):
+        """Factorize the subsystem blocks once (catenary: banded Cholesky); each solve adds the
+        current contact linearisation U V^T (rank = contacts in touch) exactly:
+        (A + U V^T)^-1 r = A^-1 r - A^-1 U (I + V^T A^-1 U)^-1 V^T A^-1 r."""
+        cat_solve = self.catenary.factorize(S.cat)
+        pan_solves = [p.factorize(Sp) for p, Sp in zip(self.pantographs, S.pans)]
+        cache: dict = {}
+        n_cat = self.n_cat
+
+        def block_solve(r):
+            x = np.empty_like(r)
+            x[:n_cat] = cat_solve(r[:n_cat])
+            for k, ps in enumerate(pan_solves):
+                o, e = self.offsets[k], self.offsets[k + 1]
+                x[o:e] = ps(r[o:e])
+            return x
+
+        def solve(r):
+            r = np.asarray(r, dtype=float)
+            x = block_solve(r)
+            t, lin = self._contact_lin
+            if not lin:
+                return x
+            m = len(lin)
+            AU = np.empty((self.n_dofs, m))
+            Vt = np.zeros((m, self.n_dofs))
+            for j, (k, cp, g, dF, cF, wq_c) in enumerate(lin):
+                o = self.offsets[k]
+                key = (t, k, g.tobytes())
+                col = cache.get(key)
+                if col is None:
+                    u = np.zeros(self.n_dofs)
+                    u[o:o + g.size] = g
+                    np.add.at(u, cp.dofs, -cp.weights)
+                    col = block_solve(u)
+                    if len(cache) > 64:
+                        cache.clear()
+                    cache[key] = col
+                AU[:, j] = col
+                # V_j = c_f (dF w + c_v cF w + convective part)
+                vj = np.zeros(self.n_dofs)
+                vj[o:o + g.size] = (dF + S.c_v * cF) * g
+                np.add.at(vj, cp.dofs, wq_c - S.c_v * cF * cp.weights)
+                Vt[j] = S.c_f * vj
+            small = np.eye(m) + Vt @ AU
+            return x - AU @ np.linalg.solve(small, Vt @ x)
+
+        return solve
+
+    def assembled(self, ev, c_a=0.0, c_v=0.0, c_f=1.0):
+        """The full Newton matrix c_a M + inertia_q + c_f (c_v C + K) including contact, as a
+        sparse matrix (for checks; the solver never assembles it)."""
+        ev_c, ev_p = ev.parts
+        blocks = [sp.csr_matrix(self.catenary.effective_matrix(ev_c, c_a, c_v, c_f))]
+        blocks += [sp.csr_matrix(np.asarray(p.effective_matrix(e, c_a, c_v, c_f)))
+                   for p, e in zip(self.pantographs, ev_p)]
+        S = sp.block_diag(blocks, format="lil")
+        t, lin = self._contact_lin
+        for k, cp, g, dF, cF, wq_c in lin:
+            o = self.offsets[k]
+            u = np.zeros(self.n_dofs)
+            u[o:o + g.size] = g
+            np.add.at(u, cp.dofs, -cp.weights)
+            vj = np.zeros(self.n_dofs)
+            vj[o:o + g.size] = (dF + c_v * cF) * g
+            np.add.at(vj, cp.dofs, wq_c - c_v * cF * cp.weights)
+            S = S + sp.csr_matrix(np.outer(u, c_f * vj))
+        return sp.csr_matrix(S)
+
+    def static_solve(self, q0, t: float = 0.0, tol: float = 1e-10, max_iter: int = 60):
+        """Static equilibrium f_rest(t, q, 0) = 0 of the coupled system by Newton-Raphson
+        (the static start: pantographs and catenary in equilibrium in contact)."""
+        from pantocosim.core.errors import ConvergenceError
+
+        q = np.array(q0, dtype=float)
+        zero = np.zeros(self.n_dofs)
+        for it in range(max_iter):
+            ev = self.evaluate(t, q, zero, zero, None, tangent=True)
+            R = ev.f_rest
+            scale = max(float(np.max(np.abs(ev.parts[0].f_rest + self.catenary.weight)))
+                        if hasattr(self.catenary, "weight") else 1.0, 1.0)
+            if float(np.max(np.abs(R))) <= tol * scale:
+                return q
+            dq = -self.factorize(self.effective_matrix(ev, 0.0, 0.0, 1.0))(R)
+            q = q + dq
+        raise ConvergenceError(f"static start did not converge: residual "
+                               f"{float(np.max(np.abs(R))):.3e} N after {max_iter} iterations",
+                               time=t, residual=float(np.max(np.abs(R))))
+
+    def commit(self, t, q, v, a, inputs):
+        qc, qps = self.split(q)
+        vc, vps = self.split(v)
+        ac, aps = self.split(a)
+        self.catenary.commit(t, qc, vc, ac, None)
+        for k, p in enumerate(self.pantographs):
+            p.commit(t, qps[k], vps[k], aps[k], None)
+
+    def get_internal_state(self):
+        return (self.catenary.get_internal_state(),
+                [p.get_internal_state() for p in self.pantographs])
+
+    def set_internal_state(self, state):
+        if state is None:
+            return
+        self.catenary.set_internal_state(state[0])
+        for p, s in zip(self.pantographs, state[1]):
+            p.set_internal_state(s)
+
+
+class RigidWire(SecondOrderModel):
+    """A catenary stand-in without degrees of freedom: the contact wire is rigid and lies at
+    ``height`` (or at the heights a frozen catenary configuration gives at the contact points,
+    when ``catenary`` and ``q`` are given). Used to check the penalty element and the
+    contact-point location."""
+
+    n_dofs = 0
+
+    def __init__(self, n_pantographs: int, height: float | None = None, catenary=None,
+                 q=None):
+        self.n_pantographs = n_pantographs
+        self.height = height
+        self.catenary = catenary
+        self.q = None if q is None else np.asarray(q, float)
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        z = np.zeros(0)
+        empty = sp.csr_matrix((0, 0))
+        return Evaluation(f_inertia=z, f_rest=z.copy(), mass=empty, damping=empty,
+                          stiffness=empty, structure_key=None)
+
+    def contact_points(self, t):
+        from types import SimpleNamespace
+
+        if self.catenary is None:
+            heights = np.full(self.n_pantographs, float(self.height))
+        else:
+            heights = self.catenary.wire_height(t, self.q)
+        empty_i, empty_f = np.zeros(0, dtype=int), np.zeros(0)
+        return [SimpleNamespace(dofs=empty_i, weights=empty_f, offset=float(z),
+                                dweights_dx=empty_f, doffset_dx=0.0) for z in heights]
+
+
+class _BlockNewton:
+    """Block-diagonal Newton matrix of the coupled system (contact terms excluded)."""
+
+    def __init__(self, cat, pans, c_v, c_f):
+        self.cat, self.pans, self.c_v, self.c_f = cat, pans, c_v, c_f
+
+
+class _LazyBlocks:
+    """Placeholder for a global tangent the coupled solver never assembles; use
+    :meth:`CoupledSystem.assembled` when a full matrix is needed."""
+
+    def __init__(self, system, name):
+        self.system, self.name = system, name
+
+
+def _block_diag(first, rest):
+    return sp.block_diag([sp.csr_matrix(first)] + [sp.csr_matrix(np.asarray(x)) for x in rest],
+                         format="csr")
