@@ -144,6 +144,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []
+    actuation_height = z_mean + F0 / contact.stiffness
     for k, (pan, spec) in enumerate(zip(pantographs, sc.pantographs)):
         pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
         if spec.start == "static":
@@ -166,7 +167,8 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     pantographs=pantographs, contact=contact, window_m=window,
                     duration=float(duration), n_steps=int(math.ceil(duration / sc.dt - 1e-9)),
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
-                    support_x=np.asarray(support_x, float), dropper_x=dropper_x)
+                    support_x=np.asarray(support_x, float), dropper_x=dropper_x,
+                    extra={"actuation_height": actuation_height, "mean_loaded_height": z_mean})
 
 
 def mean_loaded_height(catenary, x_samples, forces) -> np.ndarray:

@@ -1,0 +1,276 @@
+"""Co-simulation runs of a scenario: the pantograph FMUs and the catenary FMU coupled by the
+master through their ports only (explicit Jacobi / Gauss-Seidel, or implicit with rollback).
+
+The same coupling runs on in-process subsystems (:class:`ModelSubsystem`: a model and its own
+HHT integrator behind the same port semantics), which the tests use to check the algorithms
+against the monolithic solution without FMUs.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from pathlib import Path
+
+import numpy as np
+
+from pantocosim.core.errors import ParameterError, PantocosimError
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.master.coupling import Coupler, CouplingSettings
+from pantocosim.master.recorder import Recorder
+from pantocosim.master.run import Prepared, RunResult, column_names, progress_bar
+
+ROOT = Path(__file__).resolve().parents[1]
+MAX_SUPPORTS = 64
+
+
+# ---------------------------------------------------------------------- subsystems
+class ModelSubsystem:
+    """A model with its own HHT integrator behind the FMU port semantics (in-process)."""
+
+    def __init__(self, model, q0, alpha: float, inputs0, outputs, reuse: bool = False):
+        self.model = model
+        self.integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=reuse))
+        self.integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.asarray(inputs0, float))
+        self._outputs = outputs
+        self._forces = np.asarray(inputs0, float).copy()
+
+    def set_forces(self, forces):
+        self._forces = np.asarray(forces, float).copy()
+
+    def step(self, t, h):
+        self.integ.step(h, self._forces)
+
+    def outputs(self):
+        return self._outputs(self.integ)
+
+    def get_state(self):
+        return self.integ.get_state()
+
+    def set_state(self, state):
+        self.integ.set_state(state)
+
+    def free_state(self, state):
+        pass
+
+    def uplift(self):
+        return self.model.support_uplift(self.integ.q)
+
+
+class FmuPantograph:
+    """A pantograph FMU behind the common port contract."""
+
+    def __init__(self, fmu):
+        self.fmu = fmu
+        self.r_in = fmu.refs(["contact_force"])
+        self.r_out = fmu.refs(["contact_height", "contact_velocity"])
+
+    def set_forces(self, forces):
+        self.fmu.set_real(self.r_in, forces)
+
+    def step(self, t, h):
+        self.fmu.do_step(t, h)
+
+    def outputs(self):
+        z, v = self.fmu.get_real(self.r_out)
+        return np.array([z]), np.array([v])
+
+    def get_state(self):
+        return self.fmu.get_state()
+
+    def set_state(self, s):
+        self.fmu.set_state(s)
+
+    def free_state(self, s):
+        self.fmu.free_state(s)
+
+
+class FmuCatenary:
+    """The catenary FMU: contact_force_k in, wire_height_k / wire_velocity_k out."""
+
+    def __init__(self, fmu, n_pantographs: int, n_supports: int):
+        self.fmu = fmu
+        k = range(1, n_pantographs + 1)
+        self.r_in = fmu.refs([f"contact_force_{i}" for i in k])
+        self.r_out = fmu.refs([f"wire_height_{i}" for i in k] + [f"wire_velocity_{i}" for i in k])
+        self.n = n_pantographs
+        self.r_uplift = fmu.refs([f"support_uplift_{j}" for j in range(n_supports)])
+
+    def set_forces(self, forces):
+        self.fmu.set_real(self.r_in, forces)
+
+    def step(self, t, h):
+        self.fmu.do_step(t, h)
+
+    def outputs(self):
+        y = self.fmu.get_real(self.r_out)
+        return y[:self.n], y[self.n:]
+
+    def uplift(self):
+        return self.fmu.get_real(self.r_uplift)
+
+    def get_state(self):
+        return self.fmu.get_state()
+
+    def set_state(self, s):
+        self.fmu.set_state(s)
+
+    def free_state(self, s):
+        self.fmu.free_state(s)
+
+
+# ---------------------------------------------------------------------- set-up
+def in_process_subsystems(prep: Prepared):
+    """Catenary and pantograph models as in-process subsystems, in the static start."""
+    cat = prep.catenary
+    sc = prep.scenario
+    csub = ModelSubsystem(cat, prep.q_cat0, sc.alpha, prep.static_forces,
+                          lambda integ: (cat.wire_height(integ.t, integ.q),
+                                         cat.wire_velocity(integ.t, integ.q, integ.v)),
+                          reuse=True)
+    psubs = []
+    for k, pan in enumerate(prep.pantographs):
+        psubs.append(ModelSubsystem(
+            pan, prep.q_pan0[k], sc.alpha, prep.static_forces[k:k + 1],
+            lambda integ, pan=pan: (np.array([pan.contact_height(integ.q)]),
+                                    np.array([pan.contact_velocity(integ.q, integ.v)]))))
+    return csub, psubs
+
+
+def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
+    """FMU files of the scenario (default ``dist/fmus/<model>.fmu``), built if missing."""
+    sc = prep.scenario
+    base = Path(sc.source).resolve().parent
+    dist = ROOT / "dist" / "fmus"
+    pans = []
+    for spec in sc.pantographs:
+        if spec.fmu:
+            p = Path(spec.fmu)
+            if not p.is_absolute():
+                p = (ROOT / p) if (ROOT / p).exists() or not (base / p).exists() else base / p
+        else:
+            p = dist / f"{spec.model}.fmu"
+        pans.append(p)
+    cat = dist / "catenary.fmu"
+    missing = [p for p in pans + [cat] if not p.exists()]
+    if missing and build:
+        from pantocosim.master.fmu_build import build_fmus
+
+        names = sorted({p.stem for p in missing})
+        build_fmus(dist, only=names, quiet=False)
+        missing = [p for p in pans + [cat] if not p.exists()]
+    if missing:
+        raise ParameterError("fmu", str(missing[0]), "FMU file not found (run "
+                             "`pantocosim build-fmus`)", sc.source)
+    return cat, pans
+
+
+def fmu_subsystems(prep: Prepared, instances: list):
+    """Instantiate and initialise the FMUs of the scenario in the static start."""
+    from pantocosim.master.fmu_runtime import FmuInstance
+
+    sc = prep.scenario
+    cat_path, pan_paths = fmu_paths(prep)
+    n_p = len(prep.pantographs)
+    if n_p > 4:
+        raise ParameterError("pantographs", n_p, "the catenary FMU takes at most 4", sc.source)
+    cat_fmu = FmuInstance(cat_path, "catenary")
+    instances.append(cat_fmu)
+    params = {"catenary": sc.catenary, "speed_kmh": sc.speed_kmh, "n_pantographs": n_p,
+              "hht_alpha": sc.alpha, "contact_mode": 0}
+    if sc.spans:
+        params["spans"] = sc.spans
+    for k, spec in enumerate(sc.pantographs, start=1):
+        params[f"position_{k}"] = spec.position_m
+        params[f"static_force_{k}"] = float(prep.static_forces[k - 1])
+    cat_fmu.initialize(params)
+    n_sup = min(len(prep.support_x), MAX_SUPPORTS)
+    csub = FmuCatenary(cat_fmu, n_p, n_sup)
+    psubs = []
+    z_w0, _ = csub.outputs()
+    for k, (spec, pan, path) in enumerate(zip(sc.pantographs, prep.pantographs, pan_paths)):
+        fmu = FmuInstance(path, f"pantograph_{k + 1}")
+        instances.append(fmu)
+        F0 = pan.options.mean_uplift
+        p = {"speed_kmh": sc.speed_kmh, "hht_alpha": sc.alpha}
+        for key, value in spec.options.items():
+            if fmu.has(key):
+                p[key] = value
+        if spec.start == "static":
+            Fs = float(prep.static_forces[k])
+            p.update(initial_contact_force=Fs, start_mode=0,
+                     initial_height=float(pan.contact_height(prep.q_pan0[k])))
+        else:
+            ramp = pan.options.ramp
+            p.update(initial_contact_force=F0, start_mode=1,
+                     initial_height=float(prep.extra["actuation_height"][k]),
+                     ramp_start_time=ramp.start, ramp_duration=ramp.duration,
+                     lowered_height=ramp.lowered_height)
+        fmu.initialize(p)
+        psubs.append(FmuPantograph(fmu))
+    return csub, psubs
+
+
+# ---------------------------------------------------------------------- the run
+def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
+              accelerator: str = "iqn-ils", progress: bool | None = None,
+              in_process: bool = False, tolerance: float = 1e-7) -> RunResult:
+    """Co-simulate the scenario through the FMUs (or in-process subsystems)."""
+    sc = prep.scenario
+    settings = CouplingSettings(scheme=scheme, accelerator=accelerator, tolerance=tolerance)
+    instances: list = []
+    names = column_names(len(prep.pantographs), len(prep.support_x))
+    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
+    error = None
+    t_wall = _time.perf_counter()
+    try:
+        if in_process:
+            csub, psubs = in_process_subsystems(prep)
+        else:
+            csub, psubs = fmu_subsystems(prep, instances)
+        coupler = Coupler(csub, psubs, prep.contact, settings)
+        coupler.initialise(prep.static_forces)
+        n_p = len(psubs)
+        n_sup = len(prep.support_x)
+
+        def record(t, forces, iterations):
+            zp, vp, zw, vw = coupler._interface()
+            up = np.zeros(n_sup)
+            u = csub.uplift()
+            up[:min(n_sup, len(u))] = u[:n_sup]
+            row = [t]
+            for k in range(n_p):
+                row += [spec_x(k, t), forces[k], zp[k], zw[k]]
+            row += list(up)
+            row.append(iterations)
+            rec.append(row)
+
+        def spec_x(k, t):
+            return sc.pantographs[k].position_m + sc.speed * t
+
+        record(0.0, prep.static_forces, 0)
+        bar = progress_bar(prep.n_steps, f"{sc.name} {scheme}", progress)
+        t = 0.0
+        try:
+            for i in range(prep.n_steps):
+                iters = coupler.step(t, sc.dt)
+                t = (i + 1) * sc.dt
+                # explicit schemes record the force the law gives at the new state; implicit
+                # records the converged interface force
+                F = coupler.forces if scheme == "implicit" else coupler.contact_forces()
+                record(t, F, iters)
+                bar.update(1)
+        finally:
+            bar.close()
+        iterations = np.array(coupler.iterations)
+    except PantocosimError as exc:
+        error = exc
+        iterations = np.zeros(0)
+    finally:
+        rec.close()
+        for inst in instances:
+            inst.terminate()
+    wall = _time.perf_counter() - t_wall
+    result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(), wall_time_s=wall,
+                       error=error)
+    result.coupling_iterations = iterations if scheme == "implicit" else None
+    return result
