@@ -25,6 +25,7 @@ DEFAULT_OUT = ROOT / "dist" / "fmus"
 #: FMU name -> (slave base class import, class name, preset)
 PANTOGRAPH_FMUS = {
     "dsa380-rigid": "Dsa380Rigid",
+    "dsa380-flexible": "Dsa380Flexible",
     "dsa380-lumped3": "Dsa380Lumped3",
     "en50318-2mass": "En50318TwoMass",
 }

@@ -13,6 +13,7 @@ DATA_DIR = Path(__file__).resolve().parent / "data"
 #: preset name -> parameter file in ``data/``
 PRESETS = {
     "dsa380-rigid": "dsa380-rigid.toml",
+    "dsa380-flexible": "dsa380-flexible.toml",
     "dsa380-lumped3": "dsa380-lumped3.toml",
     "en50318-2mass": "en50318-2mass.toml",
 }
@@ -49,6 +50,10 @@ def load_pantograph(name_or_path: str | Path, options: PantographOptions | None 
         from .lumped import load_chain
 
         return load_chain(path, options)
+    if "rigid_model" in data:
+        from .dsa380_flexible import load_dsa380_flexible
+
+        return load_dsa380_flexible(path, options)
     from .dsa380 import load_dsa380
 
     return load_dsa380(path, options)
