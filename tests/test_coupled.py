@@ -1,0 +1,178 @@
+"""Monolithic pantograph-catenary model, static start, run outputs, scenario validation
+(issue 4) and the coupling algorithms on in-process subsystems (issue 5)."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pantocosim.core.coupled import CoupledSystem, RigidWire
+from pantocosim.core.contact import PenaltyContact
+from pantocosim.core.errors import ParameterError
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.master.cli import main
+from pantocosim.master.cosim import run_cosim
+from pantocosim.master.run import prepare, run_monolithic
+from pantocosim.master.scenario import load_scenario
+from pantocosim.pantograph.presets import load_pantograph
+
+SHORT = str(Path(__file__).with_name("data") / "short-en50318.toml")
+
+
+@pytest.fixture(scope="module")
+def short_monolithic():
+    prep = prepare(SHORT)
+    return prep, run_monolithic(prep, None, progress=False)
+
+
+@pytest.mark.parametrize("name", ["dsa380-rigid", "dsa380-lumped3", "en50318-2mass"])
+def test_rigid_wire_gives_constant_force_equal_to_uplift(name):
+    pant = load_pantograph(name, speed_kmh=300.0)
+    F0 = pant.options.mean_uplift
+    system = CoupledSystem(RigidWire(1, height=5.3), [pant], PenaltyContact())
+    q0 = pant.static_equilibrium(F0, 5.3 + F0 / 50_000.0)
+    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05))
+    integ.initialize(0.0, q0, np.zeros(pant.n_dofs))
+    forces = []
+    for _ in range(1000):
+        integ.step(1e-3)
+        forces.append(system.contact_forces(integ.t, integ.q, integ.v)[0])
+    assert np.max(np.abs(np.array(forces) - F0)) / F0 < 1e-6
+
+
+def test_rigid_wire_from_a_frozen_catenary_checks_contact_location():
+    """A wire frozen in its static shape: the pantograph riding it feels exactly the penalty
+    of the interpolated height (3.13) at every position."""
+    from pantocosim.catenary.model import CatenaryModel
+
+    cat = CatenaryModel("en50318", x0=(30.0,), speed=250 / 3.6)
+    pant = load_pantograph("en50318-2mass")
+    wire = RigidWire(1, catenary=cat, q=cat.q_static)
+    system = CoupledSystem(wire, [pant], PenaltyContact())
+    z0 = cat.wire_height(0.0, cat.q_static)[0]
+    q0 = pant.static_equilibrium(115.0, z0 + 115.0 / 50_000.0)
+    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05))
+    integ.initialize(0.0, q0, np.zeros(2))
+    for _ in range(200):
+        integ.step(1e-3)
+        st = system.contact_state(integ.t, integ.q, integ.v)[0]
+        z_w_expected = cat.contact_wire_height(cat.q_static, [30.0 + 250 / 3.6 * integ.t])[0]
+        assert st[2] == pytest.approx(z_w_expected, abs=1e-12)
+        assert st[0] == pytest.approx(max(0.0, 50_000.0 * (st[1] - z_w_expected)), rel=1e-12)
+
+
+def test_coupled_tangent_matches_finite_differences():
+    from pantocosim.catenary.model import CatenaryModel
+
+    cat = CatenaryModel("en50318", x0=(31.3,), speed=80.0)
+    pant = load_pantograph("dsa380-rigid", speed_kmh=288.0, friction_force=3.0,
+                           friction_smoothing=1e-2)
+    contact = PenaltyContact(50_000.0, 20.0)
+    system = CoupledSystem(cat, [pant], contact)
+    qp = pant.static_equilibrium(150.0, cat.wire_height(0.02, cat.q_static)[0] + 0.004)
+    q = np.concatenate([cat.q_static, qp])
+    rng = np.random.default_rng(1)
+    v = 1e-3 * rng.standard_normal(q.size)
+    a = 1e-2 * rng.standard_normal(q.size)
+    ev = system.evaluate(0.02, q, v, a, None)
+    c_a, c_v, c_f = 3.0, 7.0, 0.9
+    S = system.assembled(ev, c_a, c_v, c_f).toarray()
+
+    def residual(qq):
+        e = system.evaluate(0.02, qq, v + c_v * (qq - q), a + c_a * (qq - q), None,
+                            tangent=False)
+        return e.f_inertia + c_f * e.f_rest
+
+    # check the columns of the pantograph and of the catenary DOFs near the contact point
+    cp = cat.contact_points(0.02)[0]
+    cols = list(cp.dofs) + list(range(system.n_cat, system.n_dofs))
+    for j in cols:
+        h = 1e-7 * max(1.0, abs(q[j]))
+        dq = np.zeros_like(q)
+        dq[j] = h
+        fd = (residual(q + dq) - residual(q - dq)) / (2 * h)
+        assert np.allclose(S[:, j], fd, rtol=1e-5, atol=1e-6 * np.max(np.abs(S[:, j]))), j
+    # the Woodbury solve equals a direct solve of the assembled matrix
+    r = rng.standard_normal(q.size)
+    x = system.factorize(system.effective_matrix(ev, c_a, c_v, c_f))(r)
+    assert np.allclose(S @ x, r, rtol=0, atol=1e-8 * np.max(np.abs(r)))
+
+
+def test_static_start_is_an_equilibrium(short_monolithic):
+    prep, run = short_monolithic
+    system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
+    q0 = np.concatenate([prep.q_cat0] + prep.q_pan0)
+    ev = system.evaluate(0.0, q0, np.zeros_like(q0), np.zeros_like(q0), None)
+    assert np.max(np.abs(ev.f_rest)) < 1e-7
+    assert prep.static_forces[0] == pytest.approx(115.0, rel=0.02)
+    # the actuation delivers the mean uplift at the mean loaded height of the window
+    pant = prep.pantographs[0]
+    q_mean = pant.static_equilibrium(115.0, prep.extra["actuation_height"][0])
+    assert pant.contact_height(q_mean) == pytest.approx(prep.extra["actuation_height"][0])
+
+
+def test_implicit_coupling_reproduces_monolithic(short_monolithic):
+    prep, mono = short_monolithic
+    Fm = mono.columns["contact_force_1"]
+    for acc in ("iqn-ils", "aitken"):
+        res = run_cosim(prepare(SHORT), None, "implicit", acc, progress=False,
+                        in_process=True, tolerance=1e-8)
+        assert res.error is None
+        Fi = res.columns["contact_force_1"]
+        assert np.max(np.abs(Fi - Fm)) < 1e-6 * Fm.mean()
+        assert res.coupling_iterations.max() <= 6
+
+
+def test_explicit_coupling_is_close_to_monolithic(short_monolithic):
+    prep, mono = short_monolithic
+    Fm = mono.columns["contact_force_1"]
+    for scheme in ("jacobi", "gauss-seidel"):
+        res = run_cosim(prepare(SHORT), None, scheme, progress=False, in_process=True)
+        F = res.columns["contact_force_1"]
+        assert abs(F.mean() - Fm.mean()) < 0.01 * Fm.mean()
+        assert abs(F.std() - Fm.std()) < 0.1 * Fm.std()
+
+
+def test_run_cli_writes_outputs_and_json(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", SHORT, "--out", str(out), "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    st = summary["statistics"]
+    for key in ("mean_n", "std_n", "stat_max_n", "stat_min_n", "max_n", "min_n",
+                "loss_of_contact_percent", "max_uplift_at_support_m"):
+        assert np.isfinite(st[key]), key
+    assert st["stat_max_n"] == pytest.approx(st["mean_n"] + 3 * st["std_n"])
+    assert summary["coupling"] == "monolithic" and summary["scenario"] == "short-en50318"
+    assert summary["wall_time_s"] > 0 and summary["simulated_time_s"] > 0.6
+    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert header[:5] == ["time", "x_1", "contact_force_1", "contact_height_1", "wire_height_1"]
+    for png in ("contact_force.png", "spectrum.png", "support_uplift.png"):
+        assert (out / png).stat().st_size > 10_000
+
+
+def _scenario_file(tmp_path, **changes):
+    text = Path(SHORT).read_text()
+    for old, new in changes.items():
+        text = text.replace(old, new)
+    p = tmp_path / "bad.toml"
+    p.write_text(text)
+    return str(p)
+
+
+def test_bad_scenarios_name_the_field(tmp_path):
+    with pytest.raises(ParameterError, match="scenario"):
+        load_scenario("no-such-scenario")
+    bad = _scenario_file(tmp_path, **{'model = "en50318-2mass"': 'model = "no-such"'})
+    with pytest.raises(ParameterError, match=r"pantographs\[0\].model"):
+        prepare(bad)
+    fast = _scenario_file(tmp_path, **{"speed_kmh = 250.0": "speed_kmh = 400.0"})
+    with pytest.raises(ParameterError, match="speed_kmh = 400.0.*wave speed.*--force"):
+        prepare(fast)
+    outside = _scenario_file(tmp_path, **{"window_m = [35.0, 60.0]": "window_m = [35.0, 900.0]"})
+    with pytest.raises(ParameterError, match=r"analysis.window_m"):
+        prepare(outside)
+    typo = _scenario_file(tmp_path, **{"dt = 0.001": "dtt = 0.001"})
+    with pytest.raises(ParameterError, match="simulation.dtt"):
+        prepare(typo)
+    assert main(["run", fast, "--quiet"]) == 2
