@@ -15,7 +15,7 @@ from pantocosim import __version__
 from pantocosim.core.errors import PantocosimError
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
-COMMANDS = ["run", "modal", "pantograph", "static", "modes"]
+COMMANDS = ["run", "modal", "pantograph", "static", "modes", "build-fmus", "regress"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,9 +26,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         try:
-            module = importlib.import_module(f"pantocosim.master.commands.{name}")
+            module = importlib.import_module(f"pantocosim.master.commands.{name.replace('-', '_')}")
         except ModuleNotFoundError as exc:
-            if exc.name == f"pantocosim.master.commands.{name}":
+            if exc.name == f"pantocosim.master.commands.{name.replace('-', '_')}":
                 continue  # command not built yet
             raise
         p = module.add_parser(sub)
