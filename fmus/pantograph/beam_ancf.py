@@ -24,7 +24,8 @@ Strain energy (Euler-Bernoulli, geometrically exact in rotation, small strain):
     U = 1/2 int (EA eps^2 + EI kappa^2) dx,
     eps = (r_x . r_x - 1) / 2,   kappa = (r_x x r_xx) / |r_x|^3,
 
-integrated with 5 Gauss points. :func:`elastic_elements` returns, for every element, the
+measured from the straight reference (see :func:`elastic_elements`) and integrated with
+5 Gauss points. :func:`elastic_elements` returns, for every element, the
 elastic force dU/de and its exact Hessian (material + geometric stiffness), vectorised over
 elements; :func:`gather` and :func:`scatter_add` map element and global coordinates through
 per-node-pair 2x2 transformations (identity for shared positions/slopes, a fixed rotation for
@@ -88,12 +89,16 @@ def element_gravity(l: float, rho_a: float, g: float) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def elastic_elements(E, length, EA, EI, xi_g, w_g, out_f, out_K, out_U):
+def elastic_elements(E0, dE, length, EA, EI, xi_g, w_g, out_f, out_K, out_U):
     """Elastic forces and exact stiffness of every element (vectorised over elements).
 
-    E[k] (8,) element coordinates; out_f[k] = dU/de, out_K[k] = d2U/de2 (8 x 8),
-    out_U[k] = (axial energy, bending energy)."""
-    ne = E.shape[0]
+    E0[k] (8,) coordinates of element k in its straight, stress-free reference configuration,
+    dE[k] its displacement from there (e = E0 + dE). The strains are measured from the
+    reference, eps = r0_x . dr_x + |dr_x|^2 / 2 and kappa - kappa0, so they keep full relative
+    precision however far the element sits from the origin (no round-off floor from absolute
+    coordinates). out_f[k] = dU/de, out_K[k] = d2U/de2 (8 x 8), out_U[k] = (axial energy,
+    bending energy)."""
+    ne = E0.shape[0]
     ng = xi_g.shape[0]
     Sx = np.zeros((2, 8))
     Sxx = np.zeros((2, 8))
@@ -117,22 +122,36 @@ def elastic_elements(E, length, EA, EI, xi_g, w_g, out_f, out_K, out_U):
                 Sx[1, 2 * a + 1] = Nx[a]
                 Sxx[0, 2 * a] = Nxx[a]
                 Sxx[1, 2 * a + 1] = Nxx[a]
-            rx0 = 0.0
-            rx1 = 0.0
-            rxx0 = 0.0
-            rxx1 = 0.0
+            r0x = 0.0
+            r0y = 0.0
+            r0xx = 0.0
+            r0yy = 0.0
+            dx = 0.0
+            dy = 0.0
+            dxx = 0.0
+            dyy = 0.0
             for a in range(4):
-                rx0 += Nx[a] * E[k, 2 * a]
-                rx1 += Nx[a] * E[k, 2 * a + 1]
-                rxx0 += Nxx[a] * E[k, 2 * a]
-                rxx1 += Nxx[a] * E[k, 2 * a + 1]
+                r0x += Nx[a] * E0[k, 2 * a]
+                r0y += Nx[a] * E0[k, 2 * a + 1]
+                r0xx += Nxx[a] * E0[k, 2 * a]
+                r0yy += Nxx[a] * E0[k, 2 * a + 1]
+                dx += Nx[a] * dE[k, 2 * a]
+                dy += Nx[a] * dE[k, 2 * a + 1]
+                dxx += Nxx[a] * dE[k, 2 * a]
+                dyy += Nxx[a] * dE[k, 2 * a + 1]
+            rx0 = r0x + dx
+            rx1 = r0y + dy
+            rxx0 = r0xx + dxx
+            rxx1 = r0yy + dyy
+            s0 = r0x * r0x + r0y * r0y
+            kap0 = (r0x * r0yy - r0y * r0xx) * s0 ** -1.5
+            eps = r0x * dx + r0y * dy + 0.5 * (dx * dx + dy * dy)
             s = rx0 * rx0 + rx1 * rx1
-            eps = 0.5 * (s - 1.0)
             c = rx0 * rxx1 - rx1 * rxx0
             s32 = s ** -1.5
             s52 = s32 / s
             s72 = s52 / s
-            kap = c * s32
+            kap = c * s32 - kap0
             # first derivatives: eps_e = Sx^T r_x, s_e = 2 eps_e, c_e = Sx^T J r_xx + Sxx^T J^T r_x
             for i in range(8):
                 epse[i] = Sx[0, i] * rx0 + Sx[1, i] * rx1

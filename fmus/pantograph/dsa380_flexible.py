@@ -11,9 +11,12 @@ vertical de los nodos coincidentes"):
   tie the slopes by a fixed rotation, r_x(b) = R(alpha) r_x(a);
 * points 1, 2 (pivots) and 13 (damper end) are fixed to the roof frame.
 
-All these constraints are linear, so the generalised coordinates q (free node positions and
+All these constraints are linear, so the generalised coordinates (free node positions and
 independent slopes) give every element's coordinates as e_k = T_k q + c_k and the mass matrix
-is constant. The collector springs k_l (A.11), the torsional spring k_r and actuation torque at
+is constant. The model's q is the DISPLACEMENT u = q_abs - q_ref of these coordinates from the
+reference configuration q_ref (the rigid model's equilibrium at the working height, all bars
+straight and unstrained): absolute positions ~5 m above the rail would otherwise put a
+round-off floor of eps * 5 m * EA / l (~1e-6 N for steel) under every residual. The collector springs k_l (A.11), the torsional spring k_r and actuation torque at
 joint 1 (acting on the slope of bar 1 at point 1, (2.14)), the damper 13-1p (A.13), collector
 friction (2.15)-(2.17), aerodynamic uplift and the contact force on point 10 are those of the
 rigid model, read from the same parameter file. Bars 1-7 take the rigid bars' masses
@@ -193,12 +196,15 @@ def _spring(q, ga, gb, k, l0, f, K, with_K):
 
 
 @njit(cache=True, error_model="numpy")
-def assemble(q, v, ints, reals, pg, pR, pc, length, EA, EI, xi_g, w_g, Qg,
-             Ebuf, Fe, Ke, Ue, f, K, C, extra, with_K):
-    """f_rest (and with_K its exact tangents K = df/dq, C = df/dv) of the flexible model.
+def assemble(u, v, q_ref, q, ints, reals, pg, pR, pc0, E0, length, EA, EI, xi_g, w_g, Qg,
+             dE, Fe, Ke, Ue, f, K, C, extra, with_K):
+    """f_rest (and with_K its exact tangents K = df/du, C = df/dv) of the flexible model at
+    the displacement u from the reference configuration q_ref (q = q_ref + u is filled in).
 
     extra = (spring energy, torsion energy, damper power, friction force)."""
-    n = q.shape[0]
+    n = u.shape[0]
+    for i in range(n):
+        q[i] = q_ref[i] + u[i]
     for i in range(n):
         f[i] = -Qg[i]
     if with_K:
@@ -207,8 +213,8 @@ def assemble(q, v, ints, reals, pg, pR, pc, length, EA, EI, xi_g, w_g, Qg,
                 K[i, j] = 0.0
                 C[i, j] = 0.0
     # ---- beam elements (ANCF), vectorised
-    beam.gather(q, pg, pR, pc, Ebuf)
-    beam.elastic_elements(Ebuf, length, EA, EI, xi_g, w_g, Fe, Ke, Ue)
+    beam.gather(u, pg, pR, pc0, dE)
+    beam.elastic_elements(E0, dE, length, EA, EI, xi_g, w_g, Fe, Ke, Ue)
     beam.scatter_add(pg, pR, Fe, Ke, f, K, with_K)
     # ---- collector springs point 5 -> 11, 12 (A.11)
     g5 = ints[I_P5]
@@ -294,7 +300,7 @@ class _Dofs:
     def pair(self, name: str, suffix=("x", "y")) -> int:
         g = self.n
         self.n += 2
-        self.names += [f"{name}_{suffix[0]}", f"{name}_{suffix[1]}"]
+        self.names += [f"u_{name}_{suffix[0]}", f"u_{name}_{suffix[1]}"]
         return g
 
 
@@ -448,7 +454,9 @@ class Dsa380FlexibleModel(PantographModel):
         self.M.flags.writeable = False
         self.Qg = Qg
         # buffers
-        self._E = np.zeros((ne, 8))
+        self._dE = np.zeros((ne, 8))
+        self._q = np.zeros(n)
+        self._pc0 = np.zeros_like(pc)
         self._Fe = np.zeros((ne, 8))
         self._Ke = np.zeros((ne, 8, 8))
         self._Ue = np.zeros((ne, 2))
@@ -463,9 +471,21 @@ class Dsa380FlexibleModel(PantographModel):
                                 0.0, 0.0, 0.0, 1.0])
         self._gradient = np.zeros(n)
         self._gradient[self.point_dofs["10"] + 1] = 1.0
+        # reference (stress-free) configuration: the rigid equilibrium at the working height;
+        # the generalised coordinates are displacements from it
+        self.q_ref = self._absolute_from_rigid(rig.q_equilibrium)
+        self._E0 = np.zeros((ne, 8))
+        beam.gather(self.q_ref, pg, pR, pc, self._E0)
+
+    def absolute(self, u) -> np.ndarray:
+        """Absolute node positions and slopes q_ref + u."""
+        return self.q_ref + np.asarray(u, float)
 
     def q_from_rigid(self, q_rigid) -> np.ndarray:
-        """Coordinates of the undeformed bars in the rigid model's configuration q_rigid."""
+        """Displacement u of the undeformed bars placed in the rigid model's configuration."""
+        return self._absolute_from_rigid(q_rigid) - self.q_ref
+
+    def _absolute_from_rigid(self, q_rigid) -> np.ndarray:
         pts = self.rigid.points(q_rigid)
         q = np.zeros(self.n_dofs)
         for b in range(N_BARS):
@@ -505,9 +525,9 @@ class Dsa380FlexibleModel(PantographModel):
             C = np.empty((n, n))
         else:
             K = C = np.empty((1, 1))
-        assemble(q, v, self._ints, r, self._pg, self._pR, self._pc, self._length, self._EA,
-                 self._EI, self._xi, self._w, self.Qg, self._E, self._Fe, self._Ke, self._Ue,
-                 f, K, C, self._extra, with_K)
+        assemble(q, v, self.q_ref, self._q, self._ints, r, self._pg, self._pR, self._pc0,
+                 self._E0, self._length, self._EA, self._EI, self._xi, self._w, self.Qg,
+                 self._dE, self._Fe, self._Ke, self._Ue, f, K, C, self._extra, with_K)
         if not np.all(np.isfinite(f)):
             raise ParameterError("q", "non-finite", "the flexible model cannot be evaluated "
                                  "here (degenerate element or spring)", self.name)
@@ -527,7 +547,8 @@ class Dsa380FlexibleModel(PantographModel):
 
     # ------------------------------------------------------------------ port contract
     def contact_height(self, q):
-        return float(q[self.point_dofs["10"] + 1])
+        i = self.point_dofs["10"] + 1
+        return float(self.q_ref[i] + q[i])
 
     def contact_height_gradient(self, q):
         return self._gradient
@@ -538,17 +559,18 @@ class Dsa380FlexibleModel(PantographModel):
         if name in GROUND:
             return self.rigid.points(self.rigid.q_equilibrium)[name].copy()
         g = self.point_dofs[name]
-        return np.array(q[g:g + 2], float)
+        return self.q_ref[g:g + 2] + np.asarray(q[g:g + 2], float)
 
     def bar_angle_at_1(self, q) -> float:
         """Angle of bar 1 at joint 1 (the flexible counterpart of theta)."""
         g = self.slope1
-        return math.atan2(q[g + 1], q[g])
+        qa = self.absolute(q)
+        return math.atan2(qa[g + 1], qa[g])
 
     def bar_curves(self, q, per_element: int = 6) -> list[np.ndarray]:
         """Centre lines of bars 1..9 (list of (m, 2) arrays) for plots."""
         E = np.zeros((self.n_elements, 8))
-        beam.gather(np.asarray(q, float), self._pg, self._pR, self._pc, E)
+        beam.gather(self.absolute(q), self._pg, self._pR, self._pc, E)
         out = [[] for _ in range(N_BARS)]
         xs = np.linspace(0.0, 1.0, per_element + 1)
         for k in range(self.n_elements):
@@ -567,7 +589,7 @@ class Dsa380FlexibleModel(PantographModel):
         v = np.asarray(v, float)
         F = 0.0 if inputs is None else float(inputs[0])
         self._assemble(q, v, F, 0.0, with_K=False, aero=0.0)
-        Vg = -float(np.sum(self._Qe * self._E))
+        Vg = -float(np.sum(self._Qe * (self._E0 + self._dE)))
         return {"T": 0.5 * float(v @ self.M @ v),
                 "V": float(self._Ue.sum()) + Vg + float(self._extra[0] + self._extra[1]),
                 "strain": float(self._Ue.sum()), "damper_power": float(self._extra[2]),
@@ -582,14 +604,14 @@ class Dsa380FlexibleModel(PantographModel):
         if dq is None:
             np.add.at(out, self.bar_of, self._Ue.sum(axis=1))
             return out
-        # element tangent stiffness at q (buffers hold it after a with_K element pass)
+        # element tangent stiffness at q (self._dE holds the element displacements at q)
         Fe = np.zeros((self.n_elements, 8))
         Ke = np.zeros((self.n_elements, 8, 8))
         Ue = np.zeros((self.n_elements, 2))
-        beam.elastic_elements(self._E, self._length, self._EA, self._EI, self._xi, self._w,
-                              Fe, Ke, Ue)
+        beam.elastic_elements(self._E0, self._dE, self._length, self._EA, self._EI, self._xi,
+                              self._w, Fe, Ke, Ue)
         dE = np.zeros((self.n_elements, 8))
-        beam.gather(np.asarray(dq, float), self._pg, self._pR, np.zeros_like(self._pc), dE)
+        beam.gather(np.asarray(dq, float), self._pg, self._pR, self._pc0, dE)
         u = 0.5 * np.einsum("ki,kij,kj->k", dE, Ke, dE)
         np.add.at(out, self.bar_of, u)
         return out
@@ -637,7 +659,7 @@ class Dsa380FlexibleModel(PantographModel):
                 dq = np.linalg.solve(K, -f)
                 dM = 0.0
             else:
-                a, b = q[g], q[g + 1]
+                a, b = self.q_ref[g] + q[g], self.q_ref[g + 1] + q[g + 1]
                 s = a * a + b * b
                 gphi = np.zeros(n)
                 gphi[g], gphi[g + 1] = -b / s, a / s
@@ -645,8 +667,9 @@ class Dsa380FlexibleModel(PantographModel):
                 A[:n, :n] = K
                 A[:n, n] = -gphi
                 A[n, iy] = 1.0
-                rhs = -np.append(f, q[iy] - height)
-                res = max(np.max(np.abs(f)), abs(q[iy] - height) * 1e6)
+                gap = self.q_ref[iy] + q[iy] - height
+                rhs = -np.append(f, gap)
+                res = max(np.max(np.abs(f)), abs(gap) * 1e6)
                 sol = np.linalg.solve(A, rhs)
                 dq, dM = sol[:n], sol[n]
             step = float(np.max(np.abs(dq)))
