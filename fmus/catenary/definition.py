@@ -25,6 +25,7 @@ naming the file, the dotted field and the value.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -275,3 +276,14 @@ def load_catenary(name_or_path: str | Path) -> CatenaryDefinition:
         p = cand
     data = load_toml(p)
     return parse_definition(data, str(p.name if p.parent == DATA_DIR else p))
+
+
+def with_spans(definition: CatenaryDefinition, n_spans: int) -> CatenaryDefinition:
+    """The definition repeated/truncated to ``n_spans`` spans (span data cycled)."""
+    n_spans = int(n_spans)
+    if n_spans < 1:
+        raise ParameterError("spans", n_spans, "must be >= 1", definition.source)
+    lengths = [definition.span_lengths[i % definition.n_spans] for i in range(n_spans)]
+    droppers = [definition.dropper_positions[i % len(definition.dropper_positions)]
+                for i in range(n_spans)]
+    return dataclasses.replace(definition, span_lengths=lengths, dropper_positions=droppers)

@@ -1,0 +1,351 @@
+"""FMI 2.0 co-simulation adapter for the catenary finite-element model.
+
+Port contract (design README section 4; public interface):
+
+parameters
+  ``catenary`` (String, preset name or TOML path; relative paths are also looked up in the
+  FMU resources), ``spans`` (0 = as defined), ``element_size`` [m] (0 = as defined),
+  ``speed_kmh``, ``n_pantographs`` (1..4), ``position_k`` [m] (x of pantograph k at t0),
+  ``static_force_k`` [N] (upward static contact force at t0 for the static start, 0 = none),
+  ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
+  contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``.
+inputs
+  ``contact_force_k`` [N] (mode 0), ``pantograph_height_k`` [m] and
+  ``pantograph_velocity_k`` [m/s] (mode 1).
+outputs
+  ``wire_height_k`` [m], ``wire_velocity_k`` [m/s] (including the convective term V dz/dx
+  seen by the moving pantograph), ``contact_force_out_k`` [N], ``support_uplift_j`` [m]
+  (j = 0..63; uplift of the contact wire at support j relative to the unloaded static
+  configuration; 0 beyond the last support) and ``n_supports``.
+
+Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
+``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
+mode 0 the forces enter the HHT-alpha step weighted (1 + alpha) F(t+h) - alpha F(t) exactly
+as in the monolithic solver; at t0 the force is ``static_force_k``. In mode 1 the FMU solves
+the penalty contact F = max(0, k_H (z_p - z_w) + c_H (v_p - v_w)) implicitly with the wire,
+with the pantograph's height/velocity at t + h from the inputs (at t0 the pantograph is taken
+at z_w + static_force_k / k_H, so the contact force at t0 is ``static_force_k``; with a zero
+static force the inputs set during initialisation are used). With ``n_substeps`` > 1 the
+inputs are interpolated linearly inside the communication step.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .slave_base import GuardedSlave
+
+MAX_PANTOGRAPHS = 4
+MAX_SUPPORTS = 64
+
+TIMING = ("the value set before doStep(t, h) is the value at t + h; the value at t is the "
+          "previous accepted step's (kept in the FMU state)")
+
+
+def _discard():
+    from pythonfmu.enums import Fmi2Status
+
+    return Fmi2Status.discard
+
+
+class CatenarySlave(GuardedSlave):
+    description = "pantocosim catenary"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.description = ("pantocosim catenary (finite elements, HHT-alpha). Inputs: " + TIMING
+                            + ". contact_mode 0: contact forces are inputs (at t0: "
+                            "static_force_k); contact_mode 1: built-in penalty contact from "
+                            "pantograph_height_k/pantograph_velocity_k.")
+        self.string("catenary", "en50318", "catenary definition: preset name (en50318, ave64, "
+                    "benchmark55) or TOML file (relative paths are also looked up in the FMU "
+                    "resources)")
+        self.integer("spans", 0, "number of spans (span data cycled); 0 = as defined")
+        self.real("element_size", 0.0, "parameter", "m",
+                  "target finite-element length; 0 = as defined")
+        self.real("speed_kmh", 0.0, "parameter", "km/h", "train speed")
+        self.integer("n_pantographs", 1, "number of pantographs (1..4)")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            self.real(f"position_{k}", 30.0, "parameter", "m",
+                      f"track position x of pantograph {k} at t0")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            self.real(f"static_force_{k}", 0.0, "parameter", "N",
+                      f"upward static contact force of pantograph {k} at t0 (static start); "
+                      "0 = none")
+        self.real("hht_alpha", -0.05, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
+        self.integer("contact_mode", 0, "0 = contact forces are inputs (contact_force_k); "
+                     "1 = built-in penalty contact from pantograph_height_k and "
+                     "pantograph_velocity_k")
+        self.real("contact_stiffness", 50000.0, "parameter", "N/m",
+                  "penalty stiffness k_H (contact_mode 1)")
+        self.real("contact_damping", 0.0, "parameter", "N.s/m",
+                  "penalty contact damping c_H (contact_mode 1)")
+        self.integer("n_substeps", 1, "integration steps per communication step (inputs "
+                     "interpolated linearly)")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            self.real(f"contact_force_{k}", 0.0, "input", "N",
+                      f"contact_mode 0: upward contact force of pantograph {k} on the wire, "
+                      f">= 0; {TIMING}; at t0 it is static_force_{k}")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            self.real(f"pantograph_height_{k}", 0.0, "input", "m",
+                      f"contact_mode 1: contact height of pantograph {k} above the rail; "
+                      f"{TIMING}")
+            self.real(f"pantograph_velocity_{k}", 0.0, "input", "m/s",
+                      f"contact_mode 1: vertical velocity of pantograph {k}'s contact point; "
+                      f"{TIMING}")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            self.real(f"wire_height_{k}", 0.0, "output", "m",
+                      f"contact-wire height above the rail under pantograph {k}")
+            self.real(f"wire_velocity_{k}", 0.0, "output", "m/s",
+                      f"vertical velocity of the contact wire seen by pantograph {k} "
+                      "(including the convective term V dz/dx)")
+            self.real(f"contact_force_out_{k}", 0.0, "output", "N",
+                      f"contact force of pantograph {k}: mode 1 the penalty force at the end "
+                      "of the step, mode 0 the input force")
+        for j in range(MAX_SUPPORTS):
+            self.real(f"support_uplift_{j}", 0.0, "output", "m",
+                      f"uplift of the contact wire at support {j} relative to the unloaded "
+                      "static configuration (0 beyond the last support)")
+        self.real("n_supports", 0.0, "output", "1", "number of supports of the line (spans + 1)")
+        self.real("newton_iterations", 0.0, "local", None,
+                  "Newton iterations of the last communication step")
+        self._model = None       # CatenaryModel
+        self._system = None      # the model the integrator drives (catenary or coupled)
+        self._standins = []      # PrescribedPantograph per pantograph (mode 1)
+        self._integ = None
+        self._n = 1
+        self._mode = 0
+        self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
+        self._pending_integ_state = None
+        self._state_attributes = ["_integ_state", "_prev_inputs"]
+
+    # ------------------------------------------------------------------ lifecycle
+    def setup_experiment(self, start_time, stop_time, tolerance):
+        self._t0 = float(start_time)
+
+    def exit_initialization_mode(self):
+        self.guarded("initialisation", self._initialise)
+        return True
+
+    def _catenary_source(self):
+        from pantocosim.catenary.definition import load_catenary
+
+        name = str(self.catenary).strip()
+        if not name:
+            from pantocosim.core.errors import ParameterError
+
+            raise ParameterError("catenary", self.catenary, "empty catenary name")
+        p = Path(name)
+        if not p.is_absolute() and not p.exists() and self.resources:
+            cand = Path(self.resources) / p
+            if cand.exists():
+                return load_catenary(cand)
+        return load_catenary(name)
+
+    def _initialise(self):
+        from pantocosim.catenary.definition import with_spans
+        from pantocosim.catenary.model import CatenaryModel
+        from pantocosim.core.contact import PenaltyContact
+        from pantocosim.core.errors import ParameterError
+        from pantocosim.core.hht import HHTIntegrator, HHTSettings
+
+        self.check_build_stamp()
+        if self._error:
+            return
+        n = int(self.n_pantographs)
+        if not 1 <= n <= MAX_PANTOGRAPHS:
+            raise ParameterError("n_pantographs", n, f"must be 1..{MAX_PANTOGRAPHS}")
+        mode = int(self.contact_mode)
+        if mode not in (0, 1):
+            raise ParameterError("contact_mode", mode, "must be 0 (force inputs) or 1 "
+                                 "(built-in penalty)")
+        if int(self.n_substeps) < 1:
+            raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
+        alpha = self.finite("hht_alpha", self.hht_alpha)
+        if not -1.0 / 3.0 <= alpha <= 0.0:
+            raise ParameterError("hht_alpha", alpha, "must lie in [-1/3, 0]")
+        speed = self.finite("speed_kmh", self.speed_kmh) / 3.6
+        esize = self.finite("element_size", self.element_size)
+        if esize < 0:
+            raise ParameterError("element_size", esize, "must be >= 0 (0 = as defined)")
+        spans = int(self.spans)
+        if spans < 0:
+            raise ParameterError("spans", spans, "must be >= 0 (0 = as defined)")
+        k_h = self.finite("contact_stiffness", self.contact_stiffness)
+        if not k_h > 0:
+            raise ParameterError("contact_stiffness", k_h, "must be > 0")
+        c_h = self.finite("contact_damping", self.contact_damping)
+        if c_h < 0:
+            raise ParameterError("contact_damping", c_h, "must be >= 0")
+        x0, F0 = [], []
+        for k in range(1, n + 1):
+            x0.append(self.finite(f"position_{k}", getattr(self, f"position_{k}")))
+            F = self.finite(f"static_force_{k}", getattr(self, f"static_force_{k}"))
+            if F < 0:
+                raise ParameterError(f"static_force_{k}", F, "must be >= 0 (upward force)")
+            F0.append(F)
+        definition = self._catenary_source()
+        if spans:
+            definition = with_spans(definition, spans)
+        length = float(definition.support_x[-1])
+        for k, x in enumerate(x0, start=1):
+            if not 0.0 < x < length:
+                raise ParameterError(f"position_{k}", x, f"must lie on the line (0 .. "
+                                     f"{length:g} m of catenary '{definition.name}')")
+        model = CatenaryModel(definition, x0=x0, speed=speed,
+                              element_size=esize if esize > 0 else None)
+        F0 = np.array(F0)
+        q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
+        settings = HHTSettings(alpha=alpha, reuse_factorization=True)
+        self._model, self._n, self._mode = model, n, mode
+        if mode == 0:
+            integ = HHTIntegrator(model, settings)
+            integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
+            self._system = model
+            self._prev_inputs = F0.copy()
+            for k in range(1, n + 1):
+                setattr(self, f"contact_force_{k}", float(F0[k - 1]))
+        else:
+            from pantocosim.core.coupled import CoupledSystem
+            from pantocosim.core.prescribed import PrescribedPantograph
+
+            contact = PenaltyContact(k_h, c_h)
+            zw = model.wire_height(0.0, q0)
+            vw = model.wire_velocity(0.0, q0, np.zeros(model.n_dofs))
+            standins = []
+            for k in range(1, n + 1):
+                if F0[k - 1] > 0:
+                    z, v = float(zw[k - 1] + F0[k - 1] / k_h), float(vw[k - 1])
+                    setattr(self, f"pantograph_height_{k}", z)
+                    setattr(self, f"pantograph_velocity_{k}", v)
+                else:
+                    z = self.finite(f"pantograph_height_{k}",
+                                    getattr(self, f"pantograph_height_{k}"))
+                    v = self.finite(f"pantograph_velocity_{k}",
+                                    getattr(self, f"pantograph_velocity_{k}"))
+                standins.append(PrescribedPantograph(z, v))
+            system = CoupledSystem(model, standins, contact)
+            integ = HHTIntegrator(system, settings)
+            integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
+            self._system, self._standins = system, standins
+            self._prev_inputs = np.array([[s.height, s.velocity] for s in standins])
+        self._integ = integ
+        self.n_supports = float(len(model.support_x))
+        if self._pending_integ_state is not None:
+            self._integ.set_state(self._pending_integ_state)
+            self._pending_integ_state = None
+        self._update_outputs(initial=True)
+
+    # ------------------------------------------------------------------ stepping
+    def _read_inputs(self):
+        """Inputs at t + h for the active pantographs, or an error message."""
+        n = self._n
+        if self._mode == 0:
+            F = np.empty(n)
+            for k in range(1, n + 1):
+                name = f"contact_force_{k}"
+                x = float(getattr(self, name))
+                if not np.isfinite(x) or x < 0.0:
+                    return None, f"{name} = {x!r}: must be finite and >= 0"
+                F[k - 1] = x
+            return F, None
+        out = np.empty((n, 2))
+        for k in range(1, n + 1):
+            for j, name in enumerate((f"pantograph_height_{k}", f"pantograph_velocity_{k}")):
+                x = float(getattr(self, name))
+                if not np.isfinite(x):
+                    return None, f"{name} = {x!r}: must be finite"
+                out[k - 1, j] = x
+        return out, None
+
+    def do_step(self, current_time, step_size):
+        if self._error or self._integ is None:
+            self.log(self._error or "not initialised", _discard())
+            return False
+        try:
+            new, err = self._read_inputs()
+        except Exception as exc:  # noqa: BLE001
+            new, err = None, f"inputs: {exc}"
+        if err is not None:
+            self.log(err, _discard())
+            return False
+        saved = self._integ.get_state()
+        try:
+            n = int(self.n_substeps)
+            h = step_size / n
+            old = self._prev_inputs
+            iters = 0
+            for i in range(1, n + 1):
+                u = new if i == n else old + (new - old) * (i / n)
+                if self._mode == 0:
+                    iters += self._integ.step(h, u.copy()).iterations
+                else:
+                    for s, (z, v) in zip(self._standins, u):
+                        s.set(z, v)
+                    iters += self._integ.step(h).iterations
+            self._prev_inputs = new.copy()
+            self.newton_iterations = float(iters)
+            self._update_outputs()
+            return True
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            self._integ.set_state(saved)
+            self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: "
+                     f"{type(exc).__name__}: {exc}", _discard())
+            return False
+
+    def _update_outputs(self, initial: bool = False):
+        model, integ = self._model, self._integ
+        t = integ.t
+        qc = integ.q[:model.n_dofs]
+        vc = integ.v[:model.n_dofs]
+        zw = model.wire_height(t, qc)
+        vw = model.wire_velocity(t, qc, vc)
+        if self._mode == 0:
+            F = self._prev_inputs
+        else:
+            F = self._system.contact_forces(t, integ.q, integ.v)
+        for k in range(1, self._n + 1):
+            setattr(self, f"wire_height_{k}", float(zw[k - 1]))
+            setattr(self, f"wire_velocity_{k}", float(vw[k - 1]))
+            setattr(self, f"contact_force_out_{k}", float(F[k - 1]))
+        up = model.support_uplift(qc)
+        for j in range(min(len(up), MAX_SUPPORTS)):
+            setattr(self, f"support_uplift_{j}", float(up[j]))
+
+    # ------------------------------------------------------------------ state
+    @property
+    def _integ_state(self):
+        return None if self._integ is None else self._integ.get_state()
+
+    @_integ_state.setter
+    def _integ_state(self, state):
+        if state is None:
+            return
+        if self._integ is None:
+            self._pending_integ_state = state  # applied at the end of initialisation
+        else:
+            self._integ.set_state(state)
+
+    def _copy_attribute(self, name):
+        if name == "_integ_state":
+            return self._integ_state  # get_state copies (the factorization is immutable)
+        return super()._copy_attribute(name)
+
+    def _restore_attribute(self, name, value):
+        if name == "_integ_state":
+            self._integ_state = value  # set_state copies
+            return
+        super()._restore_attribute(name, value)
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict) -> bytes:
+        import pickle
+
+        from pantocosim.core.hht import HHTIntegrator
+
+        out = dict(state)
+        if out.get("_integ_state") is not None:
+            out["_integ_state"] = HHTIntegrator.picklable_state(out["_integ_state"])
+        return pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)

@@ -1,0 +1,341 @@
+"""Catenary FMU: validation, port contract, exactness vs the in-process model, rollback,
+bad input, built-in penalty vs monolithic, SSP, third-party masters, bare venv (issue 5).
+
+Every FMU is loaded in a subprocess (tests/fmu_catenary_probe.py, the run_* scripts), never in
+the pytest process (pythonfmu defects B4/B5 in design/fmi-toolchain.md)."""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PROBE = Path(__file__).with_name("fmu_catenary_probe.py")
+SCRIPTS = ROOT / "scripts"
+SHORT = {"catenary": "en50318", "spans": 4, "speed_kmh": 300.0}
+H = 1e-3
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    sys.path.insert(0, str(ROOT))
+    import build_fmus
+
+    out = tmp_path_factory.mktemp("fmus")
+    paths = build_fmus.build(out, only=["catenary", "en50318-2mass", "dsa380-rigid"],
+                             quiet=True)
+    return {p.stem: p for p in paths}
+
+
+def probe(check, fmu, python=sys.executable, **args):
+    proc = subprocess.run([python, str(PROBE), check, str(fmu), json.dumps(args)],
+                          capture_output=True, text=True, timeout=900, cwd=str(PROBE.parent))
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("RESULT ")]
+    assert proc.returncode == 0 and lines, proc.stdout[-4000:] + proc.stderr[-4000:]
+    return json.loads(lines[-1][7:])
+
+
+def short_catenary(x0, speed_kmh=300.0):
+    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.catenary.model import CatenaryModel
+
+    return CatenaryModel(with_spans(load_catenary("en50318"), 4), x0=x0,
+                         speed=speed_kmh / 3.6)
+
+
+# ------------------------------------------------------------------------- model description
+def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    path = fmus["catenary"]
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    v = {x.name: x for x in md.modelVariables}
+    params = {"catenary": "String", "spans": "Integer", "element_size": "Real",
+              "speed_kmh": "Real", "n_pantographs": "Integer", "hht_alpha": "Real",
+              "contact_mode": "Integer", "contact_stiffness": "Real",
+              "contact_damping": "Real", "n_substeps": "Integer"}
+    for k in range(1, 5):
+        params[f"position_{k}"] = params[f"static_force_{k}"] = "Real"
+    for name, typ in params.items():
+        assert v[name].causality == "parameter" and v[name].type == typ, name
+    assert v["catenary"].start == "en50318" and float(v["hht_alpha"].start) == -0.05
+    assert float(v["contact_stiffness"].start) == 50000.0
+    ports = {(x.name, x.causality, x.unit) for x in md.modelVariables
+             if x.causality in ("input", "output")}
+    expected = set()
+    for k in range(1, 5):
+        expected |= {(f"contact_force_{k}", "input", "N"),
+                     (f"pantograph_height_{k}", "input", "m"),
+                     (f"pantograph_velocity_{k}", "input", "m/s"),
+                     (f"wire_height_{k}", "output", "m"),
+                     (f"wire_velocity_{k}", "output", "m/s"),
+                     (f"contact_force_out_{k}", "output", "N")}
+    expected |= {(f"support_uplift_{j}", "output", "m") for j in range(64)}
+    expected |= {("n_supports", "output", "1")}
+    assert ports == expected
+    assert "t + h" in v["contact_force_1"].description
+    assert "t + h" in v["pantograph_height_1"].description
+    assert all(x.initial == "exact" for x in md.modelVariables if x.causality == "output")
+
+
+# ------------------------------------------------------------------------- mode 0
+def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus):
+    from pantocosim.core.hht import HHTIntegrator, HHTSettings
+
+    x0, F0 = [30.0, 95.0], [120.0, 100.0]
+    steps = 120
+    t = H * np.arange(1, steps + 1)
+    forces = np.column_stack([F0[0] + 30 * np.sin(2 * np.pi * 5 * t),
+                              F0[1] + 20 * np.sin(2 * np.pi * 3 * t) + 40 * t])
+    params = dict(SHORT, n_pantographs=2, position_1=x0[0], position_2=x0[1],
+                  static_force_1=F0[0], static_force_2=F0[1])
+    res = probe("catenary_trace", fmus["catenary"], params=params, forces=forces.tolist(),
+                n_uplift=5)
+    # in-process reference: CatenaryModel + HHTIntegrator(reuse_factorization=True)
+    m = short_catenary(x0)
+    integ = HHTIntegrator(m, HHTSettings(alpha=-0.05, reuse_factorization=True))
+    integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
+    ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
+    for F in forces:
+        integ.step(H, F.copy())
+        ref.append(list(m.wire_height(integ.t, integ.q))
+                   + list(m.wire_velocity(integ.t, integ.q, integ.v)))
+    ref = np.array(ref)
+    rows = np.array(res["rows"])
+    got = np.vstack([np.array(res["initial"])[None, :4], rows[:, :4]])
+    assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
+    assert np.array_equal(got[:, :2], ref[:, :2])   # wire heights bitwise
+    # contact_force_out echoes the input force; support uplift as the model's
+    assert np.array_equal(rows[:, 4:6], forces)
+    up = m.support_uplift(integ.q)
+    assert np.array_equal(rows[-1, 6:11], up[:5])
+    assert res["n_supports"] == 5.0
+    assert res["rollback_equal"] and res["serialized_equal"]
+
+
+def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
+    res = probe("catenary_bad_input", fmus["catenary"],
+                params=dict(SHORT, static_force_1=100.0))
+    expect = {"unknown_catenary": "catenary", "nan_force": "contact_force_1 = nan",
+              "negative_force": "contact_force_1 = -5.0",
+              "bad_n_pantographs": "n_pantographs", "position_off_line": "position_1",
+              "negative_static_force": "static_force_1", "bad_alpha": "hht_alpha",
+              "nan_height_mode1": "pantograph_height_1 = nan"}
+    for case, text in expect.items():
+        r = res[case]
+        assert r["status"] == 2, (case, r)   # fmi2Discard
+        assert any(text in m for m in r["messages"]), (case, r["messages"])
+    assert any("no-such-catenary.toml" in m for m in res["unknown_catenary"]["messages"])
+    assert res["nan_force"]["after_status"] == 0
+    assert 5.0 < res["nan_force"]["after_height"] < 5.6
+
+
+# ------------------------------------------------------------------------- mode 1
+def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0):
+    """In-process monolithic run of a pantograph on the short catenary (static start at the
+    static handshake of the SSP)."""
+    from pantocosim.core.contact import PenaltyContact
+    from pantocosim.core.coupled import CoupledSystem
+    from pantocosim.core.hht import HHTIntegrator, HHTSettings
+    from pantocosim.pantograph.presets import load_pantograph
+
+    cat = short_catenary([x0], speed_kmh)
+    pan = load_pantograph(pantograph, speed_kmh=speed_kmh)
+    contact = PenaltyContact()
+    F0 = pan.options.mean_uplift
+    qc = cat.static_state([F0])
+    z_w = cat.wire_height(0.0, qc)[0]
+    qp = pan.static_equilibrium(F0, z_w + F0 / contact.stiffness)
+    system = CoupledSystem(cat, [pan], contact)
+    q0 = np.concatenate([qc, qp])
+    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05, reuse_factorization=True))
+    integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
+    rec = []
+
+    def record():
+        st = system.contact_state(integ.t, integ.q, integ.v)[0]
+        rec.append((integ.t, st[0], st[1], st[2], st[3], st[4]))  # t, F, z_p, z_w, v_p, v_w
+
+    record()
+    for _ in range(steps):
+        integ.step(H)
+        record()
+    return np.array(rec), F0
+
+
+def test_mode1_builtin_penalty_reproduces_the_monolithic_catenary(fmus):
+    """Given the monolithic pantograph motion z_p(t), v_p(t) as inputs, the catenary FMU's
+    built-in penalty contact solves the same catenary equations: its contact force and wire
+    height equal the monolithic ones to the Newton tolerance."""
+    steps = 150
+    mono, F0 = monolithic_short(steps)
+    assert mono[0, 1] == pytest.approx(F0, rel=1e-9)
+    inputs = mono[1:, [2, 4]]
+    res = probe("catenary_penalty", fmus["catenary"],
+                params=dict(SHORT, position_1=30.0, static_force_1=F0),
+                inputs=inputs.tolist())
+    rows = np.array(res["rows"])
+    assert res["initial"][0] == pytest.approx(F0, rel=1e-9)
+    dF = np.max(np.abs(rows[:, 0] - mono[1:, 1]))
+    dz = np.max(np.abs(rows[:, 1] - mono[1:, 3]))
+    assert dF < 1e-6 * F0, dF
+    assert dz < 1e-9, dz
+    assert res["rollback_equal"] and res["serialized_equal"]
+
+
+# ------------------------------------------------------------------------- SSP
+def test_default_ssp_has_the_system_and_the_static_handshake(fmus, tmp_path):
+    import xml.etree.ElementTree as ET
+
+    import build_fmus
+
+    # the default SSP from FMUs in a folder (copies of the module's builds)
+    import shutil
+
+    for name in ("catenary", "dsa380-rigid"):
+        shutil.copy(fmus[name], tmp_path / f"{name}.fmu")
+    (ssp,) = build_fmus.write_default_ssp(tmp_path, quiet=True)
+    assert ssp.name == "dsa380-ave-300.ssp"
+    with zipfile.ZipFile(ssp) as z:
+        names = set(z.namelist())
+        ssd = z.read("SystemStructure.ssd").decode()
+    assert names == {"SystemStructure.ssd", "resources/dsa380-rigid.fmu",
+                     "resources/catenary.fmu"}
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+          "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+    root = ET.fromstring(ssd)
+    assert root.get("version") == "1.0"
+    params = {}
+    for comp in root.iter(f"{{{ns['ssd']}}}Component"):
+        for p in comp.iter(f"{{{ns['ssv']}}}Parameter"):
+            (val,) = list(p)
+            params[(comp.get("name"), p.get("name"))] = val.get("value")
+    conns = {(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
+              c.get("endConnector")) for c in root.iter(f"{{{ns['ssd']}}}Connection")}
+    assert conns == {("pantograph", "contact_height", "catenary", "pantograph_height_1"),
+                     ("pantograph", "contact_velocity", "catenary", "pantograph_velocity_1"),
+                     ("catenary", "contact_force_out_1", "pantograph", "contact_force")}
+    assert params[("catenary", "catenary")] == "ave64"
+    assert params[("catenary", "contact_mode")] == "1"
+    assert float(params[("catenary", "speed_kmh")]) == 300.0
+    assert float(params[("pantograph", "speed_kmh")]) == 300.0
+    assert float(params[("catenary", "position_1")]) == 32.0
+    hs = build_fmus.static_handshake("ave64", 300.0, 32.0, "dsa380-rigid")
+    assert float(params[("catenary", "static_force_1")]) == hs["static_force"]
+    assert float(params[("pantograph", "initial_height")]) == hs["initial_height"]
+    assert hs["initial_height"] == pytest.approx(hs["wire_height"] + hs["static_force"] / 5e4)
+
+
+# ------------------------------------------------------------------------- third-party masters
+def short_ssp(fmus, tmp_path, stop=1.0):
+    import build_fmus
+
+    ssp = tmp_path / "short.ssp"
+    info = build_fmus.pantograph_catenary_ssp(
+        ssp, "short", fmus["en50318-2mass"], fmus["catenary"], "en50318", 300.0, 30.0,
+        "en50318-2mass", stop, spans=4)
+    return ssp, info
+
+
+def run_script(script, *args, timeout=900):
+    proc = subprocess.run([sys.executable, str(SCRIPTS / script), *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, cwd=str(ROOT))
+    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("STATISTICS ")]
+    assert lines, proc.stdout[-4000:] + proc.stderr[-4000:]
+    return json.loads(lines[-1][len("STATISTICS "):]), proc.stdout
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    head = rows[0]
+    data = np.array(rows[1:], dtype=float)
+    return {h: data[:, i] for i, h in enumerate(head)}
+
+
+def _third_party(fmus, tmp_path, script, package):
+    pytest.importorskip(package, reason=f"{package} is not installed (pip install -e "
+                        "\".[thirdparty]\")")
+    ssp, info = short_ssp(fmus, tmp_path)
+    out = tmp_path / f"{package}.csv"
+    stats, _ = run_script(script, "--ssp", ssp, "--stop", 1.0, "--step", H,
+                          "--window", 60.0, 110.0, "--out", out)
+    c = read_csv(out)
+    assert len(c["time"]) == 1001 and c["time"][-1] == pytest.approx(1.0)
+    # the master coupled the FMUs: a contact force around the static one, wire moving
+    mono, F0 = monolithic_short(1000)
+    assert c["contact_force_1"][0] == pytest.approx(F0, rel=1e-6)
+    assert stats["mean_n"] == pytest.approx(F0, rel=0.1)
+    # explicit (Jacobi, 1 ms) vs monolithic over the window: close
+    from pantocosim.master.statistics import contact_statistics
+
+    x = 30.0 + 300 / 3.6 * mono[:, 0]
+    ref = contact_statistics(mono[:, 0], mono[:, 1], x, (60.0, 110.0))
+    assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=0.02)
+    assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.15)
+    return c, stats
+
+
+@pytest.mark.slow
+def test_libcosim_runs_the_ssp(fmus, tmp_path):
+    _third_party(fmus, tmp_path, "run_libcosim.py", "libcosimpy")
+
+
+@pytest.mark.slow
+def test_ecos_runs_the_ssp_and_agrees_with_libcosim(fmus, tmp_path):
+    c, stats = _third_party(fmus, tmp_path, "run_ecos.py", "ecospy")
+    try:
+        import libcosimpy  # noqa: F401
+    except ImportError:
+        return
+    _third_party(fmus, tmp_path / "..", "run_libcosim.py", "libcosimpy")
+
+
+def test_fmpy_simulate_fmu_on_a_pantograph_under_a_prescribed_force(fmus, tmp_path):
+    from pantocosim.master.standalone import simulate_pantograph
+    from pantocosim.pantograph.presets import load_pantograph
+
+    out = tmp_path / "single.csv"
+    stats, _ = run_script("run_fmpy_single.py", "--fmu", fmus["en50318-2mass"], "--stop", 0.5,
+                          "--step", H, "--out", out)
+    c = read_csv(out)
+    ref = simulate_pantograph(load_pantograph("en50318-2mass"),
+                              lambda t: 120.0 + 30.0 * np.sin(2 * np.pi * 5.0 * t), 0.5, H)
+    # simulate_fmu holds the input over each step (value at the step start): a one-step lag
+    # against the FMU's "force at t + h" convention, so close but not bitwise
+    assert np.max(np.abs(c["contact_height"] - ref.contact_height)) < 2e-3
+    assert stats["samples"] > 0
+
+
+# ------------------------------------------------------------------------- bare venv
+@pytest.mark.slow
+def test_every_fmu_steps_in_a_bare_venv(fmus, tmp_path_factory):
+    """A venv with only numpy, scipy, numba and fmpy (not this project) instantiates and steps
+    each FMU (the FMU bundles pantocosim and pythonfmu's Python files)."""
+    venv = tmp_path_factory.mktemp("bare") / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    py = venv / "bin" / "python"
+    pip = subprocess.run([str(py), "-m", "pip", "install", "-q", "numpy", "scipy", "numba",
+                          "fmpy"], capture_output=True, text=True, timeout=1200)
+    assert pip.returncode == 0, pip.stdout + pip.stderr
+    check = subprocess.run([str(py), "-c", "import pantocosim"], capture_output=True)
+    assert check.returncode != 0  # the project is not installed there
+    res = probe("smoke", fmus["catenary"], python=str(py),
+                params=dict(SHORT, static_force_1=120.0),
+                inputs={"contact_force_1": 125.0}, outputs=["wire_height_1"], steps=5)
+    assert 5.0 < res["outputs"]["wire_height_1"] < 5.6 and not res["errors"]
+    assert "resources" in res["pantocosim_from"]
+    for name in ("en50318-2mass", "dsa380-rigid"):
+        res = probe("smoke", fmus[name], python=str(py), inputs={"contact_force": 120.0},
+                    outputs=["contact_height"], steps=20)
+        assert 4.0 < res["outputs"]["contact_height"] < 7.0 and not res["errors"], name
