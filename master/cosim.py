@@ -126,7 +126,7 @@ def in_process_subsystems(prep: Prepared):
     csub = ModelSubsystem(cat, prep.q_cat0, sc.alpha, prep.static_forces,
                           lambda integ: (cat.wire_height(integ.t, integ.q),
                                          cat.wire_velocity(integ.t, integ.q, integ.v)),
-                          reuse=True)
+                          reuse="step")
     psubs = []
     for k, pan in enumerate(prep.pantographs):
         psubs.append(ModelSubsystem(

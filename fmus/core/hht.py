@@ -35,15 +35,20 @@ class HHTSettings:
     #: energy test: |dq_k . R_k| <= etol * |dq_0 . R_0|
     etol: float = 1e-14
     max_iterations: int = 30
-    #: modified Newton: keep the factorized Newton matrix across iterations and steps while
-    #: the model's structure_key and the step size are unchanged
-    reuse_factorization: bool = False
+    #: factorization policy of the Newton matrix: False = full Newton (refactorize every
+    #: iteration); "step" = factorize at the first iteration of each step and reuse it within
+    #: the step (chord method); True = also reuse it across steps while the model's
+    #: structure_key and the step size are unchanged (modified Newton)
+    reuse_factorization: bool | str = False
     #: with reuse, refresh the factorization when a step needs more iterations than this
     refresh_after: int = 6
 
     def validate(self, source: str | None = None) -> None:
         if not np.isfinite(self.alpha) or not (-1.0 / 3.0 <= self.alpha <= 0.0):
             raise ParameterError("alpha", self.alpha, "HHT alpha must lie in [-1/3, 0]", source)
+        if self.reuse_factorization not in (False, True, "step"):
+            raise ParameterError("reuse_factorization", self.reuse_factorization,
+                                 'must be false, true or "step"', source)
         if not (self.rtol > 0) or not (self.etol >= 0):
             raise ParameterError("rtol", self.rtol, "tolerances must be positive", source)
         if int(self.max_iterations) < 1:
@@ -129,7 +134,7 @@ class HHTIntegrator:
         q = q_p + beta * h * h * self.a  # predictor: a_{n+1} = a_n
         hist = alpha * self.f_rest
 
-        factor = self._factor if s.reuse_factorization else None
+        factor = self._factor if s.reuse_factorization is True else None
         if factor is not None and factor[1] != h:
             factor = None
         refactorizations = 0
@@ -140,7 +145,8 @@ class HHTIntegrator:
             dqp = q - q_p
             a = c_a * dqp
             v = v_p + c_v * dqp
-            need_tangent = factor is None or (k > s.refresh_after)
+            need_tangent = (factor is None or (k > s.refresh_after)
+                            or (s.reuse_factorization is False and k > 0))
             ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
             if factor is not None and not need_tangent and ev.structure_key != factor[0]:
                 need_tangent = True
@@ -187,7 +193,7 @@ class HHTIntegrator:
         self.n_steps += 1
         self.total_iterations += k
         self.total_factorizations += refactorizations
-        if s.reuse_factorization:
+        if s.reuse_factorization is True:
             self._factor = factor
         model.commit(self.t, self.q, self.v, self.a, self.inputs)
         return StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
