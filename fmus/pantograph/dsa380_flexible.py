@@ -290,6 +290,83 @@ def assemble(u, v, q_ref, q, ints, reals, pg, pR, pc0, E0, length, EA, EI, xi_g,
     return 0
 
 
+@njit(cache=True, error_model="numpy")
+def matvec(A, x, out):
+    """out = A x with a fixed summation order (bitwise reproducible, unlike BLAS whose SIMD
+    paths depend on memory alignment: an FMU must equal the stand-alone run bit for bit)."""
+    n = A.shape[0]
+    for i in range(n):
+        s = 0.0
+        for j in range(A.shape[1]):
+            s += A[i, j] * x[j]
+        out[i] = s
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def lu_factor(A):
+    """LU with partial pivoting (Doolittle, fixed operation order, see :func:`matvec`)."""
+    n = A.shape[0]
+    LU = A.copy()
+    piv = np.arange(n)
+    for k in range(n):
+        p = k
+        big = abs(LU[k, k])
+        for i in range(k + 1, n):
+            if abs(LU[i, k]) > big:
+                big = abs(LU[i, k])
+                p = i
+        if p != k:
+            for j in range(n):
+                tmp = LU[k, j]
+                LU[k, j] = LU[p, j]
+                LU[p, j] = tmp
+            t = piv[k]
+            piv[k] = piv[p]
+            piv[p] = t
+        d = LU[k, k]
+        if d == 0.0:
+            continue
+        for i in range(k + 1, n):
+            lik = LU[i, k] / d
+            LU[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, n):
+                    LU[i, j] -= lik * LU[k, j]
+    return LU, piv
+
+
+@njit(cache=True, error_model="numpy")
+def lu_solve(LU, piv, b):
+    n = LU.shape[0]
+    x = np.empty(n)
+    for i in range(n):
+        x[i] = b[piv[i]]
+    for i in range(n):
+        s = x[i]
+        for j in range(i):
+            s -= LU[i, j] * x[j]
+        x[i] = s
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[i, j] * x[j]
+        x[i] = s / LU[i, i]
+    return x
+
+
+def dense_solver(S):
+    """``solve(rhs)`` for a dense matrix S by :func:`lu_factor` (reproducible bit for bit)."""
+    LU, piv = lu_factor(np.ascontiguousarray(S, dtype=float))
+    if not np.all(np.isfinite(LU)) or np.any(np.diag(LU) == 0.0):
+        raise np.linalg.LinAlgError("singular Newton matrix")
+
+    def solve(rhs):
+        return lu_solve(LU, piv, np.ascontiguousarray(rhs, dtype=float))
+
+    return solve
+
+
 # ---------------------------------------------------------------------------------------
 
 class _Dofs:
@@ -539,11 +616,15 @@ class Dsa380FlexibleModel(PantographModel):
         q = np.asarray(q, float)
         v = np.asarray(v, float)
         f, K, C = self._assemble(q, v, F, self.actuation_torque(t), with_K=tangent)
-        fin = self.M @ np.asarray(a, float)
+        fin = matvec(self.M, np.ascontiguousarray(a, dtype=float), np.empty(self.n_dofs))
         if not tangent:
             return Evaluation(f_inertia=fin, f_rest=f)
         return Evaluation(f_inertia=fin, f_rest=f, mass=self.M, inertia_q=None, damping=C,
                           stiffness=K)
+
+    def factorize(self, S):
+        """Dense LU in numba: reproducible bit for bit across processes (FMU = stand-alone)."""
+        return dense_solver(S)
 
     # ------------------------------------------------------------------ port contract
     def contact_height(self, q):
@@ -656,7 +737,7 @@ class Dsa380FlexibleModel(PantographModel):
             f, K, _ = self._assemble(q, zero, F, torque, friction=False)
             if height is None:
                 res = np.max(np.abs(f))
-                dq = np.linalg.solve(K, -f)
+                dq = dense_solver(K)(-f)
                 dM = 0.0
             else:
                 a, b = self.q_ref[g] + q[g], self.q_ref[g + 1] + q[g + 1]
@@ -670,7 +751,7 @@ class Dsa380FlexibleModel(PantographModel):
                 gap = self.q_ref[iy] + q[iy] - height
                 rhs = -np.append(f, gap)
                 res = max(np.max(np.abs(f)), abs(gap) * 1e6)
-                sol = np.linalg.solve(A, rhs)
+                sol = dense_solver(A)(rhs)
                 dq, dM = sol[:n], sol[n]
             step = float(np.max(np.abs(dq)))
             if step > 0.05:  # limit the first steps far from equilibrium
