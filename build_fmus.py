@@ -150,6 +150,10 @@ def static_handshake(catenary: str, speed_kmh: float, position_m: float, pantogr
             "support_x": [float(x) for x in d.support_x]}
 
 
+#: name of the SSP parameter set holding the scenario's values (ecos: init(parameter_set=...))
+PARAMETER_SET = "default"
+
+
 def _xml_value(value) -> tuple[str, str]:
     if isinstance(value, bool):
         return "Boolean", "true" if value else "false"
@@ -190,7 +194,9 @@ def system_structure(name: str, components: list[dict], connections: list[tuple]
             lines += ['        <ssd:ParameterBindings>',
                       '          <ssd:ParameterBinding>',
                       '            <ssd:ParameterValues>',
-                      f'              <ssv:ParameterSet version="1.0" name={q(c["name"])}>',
+                      # one set name for every component: ecos applies the set named at
+                      # init (merged over components); libcosim applies each component's
+                      f'              <ssv:ParameterSet version="1.0" name={q(PARAMETER_SET)}>',
                       '                <ssv:Parameters>']
             for pname, value in c["parameters"].items():
                 typ, text = _xml_value(value)

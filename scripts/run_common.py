@@ -1,0 +1,140 @@
+"""Shared helpers of the third-party recipes (run_libcosim.py, run_ecos.py, run_fmpy_single.py).
+
+Not a recipe itself. Every recipe runs the foreign master in a child process (``--child``)
+that imports only numpy, scipy and the master (never ``pantocosim``: the FMUs import the copy
+bundled in their resources, and pythonfmu may abort at process exit, design/fmi-toolchain.md
+B5); the child writes the time series as CSV, prints its wall time and ends with
+``os._exit(0)``. The parent reads the CSV and prints the EN 50317 statistics computed with
+``pantocosim.master.statistics.contact_statistics``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SSP = ROOT / "dist" / "fmus" / "dsa380-ave-300.ssp"
+NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+      "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+
+
+# ------------------------------------------------------------------------- SSP
+def read_ssd(ssp: str | Path) -> dict:
+    """Parameters per component, connections and the default stop time of an SSP file."""
+    with zipfile.ZipFile(ssp) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    params: dict = {}
+    sets = sorted({ps.get("name") for ps in root.iter(f"{{{NS['ssv']}}}ParameterSet")})
+    for comp in root.iter(f"{{{NS['ssd']}}}Component"):
+        p = params.setdefault(comp.get("name"), {})
+        for par in comp.iter(f"{{{NS['ssv']}}}Parameter"):
+            (val,) = list(par)
+            kind = val.tag.split("}")[1]
+            text = val.get("value")
+            p[par.get("name")] = (float(text) if kind == "Real" else int(text)
+                                  if kind == "Integer" else text)
+    exp = root.find("ssd:DefaultExperiment", NS)
+    stop = float(exp.get("stopTime")) if exp is not None and exp.get("stopTime") else None
+    return {"parameters": params, "stop_time": stop, "parameter_sets": sets}
+
+
+def catenary_layout(cat_params: dict) -> np.ndarray:
+    """Support positions of the catenary the SSP's catenary FMU builds."""
+    from pantocosim.catenary.definition import load_catenary, with_spans
+
+    d = load_catenary(cat_params.get("catenary", "en50318"))
+    if int(cat_params.get("spans", 0)):
+        d = with_spans(d, int(cat_params["spans"]))
+    return np.asarray(d.support_x, float)
+
+
+def columns(n_supports: int) -> list[str]:
+    return (["time", "x_1", "contact_force_1", "contact_height_1", "wire_height_1"]
+            + [f"support_uplift_{j}" for j in range(n_supports)])
+
+
+# ------------------------------------------------------------------------- child side
+def write_csv(path: str | Path, names: list[str], rows) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(names)
+        for r in rows:
+            w.writerow([repr(float(x)) for x in r])
+
+
+def read_csv(path: str | Path) -> dict:
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    data = np.array(rows[1:], dtype=float).reshape(len(rows) - 1, len(rows[0]))
+    return {h: data[:, i] for i, h in enumerate(rows[0])}
+
+
+# ------------------------------------------------------------------------- parent side
+def run_child(script: str | Path, args: list) -> tuple[float, float | None]:
+    """Run ``script --child ARGS``; returns its wall time (printed as ``WALL <s>``) and the
+    part of it spent in initialisation (``INIT <s>``, model set-up and numba JIT), if given."""
+    cmd = [sys.executable, str(script), "--child", *map(str, args)]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = [l for l in proc.stdout.splitlines() if l.startswith("WALL ")]
+    if proc.returncode != 0 or not wall:
+        sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
+        raise SystemExit(f"{Path(script).name}: the co-simulation failed "
+                         f"(exit code {proc.returncode})")
+    init = None
+    for line in proc.stdout.splitlines():
+        if line.startswith("NOTE "):
+            print(line[5:])
+        if line.startswith("INIT "):
+            init = float(line.split()[1])
+    return float(wall[-1].split()[1]), init
+
+
+def default_window(support_x: np.ndarray) -> tuple[float, float]:
+    """Supports 5..6 (the thesis' spans 5-6) when the line has them."""
+    if len(support_x) < 7:
+        raise SystemExit("the line has fewer than 6 spans: give --window START END (m)")
+    return float(support_x[5]), float(support_x[6])
+
+
+def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> dict:
+    """EN 50317 statistics of the run in ``csv_path``; prints a table and a JSON line
+    ``STATISTICS {...}`` and writes ``<csv>.json``."""
+    from pantocosim.master.statistics import contact_statistics
+
+    c = read_csv(csv_path)
+    n_sup = sum(1 for k in c if k.startswith("support_uplift_"))
+    uplift = (np.column_stack([c[f"support_uplift_{j}"] for j in range(n_sup)])
+              if n_sup else None)
+    st = contact_statistics(c["time"], c["contact_force_1"], c["x_1"], tuple(window), uplift,
+                            support_x[:n_sup] if n_sup else None)
+    wall, init = wall if isinstance(wall, tuple) else (wall, None)
+    out = dict(st.as_dict(), master=master, wall_time_s=wall, init_time_s=init,
+               steps=int(len(c["time"]) - 1), timeseries=str(csv_path))
+    if extra:
+        out.update(extra)
+    init_text = f" (of which {init:.2f} s initialisation)" if init is not None else ""
+    print(f"{master}: {out['steps']} steps in {wall:.2f} s wall{init_text}; contact force over "
+          f"{window[0]:g}..{window[1]:g} m (EN 50317, 20 Hz low-pass):")
+    for key, label in (("mean_n", "mean [N]"), ("std_n", "std [N]"),
+                       ("stat_max_n", "mean + 3 std [N]"), ("stat_min_n", "mean - 3 std [N]"),
+                       ("max_n", "max [N]"), ("min_n", "min [N]"),
+                       ("loss_of_contact_percent", "loss of contact [%]"),
+                       ("max_uplift_at_support_m", "max uplift at support [m]")):
+        print(f"  {label:28s} {out[key]:.6g}")
+    Path(csv_path).with_suffix(".json").write_text(json.dumps(out, indent=2) + "\n")
+    print("STATISTICS " + json.dumps(out))
+    return out
+
+
+if __name__ == "__main__":
+    sys.exit(__doc__)

@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Run an SSP file of pantocosim FMUs in ecos (the PythonFMU author's co-simulation engine)
+via ecospy.
+
+Recipe (docs/third-party.md)::
+
+    apt-get install -y libtbb12            # ecospy's native library needs libtbb.so.12
+    pip install -e ".[thirdparty]"          # ecospy
+    python build_fmus.py                    # dist/fmus/*.fmu + dist/fmus/dsa380-ave-300.ssp
+    python scripts/run_ecos.py [--ssp dist/fmus/dsa380-ave-300.ssp] [--step 0.001]
+                               [--stop SECONDS] [--window START END] [--out CSV]
+
+ecos loads the SSP (SystemStructure.ssd + resources/*.fmu), applies its parameter values and
+connections and runs fixed-step coupling. The co-simulation runs in a child process (see
+run_common.py); the time series goes to a CSV file and the statistics are printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import run_common  # noqa: E402
+
+
+def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: float,
+          speed: float, parameter_set: str) -> None:
+    import numpy as np
+    import scipy.sparse.linalg  # noqa: F401  (B5: before any FMU is loaded)
+    from ecospy import EcosSimulation
+    from ecospy.lib import EcosLib
+
+    EcosLib.set_log_level("warn")
+    n = int(round(stop / step))
+    names = (["catenary::contact_force_out_1", "pantograph::contact_height",
+              "catenary::wire_height_1"]
+             + [f"catenary::support_uplift_{j}" for j in range(n_supports)])
+    rows = []
+    ok = True
+    t_wall = time.perf_counter()
+    sim = EcosSimulation(step_size=step, ssp_path=str(ssp))
+    # ecos applies the SSP's parameter values only from the parameter set named here
+    sim.init(parameter_set=parameter_set or None)
+    t_init = time.perf_counter()
+
+    def record(i):
+        t = i * step
+        rows.append([t, x0 + speed * t] + [sim.get_real(v) for v in names])
+
+    record(0)
+    try:
+        for i in range(1, n + 1):
+            sim.step(1)
+            record(i)
+    except Exception as exc:  # noqa: BLE001 - keep what was computed
+        ok = False
+        print(f"NOTE ecos stopped at t = {(len(rows) - 1) * step:g} s: {exc}")
+    wall = time.perf_counter() - t_wall
+    run_common.write_csv(out, run_common.columns(n_supports), np.array(rows))
+    print(f"INIT {t_init - t_wall!r}")
+    print(f"WALL {wall!r}", flush=True)
+    os._exit(0 if ok else 3)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--ssp", type=Path, default=run_common.DEFAULT_SSP)
+    p.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
+    p.add_argument("--stop", type=float, help="stop time [s] (default: the SSP's)")
+    p.add_argument("--window", type=float, nargs=2, metavar=("START", "END"),
+                   help="analysis window [m] (default: supports 5..6)")
+    p.add_argument("--out", type=Path, help="time series CSV (default: results/<ssp>-ecos.csv)")
+    p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("child_args", nargs="*", help=argparse.SUPPRESS)
+    a = p.parse_args(argv)
+    if a.child:
+        ssp, step, stop, out, n_sup, x0, speed, pset = a.child_args
+        child(ssp, float(step), float(stop), out, int(n_sup), float(x0), float(speed), pset)
+        return 0
+    ssd = run_common.read_ssd(a.ssp)
+    cat = ssd["parameters"]["catenary"]
+    support_x = run_common.catenary_layout(cat)
+    stop = a.stop if a.stop is not None else ssd["stop_time"]
+    window = a.window or run_common.default_window(support_x)
+    out = a.out or Path("results") / f"{a.ssp.stem}-ecos.csv"
+    n_sup = min(len(support_x), 64)
+    if len(ssd["parameter_sets"]) > 1:
+        raise SystemExit(f"{a.ssp}: several parameter set names {ssd['parameter_sets']}; ecos "
+                         "applies one set (by name) to every component")
+    pset = ssd["parameter_sets"][0] if ssd["parameter_sets"] else ""
+    wall = run_common.run_child(__file__, [
+        "--", a.ssp.resolve(), a.step, stop, out, n_sup, cat["position_1"],
+        cat["speed_kmh"] / 3.6, pset])
+    run_common.report("ecos", out, window, support_x, wall,
+                      {"ssp": str(a.ssp), "step_s": a.step})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
