@@ -140,7 +140,8 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     F0 = np.array([pan.options.mean_uplift for pan in pantographs])
     x_samples = np.linspace(window[0], window[1], 16 * max(1, int(round(
         (window[1] - window[0]) / np.mean(definition.span_lengths)))) + 1)
-    z_mean = mean_loaded_height(catenary, x_samples, F0)
+    z_mean = mean_loaded_height(catenary, x_samples, F0, amplification=1.0 / (
+        1.0 - (sc.speed / wave) ** 2))
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []
@@ -171,10 +172,12 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     extra={"actuation_height": actuation_height, "mean_loaded_height": z_mean})
 
 
-def mean_loaded_height(catenary, x_samples, forces) -> np.ndarray:
-    """Mean over ``x_samples`` of the contact-wire height under a static upward force F at x,
-    z(x) + F e(x), with the elasticity e(x) = N(x)^T K0^-1 N(x) of the static configuration
-    (one banded factorization, one solve per sample); one value per force."""
+def mean_loaded_height(catenary, x_samples, forces, amplification: float = 1.0) -> np.ndarray:
+    """Mean over ``x_samples`` of the contact-wire height under an upward force F moving
+    along x: z(x) + A F e(x), with the elasticity e(x) = N(x)^T K0^-1 N(x) of the static
+    configuration (one banded factorization, one solve per sample) and A the moving-load
+    amplification of the mean uplift, 1 / (1 - (v/c)^2) for a taut string (reference-data
+    section 5: the quasi-static term of the series); one value per force."""
     st = catenary.structure
     solve = catenary.factorize(st.csr(catenary.K0_data))
     z0 = catenary.contact_wire_height(catenary.q_static, x_samples)
@@ -184,7 +187,8 @@ def mean_loaded_height(catenary, x_samples, forces) -> np.ndarray:
         u = np.zeros(catenary.n_dofs)
         np.add.at(u, cp.dofs, cp.weights)
         e[i] = float(u @ solve(u))
-    return np.array([float(np.mean(z0 + F * e)) for F in np.atleast_1d(forces)])
+    return np.array([float(np.mean(z0 + amplification * F * e))
+                     for F in np.atleast_1d(forces)])
 
 
 def column_names(n_pantographs: int, n_supports: int) -> list[str]:

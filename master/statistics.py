@@ -51,7 +51,8 @@ def window_mask(position: np.ndarray, start_m: float, end_m: float) -> np.ndarra
     """Samples whose pantograph position lies in [start_m, end_m]."""
     if not end_m > start_m:
         raise ParameterError("analysis window", (start_m, end_m), "end must exceed start")
-    mask = (position >= start_m) & (position <= end_m)
+    tol = 1e-9 * max(1.0, abs(start_m), abs(end_m))  # round-off of x0 + v t at the bounds
+    mask = (position >= start_m - tol) & (position <= end_m + tol)
     if mask.sum() < 2:
         raise ParameterError("analysis window", (start_m, end_m),
                              "contains no samples of the run (outside the simulated passage)")
