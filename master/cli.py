@@ -49,5 +49,19 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+def console_main() -> None:
+    """Console entry point. After runs that loaded pythonfmu FMUs into this process, exit with
+    ``os._exit`` once everything is written: pythonfmu 0.7.0 can abort at interpreter shutdown
+    (design/fmi-toolchain.md, defect B5) and would turn a finished run into a crash."""
+    code = main()
+    if "fmpy.fmi2" in sys.modules:
+        import os
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console_main()
