@@ -133,15 +133,15 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     x0 = [p.position_m for p in sc.pantographs]
     catenary = CatenaryModel(definition, x0=x0, speed=sc.speed, element_size=element_size)
     # The actuation of every pantograph is set so that it delivers its mean uplift at the mean
-    # height of the loaded contact wire over the analysis window (quasi-static, linear
-    # elasticity); the static start then solves catenary + pantographs + contacts together,
+    # height of the contact wire under the moving mean force over the analysis window
+    # (operating_height.py); the static start then solves catenary + pantographs + contacts
+    # together,
     # so a pantograph that starts where the wire is higher or lower than the mean starts with
     # the matching force.
     F0 = np.array([pan.options.mean_uplift for pan in pantographs])
-    x_samples = np.linspace(window[0], window[1], 16 * max(1, int(round(
-        (window[1] - window[0]) / np.mean(definition.span_lengths)))) + 1)
-    z_mean = mean_loaded_height(catenary, x_samples, F0, amplification=1.0 / (
-        1.0 - (sc.speed / wave) ** 2))
+    from pantocosim.master.operating_height import mean_dynamic_wire_height
+
+    z_mean = mean_dynamic_wire_height(catenary, F0, window, sc.dt, duration, sc.alpha)
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []
@@ -169,26 +169,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     duration=float(duration), n_steps=int(math.ceil(duration / sc.dt - 1e-9)),
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
                     support_x=np.asarray(support_x, float), dropper_x=dropper_x,
-                    extra={"actuation_height": actuation_height, "mean_loaded_height": z_mean})
-
-
-def mean_loaded_height(catenary, x_samples, forces, amplification: float = 1.0) -> np.ndarray:
-    """Mean over ``x_samples`` of the contact-wire height under an upward force F moving
-    along x: z(x) + A F e(x), with the elasticity e(x) = N(x)^T K0^-1 N(x) of the static
-    configuration (one banded factorization, one solve per sample) and A the moving-load
-    amplification of the mean uplift, 1 / (1 - (v/c)^2) for a taut string (reference-data
-    section 5: the quasi-static term of the series); one value per force."""
-    st = catenary.structure
-    solve = catenary.factorize(st.csr(catenary.K0_data))
-    z0 = catenary.contact_wire_height(catenary.q_static, x_samples)
-    e = np.empty(len(x_samples))
-    for i, x in enumerate(x_samples):
-        cp = catenary.locator.point(float(x))
-        u = np.zeros(catenary.n_dofs)
-        np.add.at(u, cp.dofs, cp.weights)
-        e[i] = float(u @ solve(u))
-    return np.array([float(np.mean(z0 + amplification * F * e))
-                     for F in np.atleast_1d(forces)])
+                    extra={"actuation_height": actuation_height, "mean_wire_height": z_mean})
 
 
 def column_names(n_pantographs: int, n_supports: int) -> list[str]:
