@@ -151,7 +151,8 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
             p = dist / f"{spec.model}.fmu"
         pans.append(p)
     cat = dist / "catenary.fmu"
-    missing = [p for p in pans + [cat] if not p.exists()]
+    missing = [p for p in pans + [cat] if not p.exists() or (build and p.parent == dist
+                                                            and is_stale(p))]
     if missing and build:
         from pantocosim.master.fmu_build import build_fmus
 
@@ -162,6 +163,21 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
         raise ParameterError("fmu", str(missing[0]), "FMU file not found (run "
                              "`pantocosim build-fmus`)", sc.source)
     return cat, pans
+
+
+def is_stale(fmu: Path) -> bool:
+    """True when the FMU bundles another version of the model package than the one installed
+    (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
+    import zipfile
+
+    from pantocosim.fmi.slave_base import STAMP_FILE, package_stamp
+
+    try:
+        with zipfile.ZipFile(fmu) as z:
+            built = z.read(f"resources/{STAMP_FILE}").decode().strip()
+    except (KeyError, OSError, zipfile.BadZipFile):
+        return True
+    return built != package_stamp()
 
 
 def fmu_subsystems(prep: Prepared, instances: list):
