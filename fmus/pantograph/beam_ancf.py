@@ -126,19 +126,19 @@ def elastic_elements(E0, dE, length, EA, EI, xi_g, w_g, out_f, out_K, out_U):
             r0y = 0.0
             r0xx = 0.0
             r0yy = 0.0
-            dx = 0.0
-            dy = 0.0
-            dxx = 0.0
-            dyy = 0.0
             for a in range(4):
                 r0x += Nx[a] * E0[k, 2 * a]
                 r0y += Nx[a] * E0[k, 2 * a + 1]
                 r0xx += Nxx[a] * E0[k, 2 * a]
                 r0yy += Nxx[a] * E0[k, 2 * a + 1]
-                dx += Nx[a] * dE[k, 2 * a]
-                dy += Nx[a] * dE[k, 2 * a + 1]
-                dxx += Nxx[a] * dE[k, 2 * a]
-                dyy += Nxx[a] * dE[k, 2 * a + 1]
+            # N1' = -N3' and N1'' = -N3'': the displacement of node 1 drops out exactly; take
+            # the node difference first so the element's translation leaves no round-off
+            ux = dE[k, 4] - dE[k, 0]
+            uy = dE[k, 5] - dE[k, 1]
+            dx = Nx[2] * ux + Nx[1] * dE[k, 2] + Nx[3] * dE[k, 6]
+            dy = Nx[2] * uy + Nx[1] * dE[k, 3] + Nx[3] * dE[k, 7]
+            dxx = Nxx[2] * ux + Nxx[1] * dE[k, 2] + Nxx[3] * dE[k, 6]
+            dyy = Nxx[2] * uy + Nxx[1] * dE[k, 3] + Nxx[3] * dE[k, 7]
             rx0 = r0x + dx
             rx1 = r0y + dy
             rxx0 = r0xx + dxx
