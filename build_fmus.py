@@ -154,6 +154,40 @@ def static_handshake(catenary: str, speed_kmh: float, position_m: float, pantogr
 PARAMETER_SET = "default"
 
 
+def scenario_handshake(scenario_file) -> dict:
+    """The static start of a single-pantograph scenario exactly as the monolithic run and our
+    co-simulation master make it (``pantocosim.master.run.prepare``): the pantograph's
+    actuation is set at the mean loaded wire height of the analysis window, and catenary,
+    pantograph and penalty contact are solved together at t0. The static contact force F*
+    and the pantograph's contact height h* of that solution become ``static_force_1`` of the
+    catenary and ``initial_contact_force`` / ``initial_height`` of the pantograph FMU (whose
+    static start sets its actuation so that F* is in equilibrium at h*: the same actuation);
+    h* = z_w + F* / k_H."""
+    from pantocosim.master.run import prepare
+
+    prep = prepare(str(scenario_file))
+    if len(prep.pantographs) != 1 or prep.scenario.pantographs[0].start != "static":
+        raise SystemExit(f"{scenario_file}: the SSP export handles one pantograph with a "
+                         "static start")
+    pan = prep.pantographs[0]
+    return {"static_force": float(prep.static_forces[0]),
+            "wire_height": float(prep.catenary.wire_height(0.0, prep.q_cat0)[0]),
+            "initial_height": float(pan.contact_height(prep.q_pan0[0])),
+            "mean_uplift": float(pan.options.mean_uplift),
+            "support_x": [float(x) for x in prep.support_x]}
+
+
+def _fmu_options(fmu: Path, options: dict) -> dict:
+    """The scenario's pantograph options that are parameters of the FMU."""
+    if not options:
+        return {}
+    from fmpy import read_model_description
+
+    names = {v.name for v in read_model_description(str(fmu)).modelVariables
+             if v.causality == "parameter"}
+    return {k: v for k, v in options.items() if k in names}
+
+
 def _xml_value(value) -> tuple[str, str]:
     if isinstance(value, bool):
         return "Boolean", "true" if value else "false"
@@ -232,12 +266,25 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
                             catenary: str, speed_kmh: float, position_m: float,
                             pantograph: str, stop_time: float, contact_stiffness=50_000.0,
                             contact_damping=0.0, hht_alpha=-0.05, spans: int = 0,
-                            step_size: float | None = None) -> dict:
+                            step_size: float | None = None, handshake: dict | None = None,
+                            pantograph_parameters: dict | None = None) -> dict:
     """Write an SSP 1.0 archive (SystemStructure.ssd + resources/*.fmu) of one pantograph FMU
     on the catenary FMU in contact_mode 1 (built-in penalty), with the static start
-    handshake; returns the handshake figures and the parameter values written."""
-    hs = static_handshake(catenary, speed_kmh, position_m, pantograph, contact_stiffness,
-                          spans)
+    handshake (``handshake``: static_force, wire_height, initial_height, support_x; default
+    :func:`static_handshake`); returns the handshake figures and the parameter values
+    written."""
+    stamps = {}
+    for f in (pantograph_fmu, catenary_fmu):
+        with zipfile.ZipFile(f) as z:
+            from pantocosim.fmi.slave_base import STAMP_FILE
+
+            stamps[Path(f).name] = z.read(f"resources/{STAMP_FILE}").decode().strip()
+    if len(set(stamps.values())) != 1:
+        raise SystemExit(f"the FMUs come from different builds (stamps {stamps}): they bundle "
+                         "different pantocosim copies and cannot run in one process; rebuild "
+                         "them together with build_fmus.py")
+    hs = handshake or static_handshake(catenary, speed_kmh, position_m, pantograph,
+                                       contact_stiffness, spans)
     cat_params = {"catenary": catenary, "spans": int(spans), "speed_kmh": float(speed_kmh),
                   "n_pantographs": 1, "position_1": float(position_m),
                   "static_force_1": hs["static_force"], "hht_alpha": float(hht_alpha),
@@ -246,6 +293,7 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
     pan_params = {"speed_kmh": float(speed_kmh), "hht_alpha": float(hht_alpha),
                   "initial_height": hs["initial_height"],
                   "initial_contact_force": hs["static_force"], "start_mode": 0}
+    pan_params.update(pantograph_parameters or {})
     types = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
     units: dict = {}
     n_sup = len(hs["support_x"])
@@ -308,14 +356,18 @@ def write_default_ssp(out: Path = DEFAULT_OUT, quiet: bool = False) -> list[Path
                 else (window[1] - p.position_m) / sc.speed + 0.2)
         stop = math.ceil(stop / sc.dt - 1e-9) * sc.dt
         dest = Path(out) / f"{name}.ssp"
+        pan_fmu = Path(out) / f"{p.model}.fmu"
         info = pantograph_catenary_ssp(
-            dest, name, Path(out) / f"{p.model}.fmu", Path(out) / f"{CATENARY_FMU}.fmu",
+            dest, name, pan_fmu, Path(out) / f"{CATENARY_FMU}.fmu",
             sc.catenary, sc.speed_kmh, p.position_m, p.model, stop, sc.contact_stiffness,
-            sc.contact_damping, sc.alpha, int(sc.spans or 0))
+            sc.contact_damping, sc.alpha, int(sc.spans or 0),
+            handshake=scenario_handshake(scenario_file),
+            pantograph_parameters=_fmu_options(pan_fmu, p.options))
         written.append(dest)
         if not quiet:
             hs = info["handshake"]
-            print(f"wrote {_rel(dest)} (static force {hs['static_force']:.3f} N, wire height "
+            print(f"wrote {_rel(dest)} (static contact force {hs['static_force']:.3f} N, mean "
+                  f"uplift {hs['mean_uplift']:.3f} N, wire height "
                   f"{hs['wire_height']:.6f} m, pantograph initial_height "
                   f"{hs['initial_height']:.6f} m, window {window[0]:g}..{window[1]:g} m, "
                   f"stop {stop:g} s)")

@@ -80,9 +80,10 @@ def read_csv(path: str | Path) -> dict:
 
 
 # ------------------------------------------------------------------------- parent side
-def run_child(script: str | Path, args: list) -> tuple[float, float | None]:
-    """Run ``script --child ARGS``; returns its wall time (printed as ``WALL <s>``) and the
-    part of it spent in initialisation (``INIT <s>``, model set-up and numba JIT), if given."""
+def run_child(script: str | Path, args: list) -> tuple:
+    """Run ``script --child ARGS``; returns its wall time (printed as ``WALL <s>``), the part
+    of it spent in initialisation (``INIT <s>``: model set-up and numba JIT) and the process
+    CPU time of the run (``CPU <s>``), the last two None when not printed."""
     cmd = [sys.executable, str(script), "--child", *map(str, args)]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     wall = [l for l in proc.stdout.splitlines() if l.startswith("WALL ")]
@@ -91,12 +92,15 @@ def run_child(script: str | Path, args: list) -> tuple[float, float | None]:
         raise SystemExit(f"{Path(script).name}: the co-simulation failed "
                          f"(exit code {proc.returncode})")
     init = None
+    cpu = None
     for line in proc.stdout.splitlines():
+        if line.startswith("CPU "):
+            cpu = float(line.split()[1])
         if line.startswith("NOTE "):
             print(line[5:])
         if line.startswith("INIT "):
             init = float(line.split()[1])
-    return float(wall[-1].split()[1]), init
+    return float(wall[-1].split()[1]), init, cpu
 
 
 def default_window(support_x: np.ndarray) -> tuple[float, float]:
@@ -117,12 +121,15 @@ def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> 
               if n_sup else None)
     st = contact_statistics(c["time"], c["contact_force_1"], c["x_1"], tuple(window), uplift,
                             support_x[:n_sup] if n_sup else None)
-    wall, init = wall if isinstance(wall, tuple) else (wall, None)
-    out = dict(st.as_dict(), master=master, wall_time_s=wall, init_time_s=init,
+    wall, init, cpu = (tuple(wall) + (None, None))[:3] if isinstance(wall, tuple) else (
+        wall, None, None)
+    out = dict(st.as_dict(), master=master, wall_time_s=wall, init_time_s=init, cpu_time_s=cpu,
                steps=int(len(c["time"]) - 1), timeseries=str(csv_path))
     if extra:
         out.update(extra)
     init_text = f" (of which {init:.2f} s initialisation)" if init is not None else ""
+    if cpu is not None:
+        init_text += f", {cpu:.2f} s CPU"
     print(f"{master}: {out['steps']} steps in {wall:.2f} s wall{init_text}; contact force over "
           f"{window[0]:g}..{window[1]:g} m (EN 50317, 20 Hz low-pass):")
     for key, label in (("mean_n", "mean [N]"), ("std_n", "std [N]"),

@@ -41,7 +41,7 @@ def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: flo
              + [f"catenary::support_uplift_{j}" for j in range(n_supports)])
     rows = []
     ok = True
-    t_wall = time.perf_counter()
+    t_wall, t_cpu = time.perf_counter(), time.process_time()
     sim = EcosSimulation(step_size=step, ssp_path=str(ssp))
     # ecos applies the SSP's parameter values only from the parameter set named here
     sim.init(parameter_set=parameter_set or None)
@@ -62,6 +62,7 @@ def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: flo
     wall = time.perf_counter() - t_wall
     run_common.write_csv(out, run_common.columns(n_supports), np.array(rows))
     print(f"INIT {t_init - t_wall!r}")
+    print(f"CPU {time.process_time() - t_cpu!r}")
     print(f"WALL {wall!r}", flush=True)
     os._exit(0 if ok else 3)
 

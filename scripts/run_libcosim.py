@@ -51,7 +51,7 @@ def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: flo
     ex.add_observer(observer=obs)
     for idx, ref in wanted:
         obs.start_time_series(idx, ref, CosimVariableType.REAL)
-    t_wall = time.perf_counter()
+    t_wall, t_cpu = time.perf_counter(), time.process_time()
     ok = ex.step(1)          # libcosim initialises the FMUs in the first step
     t_init = time.perf_counter()
     ok = ok and ex.step(n - 1)
@@ -76,6 +76,7 @@ def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: flo
     run_common.write_csv(out, run_common.columns(n_supports), rows)
     if not ok or done < n:
         print(f"NOTE libcosim stopped at t = {done * step:g} s of {stop:g} s")
+    print(f"CPU {time.process_time() - t_cpu!r}")
     print(f"WALL {wall!r}", flush=True)
     os._exit(0 if ok and done == n else 3)
 

@@ -170,6 +170,7 @@ def catenary_bad_input(fmu, args):
         "position_off_line": ({"position_1": 1.0e5}, None),
         "negative_static_force": ({"static_force_1": -10.0}, None),
         "bad_alpha": ({"hht_alpha": 0.5}, None),
+        "bad_factorization": ({"factorization": 5}, None),
         "nan_height_mode1": ({"contact_mode": 1}, ("pantograph_height_1", float("nan"))),
     }
     out = {}

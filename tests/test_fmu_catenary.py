@@ -62,13 +62,15 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
     params = {"catenary": "String", "spans": "Integer", "element_size": "Real",
               "speed_kmh": "Real", "n_pantographs": "Integer", "hht_alpha": "Real",
               "contact_mode": "Integer", "contact_stiffness": "Real",
-              "contact_damping": "Real", "n_substeps": "Integer"}
+              "contact_damping": "Real", "n_substeps": "Integer",
+              "factorization": "Integer"}
     for k in range(1, 5):
         params[f"position_{k}"] = params[f"static_force_{k}"] = "Real"
     for name, typ in params.items():
         assert v[name].causality == "parameter" and v[name].type == typ, name
     assert v["catenary"].start == "en50318" and float(v["hht_alpha"].start) == -0.05
     assert float(v["contact_stiffness"].start) == 50000.0
+    assert int(v["factorization"].start) == 1
     ports = {(x.name, x.causality, x.unit) for x in md.modelVariables
              if x.causality in ("input", "output")}
     expected = set()
@@ -88,7 +90,10 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
 
 
 # ------------------------------------------------------------------------- mode 0
-def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus):
+@pytest.mark.parametrize("policy", [1, 2])
+def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus, policy):
+    """Same forces through FMI as into CatenaryModel + HHTIntegrator with the same
+    factorization policy (1: once per step, the default; 2: reuse across steps)."""
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
     x0, F0 = [30.0, 95.0], [120.0, 100.0]
@@ -97,12 +102,13 @@ def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus):
     forces = np.column_stack([F0[0] + 30 * np.sin(2 * np.pi * 5 * t),
                               F0[1] + 20 * np.sin(2 * np.pi * 3 * t) + 40 * t])
     params = dict(SHORT, n_pantographs=2, position_1=x0[0], position_2=x0[1],
-                  static_force_1=F0[0], static_force_2=F0[1])
+                  static_force_1=F0[0], static_force_2=F0[1], factorization=policy)
     res = probe("catenary_trace", fmus["catenary"], params=params, forces=forces.tolist(),
                 n_uplift=5)
     # in-process reference: CatenaryModel + HHTIntegrator(reuse_factorization=True)
     m = short_catenary(x0)
-    integ = HHTIntegrator(m, HHTSettings(alpha=-0.05, reuse_factorization=True))
+    reuse = {1: "step", 2: True}[policy]
+    integ = HHTIntegrator(m, HHTSettings(alpha=-0.05, reuse_factorization=reuse))
     integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
     ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
     for F in forces:
@@ -129,6 +135,7 @@ def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
               "negative_force": "contact_force_1 = -5.0",
               "bad_n_pantographs": "n_pantographs", "position_off_line": "position_1",
               "negative_static_force": "static_force_1", "bad_alpha": "hht_alpha",
+              "bad_factorization": "factorization",
               "nan_height_mode1": "pantograph_height_1 = nan"}
     for case, text in expect.items():
         r = res[case]
@@ -157,7 +164,7 @@ def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0
     qp = pan.static_equilibrium(F0, z_w + F0 / contact.stiffness)
     system = CoupledSystem(cat, [pan], contact)
     q0 = np.concatenate([qc, qp])
-    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05, reuse_factorization=True))
+    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05, reuse_factorization="step"))
     integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
     rec = []
 
@@ -229,10 +236,19 @@ def test_default_ssp_has_the_system_and_the_static_handshake(fmus, tmp_path):
     assert float(params[("catenary", "speed_kmh")]) == 300.0
     assert float(params[("pantograph", "speed_kmh")]) == 300.0
     assert float(params[("catenary", "position_1")]) == 32.0
-    hs = build_fmus.static_handshake("ave64", 300.0, 32.0, "dsa380-rigid")
-    assert float(params[("catenary", "static_force_1")]) == hs["static_force"]
-    assert float(params[("pantograph", "initial_height")]) == hs["initial_height"]
-    assert hs["initial_height"] == pytest.approx(hs["wire_height"] + hs["static_force"] / 5e4)
+    # the static start of the monolithic run / our master (pantocosim.master.run.prepare)
+    from pantocosim.master.run import prepare
+
+    prep = prepare(str(ROOT / "master" / "scenarios" / "dsa380-ave-300.toml"))
+    F = float(prep.static_forces[0])
+    h = float(prep.pantographs[0].contact_height(prep.q_pan0[0]))
+    z_w = float(prep.catenary.wire_height(0.0, prep.q_cat0)[0])
+    assert float(params[("catenary", "static_force_1")]) == F
+    assert float(params[("pantograph", "initial_contact_force")]) == F
+    assert float(params[("pantograph", "initial_height")]) == h
+    assert h == pytest.approx(z_w + F / 5e4, abs=1e-12)
+    stop = float(root.find("ssd:DefaultExperiment", ns).get("stopTime"))
+    assert stop == pytest.approx(prep.n_steps * 1e-3)
 
 
 # ------------------------------------------------------------------------- third-party masters

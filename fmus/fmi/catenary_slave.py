@@ -8,7 +8,9 @@ parameters
   ``speed_kmh``, ``n_pantographs`` (1..4), ``position_k`` [m] (x of pantograph k at t0),
   ``static_force_k`` [N] (upward static contact force at t0 for the static start, 0 = none),
   ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
-  contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``.
+  contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``,
+  ``factorization`` (HHT Newton matrix policy: 0 full Newton, 1 once per step, 2 reuse
+  across steps).
 inputs
   ``contact_force_k`` [N] (mode 0), ``pantograph_height_k`` [m] and
   ``pantograph_velocity_k`` [m/s] (mode 1).
@@ -84,6 +86,9 @@ class CatenarySlave(GuardedSlave):
                   "penalty contact damping c_H (contact_mode 1)")
         self.integer("n_substeps", 1, "integration steps per communication step (inputs "
                      "interpolated linearly)")
+        self.integer("factorization", 1, "Newton matrix policy of the HHT solver: 0 = full "
+                     "Newton (refactorize every iteration), 1 = factorize once per step "
+                     "(chord), 2 = reuse across steps while the structure is unchanged")
         for k in range(1, MAX_PANTOGRAPHS + 1):
             self.real(f"contact_force_{k}", 0.0, "input", "N",
                       f"contact_mode 0: upward contact force of pantograph {k} on the wire, "
@@ -198,7 +203,12 @@ class CatenarySlave(GuardedSlave):
                               element_size=esize if esize > 0 else None)
         F0 = np.array(F0)
         q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
-        settings = HHTSettings(alpha=alpha, reuse_factorization=True)
+        policy = int(self.factorization)
+        if policy not in (0, 1, 2):
+            raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
+                                 "per step) or 2 (reuse across steps)")
+        settings = HHTSettings(alpha=alpha,
+                               reuse_factorization={0: False, 1: "step", 2: True}[policy])
         self._model, self._n, self._mode = model, n, mode
         if mode == 0:
             integ = HHTIntegrator(model, settings)
