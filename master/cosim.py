@@ -156,8 +156,11 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
     if missing and build:
         from pantocosim.master.fmu_build import build_fmus
 
+        import sys
+
         names = sorted({p.stem for p in missing})
-        build_fmus(dist, only=names, quiet=False)
+        print(f"building FMUs {', '.join(names)} into {dist}", file=sys.stderr, flush=True)
+        build_fmus(dist, only=names, quiet=True)
         missing = [p for p in pans + [cat] if not p.exists()]
     if missing:
         raise ParameterError("fmu", str(missing[0]), "FMU file not found (run "

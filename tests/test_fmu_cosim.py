@@ -1,0 +1,99 @@
+"""Co-simulation through the FMUs with our master (issue 5), run as the CLI in subprocesses
+(pythonfmu FMUs never load into the pytest process)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pantocosim.master.results import read_csv
+from pantocosim.master.run import prepare, run_monolithic
+
+SHORT = Path(__file__).with_name("data") / "short-en50318.toml"
+
+
+def cli(*args, timeout=900):
+    proc = subprocess.run([sys.executable, "-c",
+                           "from pantocosim.master.cli import console_main; console_main()",
+                           *map(str, args)], capture_output=True, text=True, timeout=timeout)
+    return proc
+
+
+def scenario_with(tmp_path, model):
+    p = tmp_path / f"short-{model}.toml"
+    p.write_text(SHORT.read_text().replace('model = "en50318-2mass"', f'model = "{model}"')
+                 .replace('name = "short-en50318"', f'name = "short-{model}"'))
+    return p
+
+
+@pytest.fixture(scope="module")
+def monolithic_short():
+    prep = prepare(str(SHORT))
+    return run_monolithic(prep, None, progress=False)
+
+
+def test_implicit_fmu_coupling_equals_monolithic(tmp_path, monolithic_short):
+    out = tmp_path / "implicit"
+    proc = cli("run", SHORT, "--coupling", "implicit", "--out", out, "--quiet", "--no-plots",
+               "--json")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    summary = json.loads(proc.stdout)
+    assert summary["coupling"] == "implicit"
+    assert summary["coupling_iterations_max"] <= 6
+    F = read_csv(out / "timeseries.csv")["contact_force_1"]
+    Fm = monolithic_short.columns["contact_force_1"]
+    # CSV keeps 10 significant digits
+    assert np.max(np.abs(F - Fm)) < 1e-6 * Fm.mean()
+
+
+@pytest.mark.parametrize("model", ["en50318-2mass", "dsa380-lumped3", "dsa380-rigid"])
+def test_explicit_fmu_coupling_runs_for_every_pantograph_model(tmp_path, model):
+    """Swapping the pantograph is a change of the scenario file only."""
+    sc = scenario_with(tmp_path, model)
+    out = tmp_path / model
+    proc = cli("run", sc, "--coupling", "explicit", "--out", out, "--quiet", "--no-plots",
+               "--json")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    st = json.loads(proc.stdout)["statistics"]
+    assert 50.0 < st["mean_n"] < 200.0 and st["std_n"] > 0.0
+    mono = run_monolithic(prepare(str(sc)), None, progress=False).statistics()[0]
+    assert abs(st["mean_n"] - mono.mean_n) < 0.01 * mono.mean_n
+
+
+def test_bad_pantograph_option_names_the_field(tmp_path):
+    sc = tmp_path / "bad.toml"
+    sc.write_text(SHORT.read_text().replace('start = "static"',
+                                            'start = "static"\noptions = { aero_c2 = nan }'))
+    proc = cli("run", sc, "--coupling", "explicit", "--out", tmp_path / "bad", "--quiet")
+    assert proc.returncode == 2
+    assert "aero_c2 = nan" in proc.stderr
+
+
+def test_master_reports_the_fmu_message(tmp_path):
+    """A bad parameter set through FMI: the FMU discards the step with a message naming the
+    parameter, the master's FMU layer raises it as an FmuError, the process survives."""
+    code = (
+        "from pantocosim.master.cosim import ROOT\n"
+        "from pantocosim.master.fmu_build import build_fmus\n"
+        "from pantocosim.master.fmu_runtime import FmuInstance, FmuError\n"
+        "import os\n"
+        f"p = build_fmus({str(tmp_path)!r}, only=['en50318-2mass'], quiet=True)[0]\n"
+        "i = FmuInstance(p, 'pan')\n"
+        "i.initialize({'start_mode': 7, 'speed_kmh': float('nan')})\n"
+        "try:\n"
+        "    i.do_step(0.0, 1e-3)\n"
+        "    print('NO ERROR')\n"
+        "except FmuError as e:\n"
+        "    print('STATUS', e.status)\n"
+        "    print('MESSAGE', e)\n"
+        "i.terminate()\n"
+        "print('ALIVE', flush=True)\n"
+        "os._exit(0)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+    assert "STATUS 2" in proc.stdout, proc.stdout + proc.stderr
+    assert "speed_kmh = nan" in proc.stdout
+    assert "ALIVE" in proc.stdout
