@@ -151,17 +151,11 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
             p = dist / f"{spec.model}.fmu"
         pans.append(p)
     cat = dist / "catenary.fmu"
-    missing = [p for p in pans + [cat] if not p.exists() or (build and p.parent == dist
-                                                            and is_stale(p))]
-    if missing and build:
-        from pantocosim.master.fmu_build import build_fmus
+    if build:
+        from pantocosim.master.fmu_build import ensure_fmus
 
-        import sys
-
-        names = sorted({p.stem for p in missing})
-        print(f"building FMUs {', '.join(names)} into {dist}", file=sys.stderr, flush=True)
-        build_fmus(dist, only=names, quiet=True)
-        missing = [p for p in pans + [cat] if not p.exists()]
+        ensure_fmus(pans + [cat], dist)
+    missing = [p for p in pans + [cat] if not p.exists()]
     if missing:
         raise ParameterError("fmu", str(missing[0]), "FMU file not found (run "
                              "`pantocosim build-fmus`)", sc.source)

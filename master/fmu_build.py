@@ -20,3 +20,17 @@ def _builder():
 
 def build_fmus(out: Path = DEFAULT_OUT, only=None, quiet: bool = False):
     return _builder().build(Path(out), only=only, quiet=quiet)
+
+
+def ensure_fmus(paths, out: Path = DEFAULT_OUT) -> None:
+    """Build the FMUs among ``paths`` (files in ``out``) that are missing or stale (built from
+    another version of the model package than the installed one)."""
+    import sys
+
+    from pantocosim.master.cosim import is_stale
+
+    todo = sorted({Path(p).stem for p in paths
+                   if Path(p).parent == Path(out) and (not Path(p).exists() or is_stale(p))})
+    if todo:
+        print(f"building FMUs {', '.join(todo)} into {out}", file=sys.stderr, flush=True)
+        build_fmus(out, only=todo, quiet=True)

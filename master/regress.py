@@ -114,13 +114,11 @@ def run_regression(update: bool = False, reason: str | None = None,
     if update and not reason:
         raise ParameterError("--reason", reason, "an update of the references needs a reason")
     from pantocosim.master.cosim import ROOT
-    from pantocosim.master.fmu_build import build_fmus
+    from pantocosim.master.fmu_build import ensure_fmus
 
     dist = ROOT / "dist" / "fmus"
     names = ["dsa380-rigid", "dsa380-lumped3", "en50318-2mass", "catenary"]
-    missing = [n for n in names if not (dist / f"{n}.fmu").exists()]
-    if missing:
-        build_fmus(dist, only=missing, quiet=False)
+    ensure_fmus([dist / f"{n}.fmu" for n in names], dist)
     all_ok = True
     rows = []
     for name, fn in cases().items():

@@ -1,0 +1,13 @@
+"""`pantocosim regress`: the FMU regression cases match the stored references (issue 5)."""
+
+import subprocess
+import sys
+
+
+def test_regression_cases_match_references():
+    proc = subprocess.run([sys.executable, "-c",
+                           "from pantocosim.master.cli import console_main; console_main()",
+                           "regress"], capture_output=True, text=True, timeout=1500)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rows = [l for l in proc.stdout.splitlines() if l.startswith(("pantograph-", "short-"))]
+    assert len(rows) == 5 and all(" ok " in l for l in rows), proc.stdout
