@@ -56,7 +56,20 @@ class ModelSubsystem:
         return self.model.support_uplift(self.integ.q)
 
 
-class FmuPantograph:
+class _FmuState:
+    """FMU state save/restore/free of an adapter holding ``self.fmu``."""
+
+    def get_state(self):
+        return self.fmu.get_state()
+
+    def set_state(self, s):
+        self.fmu.set_state(s)
+
+    def free_state(self, s):
+        self.fmu.free_state(s)
+
+
+class FmuPantograph(_FmuState):
     """A pantograph FMU behind the common port contract."""
 
     def __init__(self, fmu):
@@ -74,17 +87,8 @@ class FmuPantograph:
         z, v = self.fmu.get_real(self.r_out)
         return np.array([z]), np.array([v])
 
-    def get_state(self):
-        return self.fmu.get_state()
 
-    def set_state(self, s):
-        self.fmu.set_state(s)
-
-    def free_state(self, s):
-        self.fmu.free_state(s)
-
-
-class FmuCatenary:
+class FmuCatenary(_FmuState):
     """The catenary FMU: contact_force_k in, wire_height_k / wire_velocity_k out."""
 
     def __init__(self, fmu, n_pantographs: int, n_supports: int):
@@ -107,15 +111,6 @@ class FmuCatenary:
 
     def uplift(self):
         return self.fmu.get_real(self.r_uplift)
-
-    def get_state(self):
-        return self.fmu.get_state()
-
-    def set_state(self, s):
-        self.fmu.set_state(s)
-
-    def free_state(self, s):
-        self.fmu.free_state(s)
 
 
 # ---------------------------------------------------------------------- set-up
