@@ -77,8 +77,9 @@ def plot_modes(flex, phi, freqs, labels, out):
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5))
     for r, ax in enumerate(axes.flat):
         shape = phi[:, r]
-        # scale: largest node displacement 0.15 m
-        disp = np.max(np.abs(shape[[g + i for g in flex.point_dofs.values() for i in (0, 1)]]))
+        # scale: largest node displacement 0.15 m (translations only, not slopes)
+        pos = [i for i, nm in enumerate(flex.dof_names) if not nm.endswith(("_dx", "_dy"))]
+        disp = np.max(np.abs(shape[pos]))
         amp = 0.15 / max(disp, 1e-12)
         for b, c in enumerate(base):
             ax.plot(c[:, 0], c[:, 1], color="0.75", lw=1.5)
