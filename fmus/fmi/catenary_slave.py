@@ -5,7 +5,8 @@ Port contract (design README section 4; public interface):
 parameters
   ``catenary`` (String, preset name or TOML path; relative paths are also looked up in the
   FMU resources), ``spans`` (0 = as defined), ``element_size`` [m] (0 = as defined),
-  ``speed_kmh``, ``n_pantographs`` (1..4), ``position_k`` [m] (x of pantograph k at t0),
+  ``speed_kmh``, ``n_pantographs`` (1..4), ``position_k`` [m] (x of pantograph k at the
+  experiment's start time t0; the model runs on the time since t0, x_k = position_k + V (t - t0)),
   ``static_force_k`` [N] (upward static contact force at t0 for the static start, 0 = none),
   ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
   contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``,
