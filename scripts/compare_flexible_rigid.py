@@ -195,7 +195,8 @@ def time_responses(rigid, flex, out, duration):
     flex.torque = M0
     flex.torque_lowered = None
     cases = {"2.13": ("F = 120 N", lambda t: F0),
-             "2.15": ("F = 120 + 30 sin(4 pi t) N", lambda t: F0 + 30.0 * math.sin(4 * math.pi * t))}
+             "2.15": ("F = 120 + 30 sin(4 pi t) N",
+                      lambda t: F0 + 30.0 * math.sin(4 * math.pi * t))}
     fig, axes = plt.subplots(2, 1, figsize=(10, 8))
     print("\n## Time responses (thesis Figs. 2.13, 2.15): from 50 mm above the working height, "
           "rigid torque M0\n")

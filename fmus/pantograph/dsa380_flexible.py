@@ -16,10 +16,12 @@ independent slopes) give every element's coordinates as e_k = T_k q + c_k and th
 is constant. The model's q is the DISPLACEMENT u = q_abs - q_ref of these coordinates from the
 reference configuration q_ref (the rigid model's equilibrium at the working height, all bars
 straight and unstrained): absolute positions ~5 m above the rail would otherwise put a
-round-off floor of eps * 5 m * EA / l (~1e-6 N for steel) under every residual. The collector springs k_l (A.11), the torsional spring k_r and actuation torque at
-joint 1 (acting on the slope of bar 1 at point 1, (2.14)), the damper 13-1p (A.13), collector
-friction (2.15)-(2.17), aerodynamic uplift and the contact force on point 10 are those of the
-rigid model, read from the same parameter file. Bars 1-7 take the rigid bars' masses
+round-off floor of eps * 5 m * EA / l (~1e-6 N for steel) under every residual.
+
+The collector springs k_l (A.11), the torsional spring k_r and actuation torque at joint 1
+(acting on the slope of bar 1 at point 1, (2.14)), the damper 13-1p (A.13), collector friction
+(2.15)-(2.17), aerodynamic uplift and the contact force on point 10 are those of the rigid
+model, read from the same parameter file. Bars 1-7 take the rigid bars' masses
 (density m / (A L), checked against steel), so that as E grows the model converges to the rigid
 one; the collector's calibrated pitch inertia beyond its tube's is a rotary inertia at point 10.
 
