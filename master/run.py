@@ -54,14 +54,6 @@ class Prepared:
         return self.scenario.speed
 
 
-def with_spans(definition, n_spans: int):
-    """The definition repeated/truncated to ``n_spans`` spans (span data cycled)."""
-    lengths = [definition.span_lengths[i % definition.n_spans] for i in range(n_spans)]
-    droppers = [definition.dropper_positions[i % len(definition.dropper_positions)]
-                for i in range(n_spans)]
-    return dataclasses.replace(definition, span_lengths=lengths, dropper_positions=droppers)
-
-
 def prepare(scenario: Scenario | str | None, force: bool = False,
             element_size: float | None = None) -> Prepared:
     """Validate ``scenario`` and build the models and the static start."""
@@ -74,6 +66,8 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     src = sc.source
     definition = load_catenary(sc.catenary)
     if sc.spans:
+        from pantocosim.catenary.definition import with_spans
+
         definition = with_spans(definition, sc.spans)
     wave = math.sqrt(definition.contact.tension / definition.contact.mass_per_length)
     if sc.speed > MAX_WAVE_SPEED_RATIO * wave and not force:

@@ -154,3 +154,18 @@ def test_state_rollback_is_bitwise():
     integ.set_state(saved)
     second = [integ.step(1e-2) and integ.q.copy() for _ in range(5)]
     assert all(np.array_equal(x, y) for x, y in zip(first, second))
+
+
+def test_step_policy_redo_reuses_factorization_bitwise():
+    model = _Cubic(eps=3.0)
+    integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization="step"))
+    integ.initialize(0.0, [1.0], [0.0])
+    for _ in range(5):
+        integ.step(1e-2)
+    saved = integ.get_state()
+    first = integ.step(1e-2)
+    q1 = integ.q.copy()
+    integ.set_state(saved)
+    again = integ.step(1e-2)
+    assert np.array_equal(integ.q, q1)
+    assert first.refactorizations == 1 and again.refactorizations == 0

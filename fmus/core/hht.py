@@ -93,6 +93,7 @@ class HHTIntegrator:
         self.f_rest = np.zeros(n)
         self.inputs = None
         self._factor = None  # (key, h, matrix, solve)
+        self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
         self.total_iterations = 0
         self.total_factorizations = 0
 
@@ -137,6 +138,14 @@ class HHTIntegrator:
         factor = self._factor if s.reuse_factorization is True else None
         if factor is not None and factor[1] != h:
             factor = None
+        # "step" policy: a step redone from the same state (co-simulation rollback) meets the
+        # same predictor, hence the same first Newton matrix: reuse its factorization
+        redo_key = None
+        if s.reuse_factorization == "step":
+            redo_key = (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes())
+            memo = self._redo_memo
+            if memo is not None and memo[0] == redo_key:
+                factor = memo[1]
         refactorizations = 0
         e0 = None
         e_prev = None
@@ -173,6 +182,8 @@ class HHTIntegrator:
                 S = model.effective_matrix(ev, c_a, c_v, c_f)
                 factor = (ev.structure_key, h, S, model.factorize(S))
                 refactorizations += 1
+                if k == 0 and redo_key is not None:
+                    self._redo_memo = (redo_key, factor)
             dq = -np.asarray(factor[3](R), dtype=float).reshape(q.shape)
             e = abs(float(dq @ R))
             if e0 is None:
