@@ -85,6 +85,11 @@ class CatenarySlave(GuardedSlave):
                   "penalty stiffness k_H (contact_mode 1)")
         self.real("contact_damping", 0.0, "parameter", "N.s/m",
                   "penalty contact damping c_H (contact_mode 1)")
+        self.boolean("extrapolate_heights", True,
+                     "contact_mode 1: take pantograph_height_k as the height at the start of "
+                     "the communication step (what a zero-order-hold master sets) and "
+                     "extrapolate it with pantograph_velocity_k over the step; false: take it "
+                     "as the height at t + h (an iterating master)")
         self.integer("n_substeps", 1, "integration steps per communication step (inputs "
                      "interpolated linearly)")
         self.integer("factorization", 1, "Newton matrix policy of the HHT solver: 0 = full "
@@ -293,7 +298,9 @@ class CatenarySlave(GuardedSlave):
                 if self._mode == 0:
                     iters += self._integ.step(h, u.copy()).iterations
                 else:
-                    for s, (z, v) in zip(self._standins, u):
+                    for s, (z, v), (z_new, v_new) in zip(self._standins, u, new):
+                        if self.extrapolate_heights:  # first-order hold from t
+                            z, v = z_new + v_new * i * h, v_new
                         s.set(z, v)
                     iters += self._integ.step(h).iterations
             self._prev_inputs = new.copy()
