@@ -134,6 +134,9 @@ class HHTIntegrator:
         v_p = self.v + (1.0 - gamma) * h * self.a
         q = q_p + beta * h * h * self.a  # predictor: a_{n+1} = a_n
         hist = alpha * self.f_rest
+        # a model may state the size of its forces (e.g. its weight): the residual test then
+        # holds in quasi-static motion, where every force in R is small
+        force_floor = max(float(getattr(model, "force_scale", 0.0)), 1e-300)
 
         factor = self._factor if s.reuse_factorization is True else None
         if factor is not None and factor[1] != h:
@@ -164,7 +167,7 @@ class HHTIntegrator:
             res_norm = float(np.max(np.abs(R))) if R.size else 0.0
             scale = max(float(np.max(np.abs(ev.f_inertia))) if R.size else 0.0,
                         c_f * float(np.max(np.abs(ev.f_rest))) if R.size else 0.0,
-                        float(np.max(np.abs(hist))) if R.size else 0.0, 1e-300)
+                        float(np.max(np.abs(hist))) if R.size else 0.0, force_floor)
             if not np.isfinite(res_norm):
                 raise ConvergenceError(
                     f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",
