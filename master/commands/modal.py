@@ -16,6 +16,9 @@ def add_parser(sub):
     p.add_argument("--height", type=float, default=None,
                    help="contact height above the rail [m] (default: the preset's)")
     p.add_argument("--force", type=float, default=120.0, help="static contact force [N]")
+    p.add_argument("--count", type=int, default=None,
+                   help="list the lowest N modes (default: all in JSON, those below 40 Hz "
+                   "in the table)")
     p.add_argument("--json", action="store_true", help="print JSON")
     return p
 
@@ -32,20 +35,32 @@ def run(args) -> int:
     q0 = model.static_equilibrium(args.force, args.height)
     M, C, K = model.linearize(q0, args.force)
     res = modal_analysis(M, C, K)
-    labels = [model.mode_label(res.shapes[:, r], M) for r in range(len(res.frequencies_hz))]
+    n = len(res.frequencies_hz)
+    if args.count is not None:
+        if args.count < 1:
+            from pantocosim.core.errors import ParameterError
+
+            raise ParameterError("--count", args.count, "must be >= 1")
+        n = min(n, args.count)
+    elif not args.json:
+        n = max(1, int(np.sum(res.frequencies_hz <= 40.0)))
+    labels = [model.mode_label(res.shapes[:, r], M) for r in range(n)]
     equilibrium = {"contact_force_n": args.force,
                    "contact_height_m": model.contact_height(q0),
                    "q": {name: float(x) for name, x in zip(model.dof_names, q0)}}
     equilibrium.update(getattr(model, "equilibrium_info", lambda: {})())
     if args.json:
         print(json.dumps({"pantograph": model.name,
-                          "frequencies_hz": [float(x) for x in res.frequencies_hz],
-                          "damping_ratios": [float(x) for x in res.damping_ratios],
+                          "frequencies_hz": [float(x) for x in res.frequencies_hz[:n]],
+                          "damping_ratios": [float(x) for x in res.damping_ratios[:n]],
                           "mode_labels": labels, "equilibrium": equilibrium}, indent=2))
         return 0
     print(f"{model.name}: linearised about F = {args.force:g} N at contact height "
           f"{model.contact_height(q0):.4f} m")
     print(f"{'mode':>4}  {'f [Hz]':>10}  {'zeta':>9}  label")
-    for r, (f, z) in enumerate(zip(res.frequencies_hz, res.damping_ratios)):
-        print(f"{r + 1:>4}  {f:>10.4f}  {z:>9.4f}  {labels[r]}")
+    for r in range(n):
+        print(f"{r + 1:>4}  {res.frequencies_hz[r]:>10.4f}  {res.damping_ratios[r]:>9.4f}  "
+              f"{labels[r]}")
+    if n < len(res.frequencies_hz):
+        print(f"({len(res.frequencies_hz) - n} more modes above; --count N lists them)")
     return 0
