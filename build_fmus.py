@@ -289,10 +289,14 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
                   "n_pantographs": 1, "position_1": float(position_m),
                   "static_force_1": hs["static_force"], "hht_alpha": float(hht_alpha),
                   "contact_mode": 1, "contact_stiffness": float(contact_stiffness),
-                  "contact_damping": float(contact_damping), "n_substeps": 1}
+                  "contact_damping": float(contact_damping), "n_substeps": 1,
+                  "extrapolate_heights": True}
+    # a zero-order-hold master hands over values of the start of each step: both FMUs
+    # extrapolate them to the end of the step (first-order hold)
     pan_params = {"speed_kmh": float(speed_kmh), "hht_alpha": float(hht_alpha),
                   "initial_height": hs["initial_height"],
-                  "initial_contact_force": hs["static_force"], "start_mode": 0}
+                  "initial_contact_force": hs["static_force"], "start_mode": 0,
+                  "force_extrapolation": True}
     pan_params.update(pantograph_parameters or {})
     types = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
     units: dict = {}

@@ -89,6 +89,7 @@ class CouplingSettings:
     max_iterations: int = 50
     initial_relaxation: float = 0.5
     min_step: float = 1e-6            # s, floor of the step halving after a discard
+    extrapolate: bool = True          # explicit schemes: linear extrapolation of the forces
 
     def validate(self):
         if self.scheme not in ("jacobi", "gauss-seidel", "implicit"):
@@ -126,6 +127,7 @@ class Coupler:
             initial_relaxation=settings.initial_relaxation)
         self.forces = np.zeros(len(pantographs))
         self.forces_prev = np.zeros(len(pantographs))
+        self._law_prev = None
         self.iterations: list[int] = []
 
     def _interface(self):
@@ -141,6 +143,17 @@ class Coupler:
         zp, vp, zw, vw = self._interface()
         return np.array([self.law.force(zp[k] + predict_h * vp[k], zw[k], vp[k], vw[k])
                          for k in range(len(self.pans))])
+
+    def _predicted_forces(self) -> np.ndarray:
+        """Explicit prediction of the contact forces at t + h: linear extrapolation of the
+        law's values at t and t - h (first-order hold), or F(t) with ``extrapolate`` off."""
+        F = self.contact_forces()
+        if self.s.extrapolate and self._law_prev is not None:
+            F_next = np.maximum(2.0 * F - self._law_prev, 0.0)
+        else:
+            F_next = F
+        self._law_prev = F
+        return F_next
 
     def initialise(self, forces: np.ndarray) -> None:
         self.forces = np.array(forces, dtype=float)
@@ -173,12 +186,12 @@ class Coupler:
         """One communication step t -> t + h; returns the number of coupling iterations."""
         scheme = self.s.scheme
         if scheme == "jacobi":
-            F = self.contact_forces()         # zero-order hold: F(t+h) ~ F(t)
+            F = self._predicted_forces()
             self._set_all(F)
             self._step_all(t, h)
             iters = 1
         elif scheme == "gauss-seidel":
-            F = self.contact_forces()
+            F = self._predicted_forces()
             self.cat.set_forces(F)
             self.cat.step(t, h)
             F = self.contact_forces(predict_h=h)  # fresh wire, predicted pantograph height

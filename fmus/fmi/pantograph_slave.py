@@ -70,6 +70,10 @@ class PantographSlave(GuardedSlave):
         self.real("lowered_height", 5.0, "parameter", "m",
                   "ramp raising: contact height of the lowered pantograph at t0")
         self.integer("n_substeps", 1, "integration steps per communication step")
+        self.boolean("force_extrapolation", False,
+                     "take contact_force as the force at the start of the communication step "
+                     "(what a zero-order-hold master sets) and extrapolate it linearly to "
+                     "t + h from the previous input: F(t+h) = max(0, 2 F(t) - F(t-h))")
         self.string("parameter_file", "", "parameter file (TOML) replacing the preset; a path "
                     "or a file name in the FMU resources")
         self.real("newton_iterations", 0.0, "local", None,
@@ -77,7 +81,8 @@ class PantographSlave(GuardedSlave):
         self._model = None
         self._integ = None
         self._force_prev = 0.0
-        self._state_attributes = ["_integ_state", "_force_prev"]
+        self._input_prev = 0.0
+        self._state_attributes = ["_integ_state", "_force_prev", "_input_prev"]
 
     # ------------------------------------------------------------------ lifecycle
     def exit_initialization_mode(self):
@@ -135,6 +140,7 @@ class PantographSlave(GuardedSlave):
         integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
         self._model, self._integ = model, integ
         self._force_prev = F0
+        self._input_prev = F0
         self.contact_force = F0
         self._update_outputs()
 
@@ -152,6 +158,9 @@ class PantographSlave(GuardedSlave):
                 self.log(f"contact_force = {F!r}: must be finite and >= 0",
                          Fmi2StatusDiscard())
                 return False
+            u = F
+            if self.force_extrapolation:
+                F = max(0.0, 2.0 * u - self._input_prev)
             n = int(self.n_substeps)
             h = step_size / n
             F0 = self._force_prev
@@ -160,6 +169,7 @@ class PantographSlave(GuardedSlave):
                 Fi = F0 + (F - F0) * i / n
                 iters += self._integ.step(h, np.array([Fi])).iterations
             self._force_prev = F
+            self._input_prev = u
             self.newton_iterations = float(iters)
             self._update_outputs()
             return True
