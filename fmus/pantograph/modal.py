@@ -20,9 +20,21 @@ class ModalResult:
     eigenvalues: np.ndarray
 
 
-def undamped_modes(M: np.ndarray, K: np.ndarray):
-    """(K - omega^2 M) phi = 0 (2.23): returns omega^2 ascending and mass-normalised shapes."""
-    w2, phi = sla.eigh(K, M)
+def undamped_modes(M: np.ndarray, K: np.ndarray, shift_hz: float = 0.1):
+    """(K - omega^2 M) phi = 0 (2.23): returns omega^2 ascending and mass-normalised shapes.
+
+    Solved in shift-invert form M phi = mu (K + s M) phi, omega^2 = 1/mu - s, which keeps the
+    lowest modes accurate when stiff (axial) modes make K ill-conditioned; falls back to the
+    direct form if K + s M is not positive definite."""
+    s = (2.0 * np.pi * shift_hz) ** 2
+    try:
+        mu, phi = sla.eigh(M, K + s * M)
+    except np.linalg.LinAlgError:
+        return sla.eigh(K, M)
+    order = np.argsort(mu)[::-1]
+    w2 = 1.0 / mu[order] - s
+    phi = phi[:, order]
+    phi = phi / np.sqrt(np.einsum("ir,ij,jr->r", phi, M, phi))
     return w2, phi
 
 
