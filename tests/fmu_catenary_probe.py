@@ -18,6 +18,9 @@ import numpy as np
 import scipy.sparse.linalg  # noqa: F401  (B5: import before loading FMUs)
 
 
+from fmu_probe import _logger_callbacks  # noqa: E402  (same folder; shared probe helpers)
+
+
 def _open(fmu, name="A"):
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
@@ -30,23 +33,6 @@ def _open(fmu, name="A"):
                   instanceName=name)
     s._pc_vr, s._pc_types = vr, types
     return s, vr
-
-
-def _logger_callbacks(messages):
-    from ctypes import byref
-
-    from fmpy.fmi2 import defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-    from fmpy.logging import addLoggerProxy
-
-    def logger(component, instance, status, category, message):
-        messages.append((int(status), message.decode("utf-8", "replace")))
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = defaultCallbacks.allocateMemory
-    cb.freeMemory = defaultCallbacks.freeMemory
-    addLoggerProxy(byref(cb))
-    return cb, logger
 
 
 def _init(s, params: dict, messages=None):
@@ -123,7 +109,8 @@ def catenary_trace(fmu, args):
 def catenary_penalty(fmu, args):
     """Mode 1 (built-in penalty) with prescribed pantograph heights/velocities."""
     s, vr = _open(fmu)
-    params = dict(args["params"], contact_mode=1)
+    # the inputs are the pantograph's values at t + h (an iterating master): no extrapolation
+    params = dict(args["params"], contact_mode=1, extrapolate_heights=False)
     _init(s, params)
     h = float(args.get("h", 1e-3))
     zvr = [vr["pantograph_height_1"], vr["pantograph_velocity_1"]]
