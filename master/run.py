@@ -276,6 +276,12 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
     if result.coupling_iterations is not None and len(result.coupling_iterations):
         summary["coupling_iterations_mean"] = float(np.mean(result.coupling_iterations))
         summary["coupling_iterations_max"] = int(np.max(result.coupling_iterations))
+    try:
+        import resource
+
+        summary["peak_memory_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    except (ImportError, OSError):  # pragma: no cover - not on every platform
+        pass
     if result.error is not None:
         summary["error"] = str(result.error)
     summary.update(result.summary)

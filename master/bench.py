@@ -1,0 +1,140 @@
+"""``pantocosim bench``: speed and memory of the solvers, as ratios measured in one run.
+
+Each case runs as ``pantocosim run`` in its own process (so its peak memory is its own) on a
+scenario written for the bench (fixed simulated time). Reported per case: wall time, simulated
+time, real-time factor (wall / simulated), time per step, Newton and coupling iterations per
+step, peak memory, and the ratios
+
+- ``floor_ratio``: wall time per step / one solve with an already factorised catenary Newton
+  matrix (the unavoidable work of any implicit method on the mesh), timed in this process;
+- ``cosim_over_monolithic``: explicit co-simulation wall time / monolithic wall time;
+- ``implicit_over_explicit``: implicit / explicit co-simulation wall time;
+
+and the growth of the cost per simulated second per doubling of the number of spans.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+CASES = {
+    # name: (catenary, spans, pantograph, speed km/h, position m)
+    "en50318-300": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
+    "dsa380-ave-300-40span": ("ave64", 40, "dsa380-rigid", 300.0, 32.0),
+}
+
+
+def scenario_text(name, catenary, spans, pantograph, speed, x0, duration) -> str:
+    return (f'name = "{name}"\ncatenary = "{catenary}"\nspans = {spans}\n'
+            f"speed_kmh = {speed}\n\n[[pantographs]]\nmodel = \"{pantograph}\"\n"
+            f"position_m = {x0}\nstart = \"static\"\n\n[analysis]\n"
+            f"window_m = [{x0 + 1.0}, {x0 + speed / 3.6 * duration - 1.0}]\n\n"
+            f"[simulation]\ndt = 0.001\nalpha = -0.05\nduration_s = {duration}\n")
+
+
+def run_case(path: Path, coupling: str, out: Path) -> dict:
+    cmd = [sys.executable, "-c", "from pantocosim.master.cli import console_main; "
+           "console_main()", "run", str(path), "--coupling", coupling, "--out", str(out),
+           "--json", "--no-plots", "--quiet"]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall_process = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{path.name} {coupling}: {proc.stderr.strip()[-500:]}")
+    summary = json.loads(proc.stdout)
+    summary["process_wall_s"] = wall_process
+    return summary
+
+
+def floor_per_step(catenary: str, spans: int, repeats: int = 200) -> float:
+    """Seconds for one solve with a factorised catenary Newton matrix (HHT, 1 ms)."""
+    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.catenary.model import CatenaryModel
+    from pantocosim.core.hht import HHTSettings
+
+    model = CatenaryModel(with_spans(load_catenary(catenary), spans), x0=(10.0,), speed=80.0)
+    s = HHTSettings(alpha=-0.05)
+    h = 1e-3
+    n = model.n_dofs
+    ev = model.evaluate(0.0, model.q_static, np.zeros(n), np.zeros(n), np.zeros(1))
+    S = model.effective_matrix(ev, 1 / (s.beta * h * h), s.gamma / (s.beta * h), 1 + s.alpha)
+    solve = model.factorize(S)
+    r = np.random.default_rng(0).standard_normal(n)
+    solve(r)
+    t0 = time.perf_counter()
+    for _ in range(repeats):
+        solve(r)
+    return (time.perf_counter() - t0) / repeats
+
+
+def bench(quick: bool = False, printer=print) -> dict:
+    durations = {"en50318-300": 0.5 if quick else 2.0, "dsa380-ave-300-40span": 0.3 if quick
+                 else 1.0}
+    couplings = ["monolithic", "explicit", "implicit"]
+    results: dict = {"cases": {}, "machine": _machine()}
+    with tempfile.TemporaryDirectory(prefix="pantocosim_bench_") as tmp:
+        tmp = Path(tmp)
+        # numba cache and FMUs warm: one short cold run first, reported separately
+        cat, spans, pan, v, x0 = CASES["en50318-300"]
+        cold = tmp / "cold.toml"
+        cold.write_text(scenario_text("cold", cat, spans, pan, v, x0, 0.05))
+        t0 = time.perf_counter()
+        run_case(cold, "explicit", tmp / "cold")
+        results["cold_first_run_s"] = time.perf_counter() - t0
+        for name, (cat, spans, pan, v, x0) in CASES.items():
+            path = tmp / f"{name}.toml"
+            path.write_text(scenario_text(name, cat, spans, pan, v, x0, durations[name]))
+            floor = floor_per_step(cat, spans)
+            case = {"floor_solve_s": floor}
+            for coupling in couplings:
+                s = run_case(path, coupling, tmp / f"{name}-{coupling}")
+                steps = max(s["steps"], 1)
+                entry = {"wall_s": s["wall_time_s"], "simulated_s": s["simulated_time_s"],
+                         "real_time_factor": s["wall_time_s"] / s["simulated_time_s"],
+                         "time_per_step_ms": 1e3 * s["wall_time_s"] / steps,
+                         "newton_iterations_per_step": s["newton_iterations_mean"],
+                         "peak_memory_mb": s.get("peak_memory_mb"),
+                         "floor_ratio": s["wall_time_s"] / steps / floor}
+                if "coupling_iterations_mean" in s:
+                    entry["coupling_iterations_mean"] = s["coupling_iterations_mean"]
+                case[coupling] = entry
+                printer(f"{name:<24} {coupling:<11} RTF {entry['real_time_factor']:7.2f}  "
+                        f"{entry['time_per_step_ms']:7.2f} ms/step  floor_ratio "
+                        f"{entry['floor_ratio']:6.1f}  peak {entry['peak_memory_mb'] or 0:7.0f} MB")
+            case["cosim_over_monolithic"] = case["explicit"]["wall_s"] / case["monolithic"]["wall_s"]
+            case["implicit_over_explicit"] = case["implicit"]["wall_s"] / case["explicit"]["wall_s"]
+            results["cases"][name] = case
+        # scaling: cost per simulated second on 10, 20, 40 spans (monolithic, AVE line)
+        scaling = {}
+        for n_spans in (10, 20, 40):
+            path = tmp / f"scale{n_spans}.toml"
+            path.write_text(scenario_text(f"scale{n_spans}", "ave64", n_spans, "dsa380-rigid",
+                                          300.0, 32.0, 0.3 if quick else 0.5))
+            s = run_case(path, "monolithic", tmp / f"scale{n_spans}")
+            scaling[n_spans] = s["wall_time_s"] / s["simulated_time_s"]
+        growth = [scaling[20] / scaling[10], scaling[40] / scaling[20]]
+        results["scaling_cost_per_simulated_s"] = scaling
+        results["scaling_growth_per_doubling"] = growth
+    for name, case in results["cases"].items():
+        printer(f"{name}: floor {1e3 * case['floor_solve_s']:.3f} ms/solve, cosim_over_monolithic "
+                f"{case['cosim_over_monolithic']:.2f}, implicit_over_explicit "
+                f"{case['implicit_over_explicit']:.2f}")
+    printer(f"cost per simulated second, 10/20/40 spans: "
+            f"{', '.join(f'{scaling[k]:.1f} s' for k in (10, 20, 40))}; growth per doubling "
+            f"{growth[0]:.2f}, {growth[1]:.2f}; cold first run {results['cold_first_run_s']:.1f} s")
+    return results
+
+
+def _machine() -> dict:
+    import os
+    import platform
+
+    return {"python": platform.python_version(), "cpus": os.cpu_count(),
+            "processor": platform.processor() or platform.machine()}

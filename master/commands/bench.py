@@ -1,0 +1,25 @@
+"""``pantocosim bench``: speed and memory figures of the solvers (ratios from one run)."""
+
+from __future__ import annotations
+
+import json
+
+
+def add_parser(sub):
+    p = sub.add_parser("bench", help="benchmark the solvers and the co-simulation",
+                       description="Run fixed cases (en50318-300 with 10 spans, a 40-span AVE "
+                       "line) monolithic, explicit and implicit and print wall time, real-time "
+                       "factor, time per step, iterations, peak memory and the ratios "
+                       "floor_ratio, cosim_over_monolithic, implicit_over_explicit.")
+    p.add_argument("--quick", action="store_true", help="shorter simulated times")
+    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    return p
+
+
+def run(args) -> int:
+    from pantocosim.master.bench import bench
+
+    res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print)
+    if args.json:
+        print(json.dumps(res, indent=2))
+    return 0
