@@ -101,10 +101,9 @@ class CoupledSystem(SecondOrderModel):
         # contact linearisation of the latest evaluation: the Newton solve adds it to the
         # (possibly reused) factorization as a low-rank update
         self._contact_lin = (t, lin)
-        if tangent:
-            ev.mass = _LazyBlocks(self, "mass")
-            ev.damping = _LazyBlocks(self, "damping")
-            ev.stiffness = _LazyBlocks(self, "stiffness")
+        # the global tangents are never assembled (mass, damping, stiffness stay None): the
+        # Newton matrix comes from the parts in effective_matrix; assembled() builds it for
+        # checks
         return ev
 
     def effective_matrix(self, ev, c_a, c_v, c_f):
@@ -263,16 +262,3 @@ class _BlockNewton:
 
     def __init__(self, cat, pans, c_v, c_f):
         self.cat, self.pans, self.c_v, self.c_f = cat, pans, c_v, c_f
-
-
-class _LazyBlocks:
-    """Placeholder for a global tangent the coupled solver never assembles; use
-    :meth:`CoupledSystem.assembled` when a full matrix is needed."""
-
-    def __init__(self, system, name):
-        self.system, self.name = system, name
-
-
-def _block_diag(first, rest):
-    return sp.block_diag([sp.csr_matrix(first)] + [sp.csr_matrix(np.asarray(x)) for x in rest],
-                         format="csr")
