@@ -57,8 +57,9 @@ def test_two_mass_frequencies_match_closed_form():
     assert res.frequencies_hz == pytest.approx(np.sqrt(w2) / (2 * np.pi), rel=1e-12)
 
 
-def test_frf_direct_equals_modal_superposition():
-    model = load_pantograph("dsa380-lumped3")
+@pytest.mark.parametrize("name", ["dsa380-lumped3", "dsa380-rigid"])
+def test_frf_direct_equals_modal_superposition(name):
+    model = load_pantograph(name)
     M, C, K = model.linearize(model.static_equilibrium(120.0), 120.0)
     f = np.linspace(0.05, 30.0, 300)
     Hd = frf_direct(M, C, K, f)
