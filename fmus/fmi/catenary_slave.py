@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .slave_base import GuardedSlave
+from .slave_base import IntegratorSlave
 
 MAX_PANTOGRAPHS = 4
 MAX_SUPPORTS = 64
@@ -53,7 +53,7 @@ def _discard():
     return Fmi2Status.discard
 
 
-class CatenarySlave(GuardedSlave):
+class CatenarySlave(IntegratorSlave):
     description = "pantocosim catenary"
 
     def __init__(self, **kwargs):
@@ -129,7 +129,6 @@ class CatenarySlave(GuardedSlave):
         self._n = 1
         self._mode = 0
         self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
-        self._pending_integ_state = None
         self._state_attributes = ["_integ_state", "_prev_inputs"]
 
     # ------------------------------------------------------------------ lifecycle
@@ -249,9 +248,7 @@ class CatenarySlave(GuardedSlave):
             self._prev_inputs = np.array([[s.height, s.velocity] for s in standins])
         self._integ = integ
         self.n_supports = float(len(model.support_x))
-        if self._pending_integ_state is not None:
-            self._integ.set_state(self._pending_integ_state)
-            self._pending_integ_state = None
+        self.apply_pending_state()
         self._update_outputs(initial=True)
 
     # ------------------------------------------------------------------ stepping
@@ -331,39 +328,3 @@ class CatenarySlave(GuardedSlave):
         up = model.support_uplift(qc)
         for j in range(min(len(up), MAX_SUPPORTS)):
             setattr(self, f"support_uplift_{j}", float(up[j]))
-
-    # ------------------------------------------------------------------ state
-    @property
-    def _integ_state(self):
-        return None if self._integ is None else self._integ.get_state()
-
-    @_integ_state.setter
-    def _integ_state(self, state):
-        if state is None:
-            return
-        if self._integ is None:
-            self._pending_integ_state = state  # applied at the end of initialisation
-        else:
-            self._integ.set_state(state)
-
-    def _copy_attribute(self, name):
-        if name == "_integ_state":
-            return self._integ_state  # get_state copies (the factorization is immutable)
-        return super()._copy_attribute(name)
-
-    def _restore_attribute(self, name, value):
-        if name == "_integ_state":
-            self._integ_state = value  # set_state copies
-            return
-        super()._restore_attribute(name, value)
-
-    @staticmethod
-    def _fmu_state_to_bytes(state: dict) -> bytes:
-        import pickle
-
-        from pantocosim.core.hht import HHTIntegrator
-
-        out = dict(state)
-        if out.get("_integ_state") is not None:
-            out["_integ_state"] = HHTIntegrator.picklable_state(out["_integ_state"])
-        return pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)

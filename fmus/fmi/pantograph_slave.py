@@ -22,13 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .slave_base import GuardedSlave
+from .slave_base import IntegratorSlave
 
 FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
                 "force at t is the previous accepted step's (kept in the FMU state).")
 
 
-class PantographSlave(GuardedSlave):
+class PantographSlave(IntegratorSlave):
     preset = "dsa380-rigid"
     description = "pantocosim pantograph"
 
@@ -79,7 +79,6 @@ class PantographSlave(GuardedSlave):
         self.real("newton_iterations", 0.0, "local", None,
                   "Newton iterations of the last communication step")
         self._model = None
-        self._integ = None
         self._force_prev = 0.0
         self._input_prev = 0.0
         self._state_attributes = ["_integ_state", "_force_prev", "_input_prev"]
@@ -142,6 +141,7 @@ class PantographSlave(GuardedSlave):
         self._force_prev = F0
         self._input_prev = F0
         self.contact_force = F0
+        self.apply_pending_state()
         self._update_outputs()
 
     def setup_experiment(self, start_time, stop_time, tolerance):
@@ -183,27 +183,6 @@ class PantographSlave(GuardedSlave):
         q, v = self._integ.q, self._integ.v
         self.contact_height = float(self._model.contact_height(q))
         self.contact_velocity = float(self._model.contact_velocity(q, v))
-
-    # ------------------------------------------------------------------ state
-    @property
-    def _integ_state(self):
-        return None if self._integ is None else self._integ.get_state()
-
-    @_integ_state.setter
-    def _integ_state(self, state):
-        if state is not None and self._integ is not None:
-            self._integ.set_state(state)
-
-    def _copy_attribute(self, name):
-        if name == "_integ_state":
-            return self._integ_state  # get_state already copies
-        return super()._copy_attribute(name)
-
-    def _restore_attribute(self, name, value):
-        if name == "_integ_state":
-            self._integ_state = value  # set_state copies
-            return
-        super()._restore_attribute(name, value)
 
 
 def Fmi2StatusDiscard():

@@ -198,3 +198,52 @@ class GuardedSlave(Fmi2Slave):
     @staticmethod
     def _fmu_state_from_bytes(data: bytes) -> dict:
         return pickle.loads(data)
+
+
+class IntegratorSlave(GuardedSlave):
+    """A slave that advances one HHT integrator (``self._integ``): the integrator's state
+    (q, v, a, t, previous forces, model sets, factorization) is part of the FMU state; a state
+    set before initialisation is applied at its end (:meth:`apply_pending_state`)."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._integ = None
+        self._pending_integ_state = None
+
+    def apply_pending_state(self) -> None:
+        if self._pending_integ_state is not None:
+            self._integ.set_state(self._pending_integ_state)
+            self._pending_integ_state = None
+
+    @property
+    def _integ_state(self):
+        return None if self._integ is None else self._integ.get_state()
+
+    @_integ_state.setter
+    def _integ_state(self, state):
+        if state is None:
+            return
+        if self._integ is None:
+            self._pending_integ_state = state  # applied at the end of initialisation
+        else:
+            self._integ.set_state(state)
+
+    def _copy_attribute(self, name):
+        if name == "_integ_state":
+            return self._integ_state  # get_state copies (the factorization is immutable)
+        return super()._copy_attribute(name)
+
+    def _restore_attribute(self, name, value):
+        if name == "_integ_state":
+            self._integ_state = value  # set_state copies
+            return
+        super()._restore_attribute(name, value)
+
+    @staticmethod
+    def _fmu_state_to_bytes(state: dict) -> bytes:
+        from pantocosim.core.hht import HHTIntegrator
+
+        out = dict(state)
+        if out.get("_integ_state") is not None:
+            out["_integ_state"] = HHTIntegrator.picklable_state(out["_integ_state"])
+        return pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
