@@ -128,7 +128,10 @@ class Coupler:
         self.forces = np.zeros(len(pantographs))
         self.forces_prev = np.zeros(len(pantographs))
         self._law_prev = None
+        self._law_now = None
         self.iterations: list[int] = []
+        #: communication steps halved after a discard
+        self.halvings = 0
 
     def _interface(self):
         zw, vw = self.cat.outputs()
@@ -144,16 +147,16 @@ class Coupler:
         return np.array([self.law.force(zp[k] + predict_h * vp[k], zw[k], vp[k], vw[k])
                          for k in range(len(self.pans))])
 
-    def _predicted_forces(self) -> np.ndarray:
+    def _predicted_forces(self, t: float, h: float) -> np.ndarray:
         """Explicit prediction of the contact forces at t + h: linear extrapolation of the
-        law's values at t and t - h (first-order hold), or F(t) with ``extrapolate`` off."""
+        law's values at the last two communication points (first-order hold), or F(t) with
+        ``extrapolate`` off. The value at t is remembered once the step succeeds."""
         F = self.contact_forces()
-        if self.s.extrapolate and self._law_prev is not None:
-            F_next = np.maximum(2.0 * F - self._law_prev, 0.0)
-        else:
-            F_next = F
-        self._law_prev = F
-        return F_next
+        self._law_now = (t, F)
+        if self.s.extrapolate and self._law_prev is not None and self._law_prev[0] < t:
+            t0, F0 = self._law_prev
+            return np.maximum(F + (F - F0) * (h / (t - t0)), 0.0)
+        return F
 
     def initialise(self, forces: np.ndarray) -> None:
         self.forces = np.array(forces, dtype=float)
@@ -183,15 +186,46 @@ class Coupler:
             p.free_state(s)
 
     def step(self, t: float, h: float) -> int:
-        """One communication step t -> t + h; returns the number of coupling iterations."""
+        """One communication step t -> t + h; returns the number of coupling iterations.
+
+        When a participant discards the step (fmi2Discard, or a model's Newton failure), every
+        participant is rolled back to t and the step is retried as two halves, recursively,
+        down to ``settings.min_step``; below it the run stops with the participant's message.
+        """
+        states = self._save()
+        try:
+            iters = self._step_once(t, h, states)
+            if self._law_now is not None:
+                self._law_prev, self._law_now = self._law_now, None
+            return iters
+        except (ConvergenceError, _Discard) as exc:
+            self._restore(states)
+            if h / 2.0 < self.s.min_step:
+                raise ConvergenceError(
+                    f"step at t = {t:.6g} s discarded down to h = {h:.3g} s (floor "
+                    f"{self.s.min_step:g} s): {exc}", time=t) from None
+            self.halvings += 1
+            return self.step(t, h / 2.0) + self.step(t + h / 2.0, h / 2.0)
+        finally:
+            self._free(states)
+
+    def _step_once(self, t: float, h: float, states) -> int:
+        try:
+            return self._step_scheme(t, h, states)
+        except Exception as exc:
+            if getattr(exc, "status", None) == 2:  # fmi2Discard: retry with a smaller step
+                raise _Discard(str(exc)) from None
+            raise
+
+    def _step_scheme(self, t: float, h: float, states) -> int:
         scheme = self.s.scheme
         if scheme == "jacobi":
-            F = self._predicted_forces()
+            F = self._predicted_forces(t, h)
             self._set_all(F)
             self._step_all(t, h)
             iters = 1
         elif scheme == "gauss-seidel":
-            F = self._predicted_forces()
+            F = self._predicted_forces(t, h)
             self.cat.set_forces(F)
             self.cat.step(t, h)
             F = self.contact_forces(predict_h=h)  # fresh wire, predicted pantograph height
@@ -200,28 +234,30 @@ class Coupler:
                 p.step(t, h)
             iters = 1
         else:
-            F, iters = self._implicit_step(t, h)
+            F, iters = self._implicit_step(t, h, states)
         self.forces_prev, self.forces = self.forces, F
         self.iterations.append(iters)
         return iters
 
-    def _implicit_step(self, t, h):
-        states = self._save()
-        try:
-            self.acc.reset()
-            F = np.maximum(2.0 * self.forces - self.forces_prev, 0.0)  # linear extrapolation
-            for it in range(1, self.s.max_iterations + 1):
-                self._set_all(F)
-                self._step_all(t, h)
-                H = self.contact_forces()
-                r = H - F
-                if np.max(np.abs(r)) <= self.s.tolerance:
-                    return F, it
-                self._restore(states)
-                F = np.maximum(self.acc.update(F, H), 0.0)
-            raise ConvergenceError(
-                f"implicit coupling did not converge at t = {t + h:.6g} s: interface residual "
-                f"{np.max(np.abs(r)):.3e} N after {self.s.max_iterations} iterations",
-                time=t + h, residual=float(np.max(np.abs(r))))
-        finally:
-            self._free(states)
+
+    def _implicit_step(self, t, h, states):
+        """Iterate on the interface forces, restoring ``states`` (saved at t) between passes."""
+        self.acc.reset()
+        F = np.maximum(2.0 * self.forces - self.forces_prev, 0.0)  # linear extrapolation
+        for it in range(1, self.s.max_iterations + 1):
+            self._set_all(F)
+            self._step_all(t, h)
+            H = self.contact_forces()
+            r = H - F
+            if np.max(np.abs(r)) <= self.s.tolerance:
+                return F, it
+            self._restore(states)
+            F = np.maximum(self.acc.update(F, H), 0.0)
+        raise ConvergenceError(
+            f"implicit coupling did not converge at t = {t + h:.6g} s: interface residual "
+            f"{np.max(np.abs(r)):.3e} N after {self.s.max_iterations} iterations",
+            time=t + h, residual=float(np.max(np.abs(r))))
+
+
+class _Discard(Exception):
+    """A participant discarded the step (fmi2Discard)."""

@@ -176,3 +176,46 @@ def test_bad_scenarios_name_the_field(tmp_path):
     with pytest.raises(ParameterError, match="simulation.dtt"):
         prepare(typo)
     assert main(["run", fast, "--quiet"]) == 2
+
+
+class _Discarding:
+    """Wraps a subsystem: discards (status 2, like fmi2Discard) steps longer than h_max
+    inside a time interval."""
+
+    def __init__(self, inner, h_max, t_from, t_to):
+        self.inner, self.h_max, self.t_from, self.t_to = inner, h_max, t_from, t_to
+        self.discards = 0
+
+    def step(self, t, h):
+        if h > self.h_max and self.t_from <= t < self.t_to:
+            self.discards += 1
+            err = RuntimeError(f"doStep(t = {t:.6g}, h = {h:.3g}) returned DISCARD")
+            err.status = 2
+            raise err
+        self.inner.step(t, h)
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", "implicit"])
+def test_discard_rolls_back_and_halves_the_step(scheme):
+    from pantocosim.core.errors import ConvergenceError
+    from pantocosim.master.cosim import in_process_subsystems
+    from pantocosim.master.coupling import Coupler, CouplingSettings
+
+    prep = prepare(SHORT)
+    cat, pans = in_process_subsystems(prep)
+    pans[0] = _Discarding(pans[0], h_max=3e-4, t_from=0.05, t_to=0.06)
+    coupler = Coupler(cat, pans, prep.contact, CouplingSettings(scheme=scheme,
+                                                                tolerance=1e-8))
+    coupler.initialise(prep.static_forces)
+    for i in range(100):
+        coupler.step(i * 1e-3, 1e-3)
+    assert pans[0].discards > 0 and coupler.halvings >= 10 * 2
+    assert abs(cat.integ.t - 0.1) < 1e-12 and abs(pans[0].integ.t - 0.1) < 1e-12
+    # below the floor the run stops with the participant's message
+    coupler.s.min_step = 5e-4
+    pans[0].t_from, pans[0].t_to = 0.1, 0.2
+    with pytest.raises(ConvergenceError, match="discarded down to.*DISCARD"):
+        coupler.step(0.1, 1e-3)
