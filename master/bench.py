@@ -47,7 +47,9 @@ def run_case(path: Path, coupling: str, out: Path) -> dict:
     proc = subprocess.run(cmd, capture_output=True, text=True)
     wall_process = time.perf_counter() - t0
     if proc.returncode != 0:
-        raise RuntimeError(f"{path.name} {coupling}: {proc.stderr.strip()[-500:]}")
+        from pantocosim.core.errors import PantocosimError
+
+        raise PantocosimError(f"{path.name} {coupling}: {proc.stderr.strip()[-500:]}")
     summary = json.loads(proc.stdout)
     summary["process_wall_s"] = wall_process
     return summary
