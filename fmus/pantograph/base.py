@@ -161,6 +161,17 @@ class PantographModel(SecondOrderModel):
         """Equilibrium without contact at a lowered ``height`` (ramp-raising start)."""
         raise NotImplementedError
 
+    def _equilibrium_at_working_height(self, working_height: float, source) -> None:
+        """The default static equilibrium, computed at construction; an unreachable working
+        height is reported as the parameter-file field ``frame.working_height``."""
+        try:
+            self.static_equilibrium()
+        except ParameterError as exc:
+            if exc.field != "height":
+                raise
+            raise ParameterError("frame.working_height", working_height, exc.reason,
+                                 source) from None
+
     # --- linearisation -------------------------------------------------------------------
     def linearize(self, q0: np.ndarray, contact_force: float | None = None):
         """M, C, K of the linearised model about (q0, v = 0) with a constant contact force

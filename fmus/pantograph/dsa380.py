@@ -244,13 +244,7 @@ class Dsa380Model(PantographModel):
         self.torque = 0.0
         self.torque_lowered = None
         self.q_equilibrium = None
-        try:
-            self.static_equilibrium()
-        except ParameterError as exc:
-            if exc.field != "height":
-                raise
-            raise ParameterError("frame.working_height", params.working_height, exc.reason,
-                                 params.source) from None
+        self._equilibrium_at_working_height(params.working_height, params.source)
 
     # ------------------------------------------------------------------ kernel access
     def _kernel(self, q, v, a, F, M_act, F_aero, f_r, k_t, one_way):

@@ -407,13 +407,7 @@ class Dsa380FlexibleModel(PantographModel):
         self.torque = 0.0
         self.torque_lowered = None
         self.q_equilibrium = None
-        try:
-            self.static_equilibrium()
-        except ParameterError as exc:
-            if exc.field != "height":
-                raise
-            raise ParameterError("frame.working_height", rp.working_height, exc.reason,
-                                 params.source) from None
+        self._equilibrium_at_working_height(rp.working_height, params.source)
 
     # ------------------------------------------------------------------ topology
     def _build(self) -> None:
