@@ -9,16 +9,14 @@ only numpy, scipy and fmpy (never pantocosim), so it also runs in a bare venv::
 
 from __future__ import annotations
 
-import json
 import os
 import sys
-import traceback
 
 import numpy as np
 import scipy.sparse.linalg  # noqa: F401  (B5: import before loading FMUs)
 
 
-from fmu_probe import _logger_callbacks  # noqa: E402  (same folder; shared probe helpers)
+from fmu_probe import _logger_callbacks, main  # noqa: E402  (same folder; shared helpers)
 
 
 def _open(fmu, name="A"):
@@ -204,15 +202,4 @@ CHECKS = {"catenary_trace": catenary_trace, "catenary_penalty": catenary_penalty
           "catenary_bad_input": catenary_bad_input, "smoke": smoke}
 
 if __name__ == "__main__":
-    check, fmu = sys.argv[1], sys.argv[2]
-    args = json.loads(sys.argv[3]) if len(sys.argv) > 3 else {}
-    try:
-        result = CHECKS[check](fmu, args)
-        print("RESULT " + json.dumps(result))
-        sys.stdout.flush()
-        os._exit(0)
-    except Exception:
-        traceback.print_exc()
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(1)
+    main(CHECKS)

@@ -130,15 +130,22 @@ def pantograph_bad_input(fmu, args):
 
 CHECKS = {"pantograph_trace": pantograph_trace, "pantograph_bad_input": pantograph_bad_input}
 
-if __name__ == "__main__":
+def main(checks: dict) -> None:
+    """``python PROBE CHECK FMU [JSON-ARGS]``: run one check, print ``RESULT {json}``, and end
+    with ``os._exit`` (0, or 1 after a traceback)."""
     check, fmu = sys.argv[1], sys.argv[2]
     args = json.loads(sys.argv[3]) if len(sys.argv) > 3 else {}
     try:
-        result = CHECKS[check](fmu, args)
+        result = checks[check](fmu, args)
         print("RESULT " + json.dumps(result))
         sys.stdout.flush()
         os._exit(0)
     except Exception:
         traceback.print_exc()
         sys.stdout.flush()
+        sys.stderr.flush()
         os._exit(1)
+
+
+if __name__ == "__main__":
+    main(CHECKS)
