@@ -79,6 +79,20 @@ def _dshape(xi, L):
 
 
 @njit(cache=True)
+def _slope(E, dX, e, dS):
+    """r' = sum_a dS_a e_a at a point of element e (x stored relative to the stations: the
+    station difference dX enters through the second node's position shape function)."""
+    r0 = dS[2] * dX[e, 0]
+    r1 = dS[2] * dX[e, 1]
+    r2 = dS[2] * dX[e, 2]
+    for a in range(4):
+        r0 += dS[a] * E[e, 3 * a]
+        r1 += dS[a] * E[e, 3 * a + 1]
+        r2 += dS[a] * E[e, 3 * a + 2]
+    return r0, r1, r2
+
+
+@njit(cache=True)
 def cable_forces(E, dX, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
     """Internal forces f = dU/de (ne x 12) and, if want_K, the tangent dF/de (ne x 12 x 12).
 
@@ -116,13 +130,7 @@ def cable_forces(E, dX, Le, EA, EI, N0, gx, gw, want_K, f_out, K_out):
             dS[2] = tab[g, 2] * iL
             dS[3] = tab[g, 3]
             w = gw[g] * L
-            r0 = dS[2] * dX[e, 0]
-            r1 = dS[2] * dX[e, 1]
-            r2 = dS[2] * dX[e, 2]
-            for a in range(4):
-                r0 += dS[a] * E[e, 3 * a]
-                r1 += dS[a] * E[e, 3 * a + 1]
-                r2 += dS[a] * E[e, 3 * a + 2]
+            r0, r1, r2 = _slope(E, dX, e, dS)
             eps = 0.5 * (r0 * r0 + r1 * r1 + r2 * r2 - 1.0)
             N = n0 + ea * eps
             for a in range(4):
@@ -202,13 +210,7 @@ def cable_tension_measures(E, dX, Le, EA, N0, gx, gw, h_out, dh_de, dh_dN0, df_d
         for g in range(ng):
             dS = _dshape(gx[g], L)
             w = gw[g] * L
-            r0 = dS[2] * dX[e, 0]
-            r1 = dS[2] * dX[e, 1]
-            r2 = dS[2] * dX[e, 2]
-            for a in range(4):
-                r0 += dS[a] * E[e, 3 * a]
-                r1 += dS[a] * E[e, 3 * a + 1]
-                r2 += dS[a] * E[e, 3 * a + 2]
+            r0, r1, r2 = _slope(E, dX, e, dS)
             eps = 0.5 * (r0 * r0 + r1 * r1 + r2 * r2 - 1.0)
             N = N0[e] + ea * eps
             h_out[e] += w * N * r0
