@@ -27,9 +27,9 @@ MAX_SUPPORTS = 64
 class ModelSubsystem:
     """A model with its own HHT integrator behind the FMU port semantics (in-process)."""
 
-    def __init__(self, model, q0, alpha: float, inputs0, outputs, reuse: bool = False):
+    def __init__(self, model, q0, settings: HHTSettings, inputs0, outputs):
         self.model = model
-        self.integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=reuse))
+        self.integ = HHTIntegrator(model, settings)
         self.integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.asarray(inputs0, float))
         self._outputs = outputs
         self._forces = np.asarray(inputs0, float).copy()
@@ -118,14 +118,14 @@ def in_process_subsystems(prep: Prepared):
     """Catenary and pantograph models as in-process subsystems, in the static start."""
     cat = prep.catenary
     sc = prep.scenario
-    csub = ModelSubsystem(cat, prep.q_cat0, sc.alpha, prep.static_forces,
+    csub = ModelSubsystem(cat, prep.q_cat0, HHTSettings.for_runs(sc.alpha, sc.newton_rtol),
+                          prep.static_forces,
                           lambda integ: (cat.wire_height(integ.t, integ.q),
-                                         cat.wire_velocity(integ.t, integ.q, integ.v)),
-                          reuse="step")
+                                         cat.wire_velocity(integ.t, integ.q, integ.v)))
     psubs = []
     for k, pan in enumerate(prep.pantographs):
         psubs.append(ModelSubsystem(
-            pan, prep.q_pan0[k], sc.alpha, prep.static_forces[k:k + 1],
+            pan, prep.q_pan0[k], HHTSettings(alpha=sc.alpha), prep.static_forces[k:k + 1],
             lambda integ, pan=pan: (np.array([pan.contact_height(integ.q)]),
                                     np.array([pan.contact_velocity(integ.q, integ.v)]))))
     return csub, psubs
@@ -184,7 +184,7 @@ def fmu_subsystems(prep: Prepared, instances: list):
     cat_fmu = FmuInstance(cat_path, "catenary")
     instances.append(cat_fmu)
     params = {"catenary": sc.catenary, "speed_kmh": sc.speed_kmh, "n_pantographs": n_p,
-              "hht_alpha": sc.alpha, "contact_mode": 0}
+              "hht_alpha": sc.alpha, "contact_mode": 0, "newton_rtol": sc.newton_rtol}
     if sc.spans:
         params["spans"] = sc.spans
     for k, spec in enumerate(sc.pantographs, start=1):

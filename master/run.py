@@ -192,7 +192,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     sc = prep.scenario
     system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
     q0 = np.concatenate([prep.q_cat0] + list(prep.q_pan0))
-    integ = HHTIntegrator(system, HHTSettings(alpha=sc.alpha, reuse_factorization="step"))
+    integ = HHTIntegrator(system, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
     integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
     n_p = len(prep.pantographs)
     names = column_names(n_p, len(prep.support_x))

@@ -21,6 +21,7 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
     [simulation]
     dt = 0.001                     # time step [s]
     alpha = -0.05                  # HHT alpha
+    newton_rtol = 1e-4             # Newton residual tolerance (relative)
     duration_s = 5.0               # optional; default: until the last pantograph leaves the
                                    # analysis window
 
@@ -37,6 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.hht import RUN_RTOL
 from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -71,6 +73,7 @@ class Scenario:
     window_m: tuple[float, float] | None
     dt: float = 1e-3
     alpha: float = -0.05
+    newton_rtol: float = RUN_RTOL
     duration_s: float | None = None
     contact_stiffness: float = 50_000.0
     contact_damping: float = 0.0
@@ -147,7 +150,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         raise ParameterError("analysis.window_supports", None,
                              "missing field (or give analysis.window_m)", source)
     sim = root.sub("simulation", required=False)
-    sim.unknown_keys({"dt", "alpha", "duration_s"})
+    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol"})
     contact = root.sub("contact", required=False)
     contact.unknown_keys({"stiffness", "damping"})
     sc = Scenario(
@@ -159,6 +162,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         pantographs=specs, window_supports=window_supports, window_m=window_m,
         dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
         alpha=sim.number("alpha", -0.05, minimum=-1.0 / 3.0, maximum=0.0),
+        newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True, maximum=1e-2),
         duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))

@@ -70,7 +70,7 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
         assert v[name].causality == "parameter" and v[name].type == typ, name
     assert v["catenary"].start == "en50318" and float(v["hht_alpha"].start) == -0.05
     assert float(v["contact_stiffness"].start) == 50000.0
-    assert int(v["factorization"].start) == 1
+    assert int(v["factorization"].start) == 2
     ports = {(x.name, x.causality, x.unit) for x in md.modelVariables
              if x.causality in ("input", "output")}
     expected = set()
@@ -93,7 +93,8 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
 @pytest.mark.parametrize("policy", [1, 2])
 def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus, policy):
     """Same forces through FMI as into CatenaryModel + HHTIntegrator with the same
-    factorization policy (1: once per step, the default; 2: reuse across steps)."""
+    factorization policy (1: once per step; 2: reuse across steps, the default) and the run
+    settings (linear predictor, Newton tolerance newton_rtol)."""
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
     x0, F0 = [30.0, 95.0], [120.0, 100.0]
@@ -102,13 +103,15 @@ def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus, policy):
     forces = np.column_stack([F0[0] + 30 * np.sin(2 * np.pi * 5 * t),
                               F0[1] + 20 * np.sin(2 * np.pi * 3 * t) + 40 * t])
     params = dict(SHORT, n_pantographs=2, position_1=x0[0], position_2=x0[1],
-                  static_force_1=F0[0], static_force_2=F0[1], factorization=policy)
+                  static_force_1=F0[0], static_force_2=F0[1], factorization=policy,
+                  newton_rtol=1e-6)
     res = probe("catenary_trace", fmus["catenary"], params=params, forces=forces.tolist(),
                 n_uplift=5)
-    # in-process reference: CatenaryModel + HHTIntegrator(reuse_factorization=True)
+    # in-process reference: CatenaryModel + HHTIntegrator with the same settings
     m = short_catenary(x0)
-    reuse = {1: "step", 2: True}[policy]
-    integ = HHTIntegrator(m, HHTSettings(alpha=-0.05, reuse_factorization=reuse))
+    settings = HHTSettings.for_runs(-0.05, 1e-6)
+    settings.reuse_factorization = {1: "step", 2: True}[policy]
+    integ = HHTIntegrator(m, settings)
     integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
     ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
     for F in forces:

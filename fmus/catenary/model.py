@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.linalg.lapack import dpbtrf as _dpbtrf, dpbtrs as _dpbtrs
 
+from ..core.banded import BandedCholesky
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
 from .contact import ContactLocator, ContactPoint
@@ -90,6 +90,10 @@ class CatenaryModel(SecondOrderModel):
         self._slack_committed = np.zeros(len(db), dtype=bool)
         self._C_data = self._C_base.copy()
         self._C_key = self._slack_committed.tobytes()
+        # for the residual: M on its own (sparser) pattern
+        self._M_own = S.mass.copy()
+        self._M_own.eliminate_zeros()
+        self._C = S.csr(self._C_data)
         self._cp_cache: tuple | None = None
 
     # ------------------------------------------------------------------ geometry
@@ -194,6 +198,7 @@ class CatenaryModel(SecondOrderModel):
             if slack.any():
                 scatter_add(C, self._dropper_pos[slack].ravel(), -self._dropper_C[slack].ravel())
             self._C_data, self._C_key = C, key
+            self._C = self.structure.csr(C)
         return self._C_data
 
     def input_vector(self, t: float, inputs) -> np.ndarray:
@@ -215,16 +220,20 @@ class CatenaryModel(SecondOrderModel):
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         S = self.structure
         f, K, slack_now = S.internal(S.full(q), tangent)
-        db = self.mesh.dropper_bars
-        slack_now = slack_now[db]
+        slack_now = slack_now[self.mesh.dropper_bars]
         Cd = self._damping_data(self._slack_committed)
-        C = S.csr(Cd)
-        f_rest = C @ v + f[S.free] - self.weight - self.input_vector(t, inputs)
-        ev = Evaluation(f_inertia=self.M @ a, f_rest=f_rest,
+        # M a on M's own (sparser) pattern; C v on the shared pattern
+        Ma = self._M_own @ a
+        f_rest = self._C @ v
+        f_rest += f[S.free]
+        f_rest -= self.weight
+        if inputs is not None:
+            f_rest -= self.input_vector(t, inputs)
+        ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
                         structure_key=(slack_now.tobytes(), self._C_key))
         if tangent:
             ev.mass = self.M
-            ev.damping = C
+            ev.damping = S.csr(Cd)
             ev.stiffness = S.csr(K)
         return ev
 
@@ -234,17 +243,14 @@ class CatenaryModel(SecondOrderModel):
         return self.structure.csr(data)
 
     def factorize(self, S):
-        """Banded Cholesky (LAPACK dpbtrf) of a matrix on the model's pattern: the DOF
-        numbering keeps the bandwidth at a few stations whatever the line length. Falls
-        back to sparse LU if the matrix is not positive definite."""
+        """Banded Cholesky (LAPACK dpbtrf, :class:`BandedCholesky`, which caches unit-vector
+        solves) of a matrix on the model's pattern: the DOF numbering keeps the bandwidth at
+        a few stations whatever the line length. Falls back to sparse LU if the matrix is
+        not positive definite."""
         st = self.structure
         if sp.issparse(S) and S.shape == (st.n_free, st.n_free) and S.nnz == st.nnz:
-            ab = st.lower_band(sp.csr_matrix(S).data)
-            cb, info = _dpbtrf(ab, lower=1, overwrite_ab=1)
-            if info == 0:
-                def solve(rhs, cb=cb):
-                    x, inf = _dpbtrs(cb, rhs, lower=1)
-                    return x
+            solve = BandedCholesky.factor(st.lower_band(sp.csr_matrix(S).data))
+            if solve is not None:
                 return solve
         lu = spla.splu(sp.csc_matrix(S))
         return lu.solve

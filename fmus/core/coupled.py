@@ -75,7 +75,7 @@ class CoupledSystem(SecondOrderModel):
         vc, vps = self.split(v)
         ac, aps = self.split(a)
         n_p = len(self.pantographs)
-        ev_c = self.catenary.evaluate(t, qc, vc, ac, np.zeros(n_p), tangent=tangent)
+        ev_c = self.catenary.evaluate(t, qc, vc, ac, None, tangent=tangent)
         ev_p = [p.evaluate(t, qps[k], vps[k], aps[k], np.zeros(1), tangent=tangent)
                 for k, p in enumerate(self.pantographs)]
         f_in = np.concatenate([ev_c.f_inertia] + [e.f_inertia for e in ev_p])
@@ -132,35 +132,46 @@ class CoupledSystem(SecondOrderModel):
                 x[o:e] = ps(r[o:e])
             return x
 
-        def solve(r):
-            r = np.asarray(r, dtype=float)
-            x = block_solve(r)
-            t, lin = self._contact_lin
-            if not lin:
-                return x
+        def contact_update(lin):
+            """A^-1 U (n x m), V^T as (pantograph slice, values, catenary dofs, values) rows
+            and I + V^T A^-1 U for the current contact linearisation."""
             m = len(lin)
             AU = np.empty((self.n_dofs, m))
-            Vt = np.zeros((m, self.n_dofs))
+            rows = []
             for j, (k, cp, g, dF, cF, wq_c) in enumerate(lin):
                 o = self.offsets[k]
-                key = (t, k, g.tobytes())
+                key = (self._contact_lin[0], k, g.tobytes())
                 col = cache.get(key)
                 if col is None:
-                    u = np.zeros(self.n_dofs)
-                    u[o:o + g.size] = g
-                    np.add.at(u, cp.dofs, -cp.weights)
-                    col = block_solve(u)
+                    col = np.zeros(self.n_dofs)
+                    if cp.dofs.size:
+                        col[:n_cat] = _sparse_solve(cat_solve, n_cat, cp.dofs, -cp.weights)
+                    ps = pan_solves[k]
+                    col[o:o + g.size] = np.asarray(ps(g), dtype=float).reshape(g.size)
                     if len(cache) > 64:
                         cache.clear()
                     cache[key] = col
                 AU[:, j] = col
                 # V_j = c_f (dF w + c_v cF w + convective part)
-                vj = np.zeros(self.n_dofs)
-                vj[o:o + g.size] = (dF + S.c_v * cF) * g
-                np.add.at(vj, cp.dofs, wq_c - S.c_v * cF * cp.weights)
-                Vt[j] = S.c_f * vj
-            small = np.eye(m) + Vt @ AU
-            return x - AU @ np.linalg.solve(small, Vt @ x)
+                rows.append((slice(o, o + g.size), S.c_f * (dF + S.c_v * cF) * g, cp.dofs,
+                             S.c_f * (wq_c - S.c_v * cF * cp.weights)))
+            Vt_AU = np.array([[row[1] @ AU[row[0], i] + row[3] @ AU[row[2], i]
+                               for i in range(m)] for row in rows])
+            return AU, rows, np.eye(m) + Vt_AU
+
+        memo = [None, None]
+
+        def solve(r):
+            r = np.asarray(r, dtype=float)
+            x = block_solve(r)
+            lin = self._contact_lin[1]
+            if not lin:
+                return x
+            if memo[0] is not lin:
+                memo[0], memo[1] = lin, contact_update(lin)
+            AU, rows, small = memo[1]
+            vx = np.array([row[1] @ x[row[0]] + row[3] @ x[row[2]] for row in rows])
+            return x - AU @ np.linalg.solve(small, vx)
 
         return solve
 
@@ -255,6 +266,16 @@ class RigidWire(SecondOrderModel):
         empty_i, empty_f = np.zeros(0, dtype=int), np.zeros(0)
         return [SimpleNamespace(dofs=empty_i, weights=empty_f, offset=float(z),
                                 dweights_dx=empty_f, doffset_dx=0.0) for z in heights]
+
+
+def _sparse_solve(solve, n, dofs, values):
+    """solve(b) for b with ``values`` at ``dofs``: from the solver's cached unit-vector
+    solves when it offers them (:class:`~pantocosim.core.banded.BandedCholesky`)."""
+    if hasattr(solve, "solve_sparse"):
+        return solve.solve_sparse(dofs, values)
+    b = np.zeros(n)
+    np.add.at(b, dofs, values)
+    return solve(b)
 
 
 class _BlockNewton:

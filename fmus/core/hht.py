@@ -27,6 +27,11 @@ from .errors import ConvergenceError, ParameterError
 from .model import SecondOrderModel
 
 
+#: Newton residual tolerance of simulation runs, relative to the largest force in the
+#: residual (:meth:`HHTSettings.for_runs`)
+RUN_RTOL = 1e-4
+
+
 @dataclass
 class HHTSettings:
     alpha: float = -0.05
@@ -40,8 +45,24 @@ class HHTSettings:
     #: the step (chord method); True = also reuse it across steps while the model's
     #: structure_key and the step size are unchanged (modified Newton)
     reuse_factorization: bool | str = False
-    #: with reuse, refresh the factorization when a step needs more iterations than this
+    #: with reuse across steps: a step that needed more iterations than this marks the
+    #: factorization stale, so the next step refactorizes at its first iteration; a step
+    #: still unconverged after ``refresh_after + 4`` iterations refactorizes at once
     refresh_after: int = 6
+    #: Newton starting guess: "constant" (a_{n+1} = a_n) or "linear" (a_{n+1} = 2 a_n -
+    #: a_{n-1}, which follows a load moving along the wire much better); the converged
+    #: solution does not depend on it
+    predictor: str = "constant"
+
+    @classmethod
+    def for_runs(cls, alpha: float, rtol: float | None = None) -> "HHTSettings":
+        """The settings of simulation runs (monolithic solver, co-simulation subsystems,
+        catenary FMU): one factorization kept across steps and refreshed after a step that
+        needed more than two iterations, the linear predictor, and the residual tolerance
+        ``rtol`` (default :data:`RUN_RTOL`; docs/performance.md shows its effect on the
+        contact force is far below the time-discretization error)."""
+        return cls(alpha=alpha, rtol=RUN_RTOL if rtol is None else float(rtol),
+                   reuse_factorization=True, refresh_after=2, predictor="linear")
 
     def validate(self, source: str | None = None) -> None:
         if not np.isfinite(self.alpha) or not (-1.0 / 3.0 <= self.alpha <= 0.0):
@@ -51,6 +72,9 @@ class HHTSettings:
                                  'must be false, true or "step"', source)
         if not (self.rtol > 0) or not (self.etol >= 0):
             raise ParameterError("rtol", self.rtol, "tolerances must be positive", source)
+        if self.predictor not in ("constant", "linear"):
+            raise ParameterError("predictor", self.predictor, 'must be "constant" or "linear"',
+                                 source)
         if int(self.max_iterations) < 1:
             raise ParameterError("max_iterations", self.max_iterations, "must be >= 1", source)
 
@@ -90,7 +114,9 @@ class HHTIntegrator:
         self.q = np.zeros(n)
         self.v = np.zeros(n)
         self.a = np.zeros(n)
+        self.a_prev = None      # a_{n-1}, for the linear predictor
         self.f_rest = np.zeros(n)
+        self._stale = False     # refactorize at the next step (reuse across steps)
         self.inputs = None
         self._factor = None  # (key, h, matrix, solve)
         self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
@@ -114,8 +140,10 @@ class HHTIntegrator:
         else:
             self.a = np.array(a0, dtype=float).reshape(n)
         self.f_rest = np.array(ev.f_rest, dtype=float)
+        self.a_prev = None
         self.n_steps = 0
         self._factor = None
+        self._stale = False
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
 
     # ------------------------------------------------------------------ stepping
@@ -132,20 +160,24 @@ class HHTIntegrator:
 
         q_p = self.q + h * self.v + (0.5 - beta) * h * h * self.a
         v_p = self.v + (1.0 - gamma) * h * self.a
-        q = q_p + beta * h * h * self.a  # predictor: a_{n+1} = a_n
+        a_guess = self.a
+        if s.predictor == "linear" and self.a_prev is not None:
+            a_guess = 2.0 * self.a - self.a_prev
+        q = q_p + beta * h * h * a_guess
         hist = alpha * self.f_rest
         # a model may state the size of its forces (e.g. its weight): the residual test then
         # holds in quasi-static motion, where every force in R is small
         force_floor = max(float(getattr(model, "force_scale", 0.0)), 1e-300)
 
-        factor = self._factor if s.reuse_factorization is True else None
+        factor = self._factor if s.reuse_factorization is True and not self._stale else None
         if factor is not None and factor[1] != h:
             factor = None
         # "step" policy: a step redone from the same state (co-simulation rollback) meets the
         # same predictor, hence the same first Newton matrix: reuse its factorization
         redo_key = None
         if s.reuse_factorization == "step":
-            redo_key = (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes())
+            redo_key = (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes(),
+                        None if self.a_prev is None else self.a_prev.tobytes())
             memo = self._redo_memo
             if memo is not None and memo[0] == redo_key:
                 factor = memo[1]
@@ -157,7 +189,7 @@ class HHTIntegrator:
             dqp = q - q_p
             a = c_a * dqp
             v = v_p + c_v * dqp
-            need_tangent = (factor is None or (k > s.refresh_after)
+            need_tangent = (factor is None or (k > s.refresh_after + 4)
                             or (s.reuse_factorization is False and k > 0))
             ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
             if factor is not None and not need_tangent and ev.structure_key != factor[0]:
@@ -201,6 +233,7 @@ class HHTIntegrator:
                 f"{s.max_iterations} iterations", time=t1, step=self.n_steps + 1,
                 residual=res_norm)
         self.t = t1
+        self.a_prev = self.a
         self.q, self.v, self.a = q, v, a
         self.f_rest = np.array(ev.f_rest, dtype=float)
         self.inputs = None if inputs is None else inputs.copy()
@@ -209,6 +242,7 @@ class HHTIntegrator:
         self.total_factorizations += refactorizations
         if s.reuse_factorization is True:
             self._factor = factor
+            self._stale = k > s.refresh_after
         model.commit(self.t, self.q, self.v, self.a, self.inputs)
         return StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
 
@@ -218,6 +252,8 @@ class HHTIntegrator:
         return {
             "t": self.t, "n_steps": self.n_steps,
             "q": self.q.copy(), "v": self.v.copy(), "a": self.a.copy(),
+            "a_prev": None if self.a_prev is None else self.a_prev.copy(),
+            "stale": self._stale,
             "f_rest": self.f_rest.copy(),
             "inputs": None if self.inputs is None else self.inputs.copy(),
             # the factorization is immutable once made: keep a reference (in-memory) and the
@@ -232,6 +268,9 @@ class HHTIntegrator:
         self.q = np.array(state["q"], dtype=float)
         self.v = np.array(state["v"], dtype=float)
         self.a = np.array(state["a"], dtype=float)
+        a_prev = state.get("a_prev")
+        self.a_prev = None if a_prev is None else np.array(a_prev, dtype=float)
+        self._stale = bool(state.get("stale", False))
         self.f_rest = np.array(state["f_rest"], dtype=float)
         self.inputs = None if state["inputs"] is None else np.array(state["inputs"], float)
         factor = state.get("factor")

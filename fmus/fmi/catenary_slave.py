@@ -11,7 +11,7 @@ parameters
   ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
   contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``,
   ``factorization`` (HHT Newton matrix policy: 0 full Newton, 1 once per step, 2 reuse
-  across steps).
+  across steps, the default), ``newton_rtol`` (Newton residual tolerance).
 inputs
   ``contact_force_k`` [N] (mode 0), ``pantograph_height_k`` [m] and
   ``pantograph_velocity_k`` [m/s] (mode 1).
@@ -92,9 +92,14 @@ class CatenarySlave(IntegratorSlave):
                      "as the height at t + h (an iterating master)")
         self.integer("n_substeps", 1, "integration steps per communication step (inputs "
                      "interpolated linearly)")
-        self.integer("factorization", 1, "Newton matrix policy of the HHT solver: 0 = full "
+        self.integer("factorization", 2, "Newton matrix policy of the HHT solver: 0 = full "
                      "Newton (refactorize every iteration), 1 = factorize once per step "
-                     "(chord), 2 = reuse across steps while the structure is unchanged")
+                     "(chord), 2 = reuse across steps (refreshed when droppers change state "
+                     "or a step needs more than 2 iterations; linear predictor)")
+        from pantocosim.core.hht import RUN_RTOL
+
+        self.real("newton_rtol", RUN_RTOL, "parameter", "1", "Newton residual tolerance, "
+                  "relative to the largest force in the residual")
         for k in range(1, MAX_PANTOGRAPHS + 1):
             self.real(f"contact_force_{k}", 0.0, "input", "N",
                       f"contact_mode 0: upward contact force of pantograph {k} on the wire, "
@@ -212,8 +217,11 @@ class CatenarySlave(IntegratorSlave):
         if policy not in (0, 1, 2):
             raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
                                  "per step) or 2 (reuse across steps)")
-        settings = HHTSettings(alpha=alpha,
-                               reuse_factorization={0: False, 1: "step", 2: True}[policy])
+        rtol = self.finite("newton_rtol", self.newton_rtol)
+        if not 0.0 < rtol <= 1e-2:
+            raise ParameterError("newton_rtol", rtol, "must lie in (0, 1e-2]")
+        settings = HHTSettings.for_runs(alpha, rtol)
+        settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
         self._model, self._n, self._mode = model, n, mode
         if mode == 0:
             integ = HHTIntegrator(model, settings)
