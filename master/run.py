@@ -235,6 +235,8 @@ class RunResult:
     columns: dict
     wall_time_s: float
     error: Exception | None = None
+    #: wall time spent before the time stepping (co-simulation: FMU set-up)
+    setup_time_s: float = 0.0
     summary: dict = field(default_factory=dict)
     coupling_iterations: np.ndarray | None = None
 
@@ -261,6 +263,7 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
         "speed_kmh": sc.speed_kmh,
         "dt_s": sc.dt,
         "wall_time_s": result.wall_time_s,
+        "setup_time_s": result.setup_time_s,
         "simulated_time_s": float(c["time"][-1]) if len(c["time"]) else 0.0,
         "steps": int(len(c["time"]) - 1),
         "analysis_window_m": list(prep.window_m),

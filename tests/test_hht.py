@@ -169,3 +169,32 @@ def test_step_policy_redo_reuses_factorization_bitwise():
     again = integ.step(1e-2)
     assert np.array_equal(integ.q, q1)
     assert first.refactorizations == 1 and again.refactorizations == 0
+
+
+def test_run_settings_converge_to_the_tight_solution_and_roll_back_bitwise():
+    """HHTSettings.for_runs (factorization kept across steps, linear predictor, loose
+    tolerance): the solution stays within the tolerance's reach of the tight full-Newton one,
+    the linear predictor starts closer to it, and a rollback (which must restore a_{n-1})
+    repeats the steps bitwise."""
+    model = _Cubic(eps=3.0)
+    runs = {}
+    for name, s in {"tight": HHTSettings(alpha=-0.1),
+                    "runs": HHTSettings.for_runs(-0.1, 1e-6),
+                    "constant": HHTSettings.for_runs(-0.1, 1e-6)}.items():
+        if name == "constant":
+            s.predictor = "constant"
+        integ = HHTIntegrator(model, s)
+        integ.initialize(0.0, [1.0], [0.0])
+        for _ in range(300):
+            integ.step(1e-2)
+        runs[name] = integ
+    assert abs(runs["runs"].q[0] - runs["tight"].q[0]) < 1e-5
+    assert runs["runs"].total_iterations < runs["constant"].total_iterations
+    integ = runs["runs"]
+    saved = integ.get_state()
+    first = [integ.step(1e-2) and integ.q.copy() for _ in range(5)]
+    integ.set_state(saved)
+    second = [integ.step(1e-2) and integ.q.copy() for _ in range(5)]
+    assert all(np.array_equal(x, y) for x, y in zip(first, second))
+    with pytest.raises(ParameterError, match="predictor"):
+        HHTSettings(predictor="quadratic").validate()

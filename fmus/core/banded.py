@@ -37,26 +37,33 @@ class BandedCholesky:
         x, _ = dpbtrs(self.cb, rhs, lower=1)
         return x
 
-    def columns(self, dofs) -> np.ndarray:
-        """(n, len(dofs)) array of A^-1 e_j for j in dofs (cached)."""
-        dofs = np.asarray(dofs, dtype=np.int64)
-        out = np.empty((self.n, dofs.size))
+    def _cached(self, dofs) -> list:
+        """The cached solves A^-1 e_j for j in dofs (computing the missing ones at once)."""
         cache = self._columns
-        missing = [int(j) for j in dofs if int(j) not in cache]
+        dofs = [int(j) for j in np.asarray(dofs, dtype=np.int64)]
+        missing = [j for j in dofs if j not in cache]
         if missing:
             E = np.zeros((self.n, len(missing)))
             E[missing, np.arange(len(missing))] = 1.0
             X = self(E)
             for i, j in enumerate(missing):
                 cache[j] = np.ascontiguousarray(X[:, i])
-        for i, j in enumerate(dofs):
-            col = cache[int(j)]
-            cache.move_to_end(int(j))
-            out[:, i] = col
-        while len(cache) > max(self.cache_size, dofs.size):
+        out = []
+        for j in dofs:
+            cache.move_to_end(j)
+            out.append(cache[j])
+        while len(cache) > max(self.cache_size, len(dofs)):
             cache.popitem(last=False)
         return out
 
+    def columns(self, dofs) -> np.ndarray:
+        """(n, len(dofs)) array of A^-1 e_j for j in dofs (cached)."""
+        cols = self._cached(dofs)
+        return np.column_stack(cols) if cols else np.zeros((self.n, 0))
+
     def solve_sparse(self, dofs, values) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere)."""
-        return self.columns(dofs) @ np.asarray(values, dtype=float)
+        x = np.zeros(self.n)
+        for col, w in zip(self._cached(dofs), np.asarray(values, dtype=float)):
+            x += w * col
+        return x

@@ -136,7 +136,7 @@ class CoupledSystem(SecondOrderModel):
             """A^-1 U (n x m), V^T as (pantograph slice, values, catenary dofs, values) rows
             and I + V^T A^-1 U for the current contact linearisation."""
             m = len(lin)
-            AU = np.empty((self.n_dofs, m))
+            cols = []
             rows = []
             for j, (k, cp, g, dF, cF, wq_c) in enumerate(lin):
                 o = self.offsets[k]
@@ -151,10 +151,11 @@ class CoupledSystem(SecondOrderModel):
                     if len(cache) > 64:
                         cache.clear()
                     cache[key] = col
-                AU[:, j] = col
+                cols.append(col)
                 # V_j = c_f (dF w + c_v cF w + convective part)
                 rows.append((slice(o, o + g.size), S.c_f * (dF + S.c_v * cF) * g, cp.dofs,
                              S.c_f * (wq_c - S.c_v * cF * cp.weights)))
+            AU = cols[0][:, None] if m == 1 else np.column_stack(cols)
             Vt_AU = np.array([[row[1] @ AU[row[0], i] + row[3] @ AU[row[2], i]
                                for i in range(m)] for row in rows])
             return AU, rows, np.eye(m) + Vt_AU
