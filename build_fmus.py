@@ -267,7 +267,8 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
                             pantograph: str, stop_time: float, contact_stiffness=50_000.0,
                             contact_damping=0.0, hht_alpha=-0.05, spans: int = 0,
                             step_size: float | None = None, handshake: dict | None = None,
-                            pantograph_parameters: dict | None = None) -> dict:
+                            pantograph_parameters: dict | None = None,
+                            newton_rtol: float | None = None) -> dict:
     """Write an SSP 1.0 archive (SystemStructure.ssd + resources/*.fmu) of one pantograph FMU
     on the catenary FMU in contact_mode 1 (built-in penalty), with the static start
     handshake (``handshake``: static_force, wire_height, initial_height, support_x; default
@@ -291,6 +292,8 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
                   "contact_mode": 1, "contact_stiffness": float(contact_stiffness),
                   "contact_damping": float(contact_damping), "n_substeps": 1,
                   "extrapolate_heights": True}
+    if newton_rtol is not None:
+        cat_params["newton_rtol"] = float(newton_rtol)
     # a zero-order-hold master hands over values of the start of each step: both FMUs
     # extrapolate them to the end of the step (first-order hold)
     pan_params = {"speed_kmh": float(speed_kmh), "hht_alpha": float(hht_alpha),
