@@ -266,6 +266,7 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
         "setup_time_s": result.setup_time_s,
         "simulated_time_s": float(c["time"][-1]) if len(c["time"]) else 0.0,
         "steps": int(len(c["time"]) - 1),
+        "catenary_dofs": int(prep.catenary.n_dofs),
         "analysis_window_m": list(prep.window_m),
         "target_mean_n": [float(p.options.mean_uplift) for p in prep.pantographs],
         "statistics": stats[0].as_dict() if stats else None,

@@ -13,6 +13,7 @@ def add_parser(sub):
                        "floor_ratio, cosim_over_monolithic, implicit_over_explicit.")
     p.add_argument("--quick", action="store_true", help="shorter simulated times")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.add_argument("--out", help="also write the results as JSON to this file")
     return p
 
 
@@ -22,4 +23,8 @@ def run(args) -> int:
     res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print)
     if args.json:
         print(json.dumps(res, indent=2))
+    if args.out:
+        from pathlib import Path
+
+        Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
     return 0
