@@ -149,8 +149,10 @@ def bench(quick: bool = False, printer=print) -> dict:
         printer(f"{name}: floor {1e3 * case['floor_solve_s']:.3f} ms/solve, cosim_over_monolithic "
                 f"{case['cosim_over_monolithic']:.2f}, implicit_over_explicit "
                 f"{case['implicit_over_explicit']:.2f}")
-    printer(f"cost per simulated second, 10/20/40 spans ({', '.join(str(dofs[k]) for k in "
-            f"(10, 20, 40))} DOFs): {', '.join(f'{scaling[k]:.1f} s' for k in (10, 20, 40))}; "
+    spans = (10, 20, 40)
+    dof_list = ", ".join(str(dofs[k]) for k in spans)
+    cost_list = ", ".join(f"{scaling[k]:.1f} s" for k in spans)
+    printer(f"cost per simulated second, 10/20/40 spans ({dof_list} DOFs): {cost_list}; "
             f"growth per doubling {growth[0]:.2f}, {growth[1]:.2f} (per DOF "
             f"{growth_per_dof[0]:.2f}, {growth_per_dof[1]:.2f})")
     cold = results["cold_first_run"]
