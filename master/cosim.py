@@ -38,7 +38,10 @@ class ModelSubsystem:
         self._forces = np.asarray(forces, float).copy()
 
     def step(self, t, h):
-        self.integ.step(h, self._forces)
+        self.last_newton_iterations = self.integ.step(h, self._forces).iterations
+
+    def newton_iterations(self) -> float:
+        return float(getattr(self, "last_newton_iterations", 0))
 
     def outputs(self):
         return self._outputs(self.integ)
@@ -98,12 +101,16 @@ class FmuCatenary(_FmuState):
         self.r_out = fmu.refs([f"wire_height_{i}" for i in k] + [f"wire_velocity_{i}" for i in k])
         self.n = n_pantographs
         self.r_uplift = fmu.refs([f"support_uplift_{j}" for j in range(n_supports)])
+        self.r_newton = fmu.refs(["newton_iterations"])
 
     def set_forces(self, forces):
         self.fmu.set_real(self.r_in, forces)
 
     def step(self, t, h):
         self.fmu.do_step(t, h)
+
+    def newton_iterations(self) -> float:
+        return float(self.fmu.get_real(self.r_newton)[0])
 
     def outputs(self):
         y = self.fmu.get_real(self.r_out)
@@ -272,9 +279,10 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
         finally:
             bar.close()
         iterations = np.array(coupler.iterations)
+        newton = np.array(coupler.catenary_newton_iterations)
     except PantocosimError as exc:
         error = exc
-        iterations = np.zeros(0)
+        iterations = newton = np.zeros(0)
     finally:
         rec.close()
         for inst in instances:
@@ -286,4 +294,5 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
                        wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall)
     result.coupling_iterations = iterations if scheme == "implicit" else None
+    result.newton_iterations = newton
     return result

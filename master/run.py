@@ -239,6 +239,8 @@ class RunResult:
     setup_time_s: float = 0.0
     summary: dict = field(default_factory=dict)
     coupling_iterations: np.ndarray | None = None
+    #: co-simulation: the catenary's Newton iterations per step (all coupling iterations)
+    newton_iterations: np.ndarray | None = None
 
     def statistics(self):
         prep = self.prep
@@ -277,6 +279,10 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
         "newton_iterations_mean": float(np.mean(c["iterations"][1:])) if len(c["time"]) > 1
         else 0.0,
     }
+    if result.newton_iterations is not None:
+        # co-simulation: the iterations column holds coupling iterations
+        summary["newton_iterations_mean"] = (float(np.mean(result.newton_iterations))
+                                             if len(result.newton_iterations) else 0.0)
     if result.coupling_iterations is not None and len(result.coupling_iterations):
         summary["coupling_iterations_mean"] = float(np.mean(result.coupling_iterations))
         summary["coupling_iterations_max"] = int(np.max(result.coupling_iterations))
