@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse.linalg  # noqa: F401  (B5: import before loading FMUs)
 
 
-from fmu_probe import _logger_callbacks, main  # noqa: E402  (same folder; shared helpers)
+from fmu_probe import _init as _init_typed, main  # noqa: E402  (same folder; shared helpers)
 
 
 def _open(fmu, name="A"):
@@ -35,19 +35,8 @@ def _open(fmu, name="A"):
 
 def _init(s, params: dict, messages=None):
     """instantiate + setup + parameters (by name, typed from the model description) + init."""
-    cb = None
-    if messages is not None:
-        cb = _logger_callbacks(messages)
-        s.instantiate(callbacks=cb[0], loggingOn=True)
-    else:
-        s.instantiate()
-    s.setupExperiment(startTime=0.0)
-    s.enterInitializationMode()
-    for name, value in params.items():
-        kind = s._pc_types[name]
-        getattr(s, f"set{kind}")([s._pc_vr[name]], [value])
-    s.exitInitializationMode()
-    return cb
+    return _init_typed(s, [(s._pc_vr[name], s._pc_types[name], value)
+                           for name, value in params.items()], messages)
 
 
 def _status(fn):
@@ -90,18 +79,25 @@ def catenary_trace(fmu, args):
         return out
 
     state = s.getFMUstate()
-    a = run10(s)
-    s.setFMUstate(state)
-    b = run10(s)
-    blob = s.serializeFMUstate(state)
-    s2 = _open(fmu, "B")[0]
-    _init(s2, params)
-    s2.setFMUstate(s2.deSerializeFMUstate(blob))
-    c = run10(s2)
+    a, b, c, blob = _replay(fmu, params, s, state, run10)
     n_sup = s.getReal([vr["n_supports"]])[0]
     return {"names": out_names, "initial": initial, "rows": rows, "rollback_equal": a == b,
             "serialized_equal": a == c, "state_bytes": len(blob), "n_supports": n_sup,
             "after": a}
+
+
+def _replay(fmu, params, s, state, run):
+    """``run`` from ``state`` (taken on ``s``), again after restoring it, and on a second
+    instance from the serialized state: (first, after rollback, after deserialization,
+    serialized bytes)."""
+    a = run(s)
+    s.setFMUstate(state)
+    b = run(s)
+    blob = s.serializeFMUstate(state)
+    s2 = _open(fmu, "B")[0]
+    _init(s2, params)
+    s2.setFMUstate(s2.deSerializeFMUstate(blob))
+    return a, b, run(s2), blob
 
 
 def catenary_penalty(fmu, args):
@@ -132,14 +128,7 @@ def catenary_penalty(fmu, args):
             out.append(slave.getReal(ovr))
         return out
 
-    a = run10(s)
-    s.setFMUstate(state)
-    b = run10(s)
-    blob = s.serializeFMUstate(state)
-    s2 = _open(fmu, "B")[0]
-    _init(s2, params)
-    s2.setFMUstate(s2.deSerializeFMUstate(blob))
-    c = run10(s2)
+    a, b, c, _ = _replay(fmu, params, s, state, run10)
     return {"initial": initial, "rows": rows, "rollback_equal": a == b,
             "serialized_equal": a == c}
 
