@@ -33,15 +33,16 @@ class ModelSubsystem:
         self.integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.asarray(inputs0, float))
         self._outputs = outputs
         self._forces = np.asarray(inputs0, float).copy()
+        self._newton_iterations = 0
 
     def set_forces(self, forces):
         self._forces = np.asarray(forces, float).copy()
 
     def step(self, t, h):
-        self.last_newton_iterations = self.integ.step(h, self._forces).iterations
+        self._newton_iterations = self.integ.step(h, self._forces).iterations
 
     def newton_iterations(self) -> float:
-        return float(getattr(self, "last_newton_iterations", 0))
+        return float(self._newton_iterations)
 
     def outputs(self):
         return self._outputs(self.integ)

@@ -114,7 +114,7 @@ class Subsystem:
     def get_state(self): ...
     def set_state(self, state) -> None: ...
     def free_state(self, state) -> None: ...
-    def newton_iterations(self) -> float: ...   # catenary: of its last step (0 if unknown)
+    def newton_iterations(self) -> float: ...   # catenary: Newton iterations of its last step
 
 
 class Coupler:
@@ -174,9 +174,12 @@ class Coupler:
         for k, p in enumerate(self.pans):
             p.set_forces(forces[k:k + 1])
 
-    def _step_all(self, t, h):
+    def _step_catenary(self, t, h):
         self.cat.step(t, h)
-        self._newton += getattr(self.cat, "newton_iterations", lambda: 0.0)()
+        self._newton += self.cat.newton_iterations()
+
+    def _step_all(self, t, h):
+        self._step_catenary(t, h)
         for p in self.pans:
             p.step(t, h)
 
@@ -235,8 +238,7 @@ class Coupler:
         elif scheme == "gauss-seidel":
             F = self._predicted_forces(t, h)
             self.cat.set_forces(F)
-            self.cat.step(t, h)
-            self._newton += getattr(self.cat, "newton_iterations", lambda: 0.0)()
+            self._step_catenary(t, h)
             F = self.contact_forces(predict_h=h)  # fresh wire, predicted pantograph height
             for k, p in enumerate(self.pans):
                 p.set_forces(F[k:k + 1])

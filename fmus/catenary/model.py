@@ -88,12 +88,12 @@ class CatenaryModel(SecondOrderModel):
         self._dropper_C = self.beta_r * Kb[db].reshape(len(db), 36)
         self._dropper_pos = S.pos_bar_blocks[db]
         self._slack_committed = np.zeros(len(db), dtype=bool)
-        self._C_data = self._C_base.copy()
+        # damping matrix for the committed slack set (see _damping)
+        self._C = S.csr(self._C_base.copy())
         self._C_key = self._slack_committed.tobytes()
         # for the residual: M on its own (sparser) pattern
         self._M_own = S.mass.copy()
         self._M_own.eliminate_zeros()
-        self._C = S.csr(self._C_data)
         self._cp_cache: tuple | None = None
 
     # ------------------------------------------------------------------ geometry
@@ -191,15 +191,16 @@ class CatenaryModel(SecondOrderModel):
         return np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), phi
 
     # ------------------------------------------------------------------ dynamics
-    def _damping_data(self, slack):
+    def _damping(self, slack) -> sp.csr_matrix:
+        """C on the shared pattern without the Rayleigh share of the ``slack`` droppers
+        (rebuilt only when the set changes)."""
         key = slack.tobytes()
         if key != self._C_key:
             C = self._C_base.copy()
             if slack.any():
                 scatter_add(C, self._dropper_pos[slack].ravel(), -self._dropper_C[slack].ravel())
-            self._C_data, self._C_key = C, key
-            self._C = self.structure.csr(C)
-        return self._C_data
+            self._C, self._C_key = self.structure.csr(C), key
+        return self._C
 
     def input_vector(self, t: float, inputs) -> np.ndarray:
         """sum_k N_k^T F_k on the free DOFs (upward contact forces)."""
@@ -221,10 +222,10 @@ class CatenaryModel(SecondOrderModel):
         S = self.structure
         f, K, slack_now = S.internal(S.full(q), tangent)
         slack_now = slack_now[self.mesh.dropper_bars]
-        Cd = self._damping_data(self._slack_committed)
+        C = self._damping(self._slack_committed)
         # M a on M's own (sparser) pattern; C v on the shared pattern
         Ma = self._M_own @ a
-        f_rest = self._C @ v
+        f_rest = C @ v
         f_rest += f[S.free]
         f_rest -= self.weight
         if inputs is not None:
@@ -233,7 +234,7 @@ class CatenaryModel(SecondOrderModel):
                         structure_key=(slack_now.tobytes(), self._C_key))
         if tangent:
             ev.mass = self.M
-            ev.damping = S.csr(Cd)
+            ev.damping = C
             ev.stiffness = S.csr(K)
         return ev
 

@@ -156,9 +156,12 @@ class CoupledSystem(SecondOrderModel):
                 rows.append((slice(o, o + g.size), S.c_f * (dF + S.c_v * cF) * g, cp.dofs,
                              S.c_f * (wq_c - S.c_v * cF * cp.weights)))
             AU = cols[0][:, None] if m == 1 else np.column_stack(cols)
-            Vt_AU = np.array([[row[1] @ AU[row[0], i] + row[3] @ AU[row[2], i]
-                               for i in range(m)] for row in rows])
+            Vt_AU = np.array([[v_dot(row, col) for col in cols] for row in rows])
             return AU, rows, np.eye(m) + Vt_AU
+
+        def v_dot(row, x):
+            """V_j . x for one row of contact_update."""
+            return row[1] @ x[row[0]] + row[3] @ x[row[2]]
 
         memo = [None, None]
 
@@ -171,7 +174,7 @@ class CoupledSystem(SecondOrderModel):
             if memo[0] is not lin:
                 memo[0], memo[1] = lin, contact_update(lin)
             AU, rows, small = memo[1]
-            vx = np.array([row[1] @ x[row[0]] + row[3] @ x[row[2]] for row in rows])
+            vx = np.array([v_dot(row, x) for row in rows])
             return x - AU @ np.linalg.solve(small, vx)
 
         return solve
