@@ -227,11 +227,21 @@ def fmu_subsystems(prep: Prepared, instances: list):
 
 
 # ---------------------------------------------------------------------- the run
+def coupling_tolerance(prep: Prepared) -> float:
+    """Interface residual tolerance [N] of the implicit coupling: the scenario's
+    ``coupling_rtol`` times the largest mean contact force of its pantographs."""
+    scale = max([float(p.options.mean_uplift) for p in prep.pantographs] + [1.0])
+    return prep.scenario.coupling_rtol * scale
+
+
 def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
-              accelerator: str = "iqn-ils", progress: bool | None = None,
-              in_process: bool = False, tolerance: float = 1e-7) -> RunResult:
-    """Co-simulate the scenario through the FMUs (or in-process subsystems)."""
+              accelerator: str = "iqn-imvj", progress: bool | None = None,
+              in_process: bool = False, tolerance: float | None = None) -> RunResult:
+    """Co-simulate the scenario through the FMUs (or in-process subsystems); ``tolerance``
+    [N] of the implicit coupling defaults to :func:`coupling_tolerance`."""
     sc = prep.scenario
+    if tolerance is None:
+        tolerance = coupling_tolerance(prep)
     settings = CouplingSettings(scheme=scheme, accelerator=accelerator, tolerance=tolerance)
     instances: list = []
     names = column_names(len(prep.pantographs), len(prep.support_x))
@@ -295,5 +305,6 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
                        wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall)
     result.coupling_iterations = iterations if scheme == "implicit" else None
+    result.coupling_tolerance = tolerance if scheme == "implicit" else None
     result.newton_iterations = newton
     return result

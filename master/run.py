@@ -239,6 +239,8 @@ class RunResult:
     setup_time_s: float = 0.0
     summary: dict = field(default_factory=dict)
     coupling_iterations: np.ndarray | None = None
+    #: implicit co-simulation: the interface residual tolerance [N]
+    coupling_tolerance: float | None = None
     #: co-simulation: the catenary's Newton iterations per step (all coupling iterations)
     newton_iterations: np.ndarray | None = None
 
@@ -286,6 +288,8 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
     if result.coupling_iterations is not None and len(result.coupling_iterations):
         summary["coupling_iterations_mean"] = float(np.mean(result.coupling_iterations))
         summary["coupling_iterations_max"] = int(np.max(result.coupling_iterations))
+    if result.coupling_tolerance is not None:
+        summary["coupling_tolerance_n"] = float(result.coupling_tolerance)
     try:
         import resource
 

@@ -22,6 +22,8 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
     dt = 0.001                     # time step [s]
     alpha = -0.05                  # HHT alpha
     newton_rtol = 1e-4             # Newton residual tolerance (relative)
+    coupling_rtol = 1e-4           # implicit co-simulation: interface residual tolerance,
+                                   # relative to the pantographs' mean contact force
     duration_s = 5.0               # optional; default: until the last pantograph leaves the
                                    # analysis window
 
@@ -74,6 +76,9 @@ class Scenario:
     dt: float = 1e-3
     alpha: float = -0.05
     newton_rtol: float = RUN_RTOL
+    #: implicit co-simulation: interface residual tolerance relative to the pantographs'
+    #: mean contact force (the Newton tolerance's counterpart at the ports)
+    coupling_rtol: float = RUN_RTOL
     duration_s: float | None = None
     contact_stiffness: float = 50_000.0
     contact_damping: float = 0.0
@@ -150,7 +155,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         raise ParameterError("analysis.window_supports", None,
                              "missing field (or give analysis.window_m)", source)
     sim = root.sub("simulation", required=False)
-    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol"})
+    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol", "coupling_rtol"})
     contact = root.sub("contact", required=False)
     contact.unknown_keys({"stiffness", "damping"})
     sc = Scenario(
@@ -163,6 +168,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
         alpha=sim.number("alpha", -0.05, minimum=-1.0 / 3.0, maximum=0.0),
         newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True, maximum=1e-2),
+        coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True, maximum=1e-2),
         duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))

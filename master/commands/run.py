@@ -16,7 +16,7 @@ def add_parser(sub):
                    choices=["monolithic", "explicit", "jacobi", "gauss-seidel", "implicit"],
                    help="monolithic reference solve, or co-simulation of the FMUs: explicit "
                    "(= jacobi), gauss-seidel, implicit (iterative with rollback)")
-    p.add_argument("--accelerator", default="iqn-ils", choices=["iqn-ils", "aitken"],
+    p.add_argument("--accelerator", default="iqn-imvj", choices=["iqn-imvj", "iqn-ils", "aitken"],
                    help="interface acceleration of the implicit coupling")
     p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING)")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
