@@ -198,3 +198,21 @@ def test_run_settings_converge_to_the_tight_solution_and_roll_back_bitwise():
     assert all(np.array_equal(x, y) for x, y in zip(first, second))
     with pytest.raises(ParameterError, match="predictor"):
         HHTSettings(predictor="quadratic").validate()
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_non_finite_residual_stops_the_step(bad):
+    """A NaN or infinite force anywhere in the residual is reported, not iterated on."""
+
+    class Blowing(LinearModel):
+        def evaluate(self, t, q, v, a, inputs, tangent=True):
+            ev = super().evaluate(t, q, v, a, inputs, tangent)
+            if t > 0.0:
+                ev.f_rest = ev.f_rest.copy()
+                ev.f_rest[1] = bad
+            return ev
+
+    integ = HHTIntegrator(Blowing(np.eye(3), np.zeros((3, 3)), np.eye(3)), HHTSettings())
+    integ.initialize(0.0, [1.0, 0.0, 0.0])
+    with pytest.raises(ConvergenceError, match="non-finite"):
+        integ.step(1e-3)

@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .errors import ConvergenceError, ParameterError
 from .model import SecondOrderModel
@@ -85,6 +86,84 @@ class HHTSettings:
     @property
     def beta(self) -> float:
         return 0.25 * (1.0 - self.alpha) ** 2
+
+
+@njit(cache=True)
+def _predict(q, v, a, a_guess, f_rest, h, alpha, beta, gamma):
+    """Newmark predictors q_p, v_p of (3.16)-(3.17), the first iterate q_p + beta h^2 a_guess
+    and the history term alpha f_rest_n."""
+    n = q.shape[0]
+    q_p = np.empty(n)
+    v_p = np.empty(n)
+    q0 = np.empty(n)
+    hist = np.empty(n)
+    cq = (0.5 - beta) * h * h
+    cv = (1.0 - gamma) * h
+    cg = beta * h * h
+    for i in range(n):
+        q_p[i] = q[i] + h * v[i] + cq * a[i]
+        v_p[i] = v[i] + cv * a[i]
+        q0[i] = q_p[i] + cg * a_guess[i]
+        hist[i] = alpha * f_rest[i]
+    return q_p, v_p, q0, hist
+
+
+@njit(cache=True)
+def _iterate_kinematics(q, q_p, v_p, c_a, c_v):
+    """a = c_a (q - q_p), v = v_p + c_v (q - q_p): (3.18) at a Newton iterate."""
+    n = q.shape[0]
+    a = np.empty(n)
+    v = np.empty(n)
+    for i in range(n):
+        d = q[i] - q_p[i]
+        a[i] = c_a * d
+        v[i] = v_p[i] + c_v * d
+    return a, v
+
+
+@njit(cache=True)
+def _hht_residual(f_inertia, f_rest, hist, c_f):
+    """R = f_inertia + c_f f_rest - hist, (3.16), with max |R| and the size of the forces
+    in it (max of the three terms' max norms)."""
+    n = f_inertia.shape[0]
+    R = np.empty(n)
+    r_max = 0.0
+    scale = 0.0
+    total = 0.0     # carries any NaN or infinity (branch-free loop: it vectorizes)
+    for i in range(n):
+        fi = f_inertia[i]
+        fr = c_f * f_rest[i]
+        h = hist[i]
+        r = fi + fr - h
+        R[i] = r
+        total += r
+        ar = abs(r)
+        r_max = ar if ar > r_max else r_max
+        m = max(abs(fi), abs(fr), abs(h))
+        scale = m if m > scale else scale
+    if not np.isfinite(total):
+        return R, np.nan, np.nan
+    return R, r_max, scale
+
+
+@njit(cache=True)
+def _newton_update(q, x, R):
+    """q - x for the Newton correction dq = -x, with |dq . R|, max |dq| and max |q - x|."""
+    n = q.shape[0]
+    out = np.empty(n)
+    e = 0.0
+    dq_max = 0.0
+    q_max = 0.0
+    for i in range(n):
+        out[i] = q[i] - x[i]
+        e += x[i] * R[i]
+        dq_max = max(dq_max, abs(x[i]))
+        q_max = max(q_max, abs(out[i]))
+    return out, abs(e), dq_max, q_max
+
+
+def _vector(x, n: int) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype=np.float64).reshape(n)
 
 
 @dataclass
@@ -158,13 +237,12 @@ class HHTIntegrator:
         t1 = self.t + h
         inputs = None if inputs is None else np.asarray(inputs, dtype=float)
 
-        q_p = self.q + h * self.v + (0.5 - beta) * h * h * self.a
-        v_p = self.v + (1.0 - gamma) * h * self.a
         a_guess = self.a
         if s.predictor == "linear" and self.a_prev is not None:
             a_guess = 2.0 * self.a - self.a_prev
-        q = q_p + beta * h * h * a_guess
-        hist = alpha * self.f_rest
+        q_p, v_p, q, hist = _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, alpha,
+                                     beta, gamma)
+        n = q.shape[0]
         # a model may state the size of its forces (e.g. its weight): the residual test then
         # holds in quasi-static motion, where every force in R is small
         force_floor = max(float(getattr(model, "force_scale", 0.0)), 1e-300)
@@ -186,20 +264,16 @@ class HHTIntegrator:
         e_prev = None
         res_norm = np.inf
         for k in range(s.max_iterations + 1):
-            dqp = q - q_p
-            a = c_a * dqp
-            v = v_p + c_v * dqp
+            a, v = _iterate_kinematics(q, q_p, v_p, c_a, c_v)
             need_tangent = (factor is None or (k > s.refresh_after + 4)
                             or (s.reuse_factorization is False and k > 0))
             ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
             if factor is not None and not need_tangent and ev.structure_key != factor[0]:
                 need_tangent = True
                 ev = model.evaluate(t1, q, v, a, inputs, tangent=True)
-            R = ev.f_inertia + c_f * ev.f_rest - hist
-            res_norm = float(np.max(np.abs(R))) if R.size else 0.0
-            scale = max(float(np.max(np.abs(ev.f_inertia))) if R.size else 0.0,
-                        c_f * float(np.max(np.abs(ev.f_rest))) if R.size else 0.0,
-                        float(np.max(np.abs(hist))) if R.size else 0.0, force_floor)
+            R, res_norm, scale = _hht_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
+                                               hist, c_f)
+            scale = max(scale, force_floor)
             if not np.isfinite(res_norm):
                 raise ConvergenceError(
                     f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",
@@ -207,8 +281,7 @@ class HHTIntegrator:
             converged = res_norm <= s.rtol * scale
             if not converged and e_prev is not None and e0 is not None:
                 # energy norm, or a correction already at round-off level of q
-                converged = (e_prev <= s.etol * e0
-                             or dq_size <= 1e-15 * float(np.max(np.abs(q))))
+                converged = e_prev <= s.etol * e0 or dq_size <= 1e-15 * q_size
             if converged:
                 break
             if k == s.max_iterations:
@@ -219,13 +292,10 @@ class HHTIntegrator:
                 refactorizations += 1
                 if k == 0 and redo_key is not None:
                     self._redo_memo = (redo_key, factor)
-            dq = -np.asarray(factor[3](R), dtype=float).reshape(q.shape)
-            e = abs(float(dq @ R))
+            q, e, dq_size, q_size = _newton_update(q, _vector(factor[3](R), n), R)
             if e0 is None:
                 e0 = max(e, 1e-300)
             e_prev = e
-            dq_size = float(np.max(np.abs(dq)))
-            q = q + dq
         if not converged:
             raise ConvergenceError(
                 f"HHT Newton-Raphson did not converge at t = {t1:.6g} s (step "
