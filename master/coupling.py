@@ -68,17 +68,26 @@ class IQNILS(Accelerator):
         if getattr(self, "V", None):
             self.old_V = (self.old_V + self.V)[-self.reuse * 8:] if self.reuse else []
             self.old_W = (self.old_W + self.W)[-self.reuse * 8:] if self.reuse else []
+        self._new_step()
+
+    def _new_step(self):
+        """Forget the secants of the step (V: residual differences, W: x~ differences)."""
         self.V: list[np.ndarray] = []
         self.W: list[np.ndarray] = []
         self.r_prev = None
         self.xt_prev = None
 
-    def update(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
+    def _residual(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
+        """r = x~ - x; records the secant pair to the previous iterate of the step."""
         r = x_tilde - x
         if self.r_prev is not None:
             self.V.append(r - self.r_prev)
             self.W.append(x_tilde - self.xt_prev)
         self.r_prev, self.xt_prev = r.copy(), x_tilde.copy()
+        return r
+
+    def update(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
+        r = self._residual(x, x_tilde)
         V = self.V + self.old_V
         W = self.W + self.old_W
         if not V:
@@ -89,7 +98,7 @@ class IQNILS(Accelerator):
         return x_tilde + Wm @ c
 
 
-class IQNIMVJ(Accelerator):
+class IQNIMVJ(IQNILS):
     """Interface quasi-Newton with a multi-vector inverse Jacobian (IQN-IMVJ, Lindner, Mehl
     & Uekermann 2015, as in preCICE): the IQN-ILS least-squares update applied on top of the
     inverse Jacobian of the previous time step, which is kept and carried forward,
@@ -101,26 +110,18 @@ class IQNIMVJ(Accelerator):
     the previous step's Jacobian, where IQN-ILS starts from a plain relaxation."""
 
     def __init__(self, initial_relaxation: float = 0.5, **_):
-        self.omega0 = initial_relaxation
         self.J_prev: np.ndarray | None = None
         self.J: np.ndarray | None = None
-        self.reset()
+        super().__init__(initial_relaxation)
 
     def reset(self):
         if self.J is not None:
             self.J_prev = self.J
         self.J = None
-        self.V: list[np.ndarray] = []
-        self.W: list[np.ndarray] = []
-        self.r_prev = None
-        self.xt_prev = None
+        self._new_step()
 
     def update(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
-        r = x_tilde - x
-        if self.r_prev is not None:
-            self.V.append(r - self.r_prev)
-            self.W.append(x_tilde - self.xt_prev)
-        self.r_prev, self.xt_prev = r.copy(), x_tilde.copy()
+        r = self._residual(x, x_tilde)
         if not self.V:
             if self.J_prev is None:
                 return x + self.omega0 * r
