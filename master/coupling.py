@@ -120,23 +120,28 @@ class IQNIMVJ(IQNILS):
         self.J = None
         self._new_step()
 
-    def update(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
-        r = self._residual(x, x_tilde)
+    def _jacobian(self, n: int) -> np.ndarray | None:
+        """J_prev + (W - J_prev V) V^+ with the step's secants so far (J_prev before the
+        first; None while no Jacobian is known)."""
         if not self.V:
-            if self.J_prev is None:
-                return x + self.omega0 * r
-            self.J = self.J_prev
-            return x_tilde - self.J_prev @ r
+            return self.J_prev
         Vm = np.column_stack(self.V)
         Wm = np.column_stack(self.W)
-        J0 = np.zeros((r.size, r.size)) if self.J_prev is None else self.J_prev
-        self.J = J0 + (Wm - J0 @ Vm) @ np.linalg.pinv(Vm, rcond=1e-12)
+        J0 = np.zeros((n, n)) if self.J_prev is None else self.J_prev
+        return J0 + (Wm - J0 @ Vm) @ np.linalg.pinv(Vm, rcond=1e-12)
+
+    def update(self, x: np.ndarray, x_tilde: np.ndarray) -> np.ndarray:
+        r = self._residual(x, x_tilde)
+        self.J = self._jacobian(r.size)
+        if self.J is None:
+            return x + self.omega0 * r
         return x_tilde - self.J @ r
 
     def converged(self, x, x_tilde):
         """The last secant of the step enters the Jacobian carried to the next step."""
         if self.r_prev is not None:
-            self.update(x, x_tilde)
+            self._residual(x, x_tilde)
+            self.J = self._jacobian(x.size)
 
 
 ACCELERATORS = {"aitken": Aitken, "iqn-ils": IQNILS, "iqn-imvj": IQNIMVJ}
