@@ -10,6 +10,7 @@ B5); the child writes the time series as CSV, prints its wall time and ends with
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import subprocess
@@ -17,6 +18,7 @@ import sys
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -101,6 +103,51 @@ def run_child(script: str | Path, args: list) -> tuple:
         if line.startswith("INIT "):
             init = float(line.split()[1])
     return float(wall[-1].split()[1]), init, cpu
+
+
+# ------------------------------------------------------------------------- recipes
+def parser(doc: str, out_default: str) -> argparse.ArgumentParser:
+    """A recipe's argument parser: its ``--out`` and the hidden child-process arguments."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("--out", type=Path, help=f"time series CSV (default: {out_default})")
+    p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("child_args", nargs="*", help=argparse.SUPPRESS)
+    return p
+
+
+def ssp_parser(doc: str, tool: str) -> argparse.ArgumentParser:
+    """:func:`parser` with the arguments of the recipes that run an SSP."""
+    p = parser(doc, f"results/<ssp>-{tool}.csv")
+    p.add_argument("--ssp", type=Path, default=DEFAULT_SSP)
+    p.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
+    p.add_argument("--stop", type=float, help="stop time [s] (default: the SSP's)")
+    p.add_argument("--window", type=float, nargs=2, metavar=("START", "END"),
+                   help="analysis window [m] (default: supports 5..6)")
+    return p
+
+
+def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
+    """What a recipe needs of the SSP named by its arguments: ``ssd`` (:func:`read_ssd`),
+    ``cat`` (the catenary component's parameters), ``support_x``, ``stop``, ``window``,
+    ``out``, ``n_sup`` (support uplift columns written, at most 64) and ``tool``."""
+    ssd = read_ssd(a.ssp)
+    cat = ssd["parameters"]["catenary"]
+    support_x = catenary_layout(cat)
+    return SimpleNamespace(
+        tool=tool, ssd=ssd, cat=cat, support_x=support_x,
+        stop=a.stop if a.stop is not None else ssd["stop_time"],
+        window=a.window or default_window(support_x),
+        out=a.out or Path("results") / f"{a.ssp.stem}-{tool}.csv",
+        n_sup=min(len(support_x), 64))
+
+
+def run_ssp_child(script: str | Path, a: argparse.Namespace, r: SimpleNamespace,
+                  *extra) -> None:
+    """Run an SSP recipe's child (arguments: SSP, step, stop, CSV, supports, x0, V, extra)
+    and report its statistics."""
+    wall = run_child(script, ["--", a.ssp.resolve(), a.step, r.stop, r.out, r.n_sup,
+                              r.cat["position_1"], r.cat["speed_kmh"] / 3.6, *extra])
+    report(r.tool, r.out, r.window, r.support_x, wall, {"ssp": str(a.ssp), "step_s": a.step})
 
 
 def default_window(support_x: np.ndarray) -> tuple[float, float]:

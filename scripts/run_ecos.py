@@ -17,7 +17,6 @@ run_common.py); the time series goes to a CSV file and the statistics are printe
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
@@ -68,36 +67,18 @@ def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: flo
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--ssp", type=Path, default=run_common.DEFAULT_SSP)
-    p.add_argument("--step", type=float, default=1e-3, help="communication step [s]")
-    p.add_argument("--stop", type=float, help="stop time [s] (default: the SSP's)")
-    p.add_argument("--window", type=float, nargs=2, metavar=("START", "END"),
-                   help="analysis window [m] (default: supports 5..6)")
-    p.add_argument("--out", type=Path, help="time series CSV (default: results/<ssp>-ecos.csv)")
-    p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("child_args", nargs="*", help=argparse.SUPPRESS)
+    p = run_common.ssp_parser(__doc__, "ecos")
     a = p.parse_args(argv)
     if a.child:
         ssp, step, stop, out, n_sup, x0, speed, pset = a.child_args
         child(ssp, float(step), float(stop), out, int(n_sup), float(x0), float(speed), pset)
         return 0
-    ssd = run_common.read_ssd(a.ssp)
-    cat = ssd["parameters"]["catenary"]
-    support_x = run_common.catenary_layout(cat)
-    stop = a.stop if a.stop is not None else ssd["stop_time"]
-    window = a.window or run_common.default_window(support_x)
-    out = a.out or Path("results") / f"{a.ssp.stem}-ecos.csv"
-    n_sup = min(len(support_x), 64)
-    if len(ssd["parameter_sets"]) > 1:
-        raise SystemExit(f"{a.ssp}: several parameter set names {ssd['parameter_sets']}; ecos "
-                         "applies one set (by name) to every component")
-    pset = ssd["parameter_sets"][0] if ssd["parameter_sets"] else ""
-    wall = run_common.run_child(__file__, [
-        "--", a.ssp.resolve(), a.step, stop, out, n_sup, cat["position_1"],
-        cat["speed_kmh"] / 3.6, pset])
-    run_common.report("ecos", out, window, support_x, wall,
-                      {"ssp": str(a.ssp), "step_s": a.step})
+    r = run_common.ssp_run(a, "ecos")
+    sets = r.ssd["parameter_sets"]
+    if len(sets) > 1:
+        raise SystemExit(f"{a.ssp}: several parameter set names {sets}; ecos applies one set "
+                         "(by name) to every component")
+    run_common.run_ssp_child(__file__, a, r, sets[0] if sets else "")
     return 0
 
 

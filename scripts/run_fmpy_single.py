@@ -18,7 +18,6 @@ whole run, with the pantograph position x = V t.
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import tempfile
@@ -60,7 +59,7 @@ def child(fmu: str, signal_file: str, step: float, stop: float, out: str, speed:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = run_common.parser(__doc__, "results/<fmu>-fmpy.csv")
     p.add_argument("--fmu", type=Path, default=DEFAULT_FMU)
     p.add_argument("--force", default="120 + 30*sin(2*pi*5*t)",
                    help="contact force law in t [N] (numpy functions, pi)")
@@ -69,10 +68,6 @@ def main(argv=None) -> int:
     p.add_argument("--speed-kmh", type=float, default=0.0,
                    help="train speed (FMU parameter speed_kmh: aerodynamic uplift); also "
                    "gives the position x = V t of the statistics (default 0: x = t)")
-    p.add_argument("--out", type=Path, help="time series CSV (default: results/"
-                   "<fmu>-fmpy.csv)")
-    p.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("child_args", nargs="*", help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.child:
         fmu, sig, step, stop, out, speed, speed_kmh = a.child_args
