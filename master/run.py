@@ -10,7 +10,6 @@ writes the CSV time series, the JSON summary and the plots; the co-simulation co
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 import time as _time

@@ -93,7 +93,6 @@ def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> Cate
     g = d.gravity
     xs = d.support_x
     st = _stations(d)
-    ns = st.size
     h_c = d.contact_wire_height
     h_m = h_c + d.system_height
     stag = d.support_stagger()

@@ -274,7 +274,6 @@ def solve_initial_configuration(mesh, tol: float = 1e-9,
         q = q + s * dy[:S.n_free]
         p = p + s * dy[S.n_free:]
         _set_params(mesh, p)
-    x = S.full(q)
     l0 = S.bar_l0[mesh.dropper_bars]
     if np.any(l0 <= 0):
         i = int(np.argmin(l0))

@@ -74,7 +74,6 @@ class CoupledSystem(SecondOrderModel):
         qc, qps = self.split(q)
         vc, vps = self.split(v)
         ac, aps = self.split(a)
-        n_p = len(self.pantographs)
         ev_c = self.catenary.evaluate(t, qc, vc, ac, None, tangent=tangent)
         ev_p = [p.evaluate(t, qps[k], vps[k], aps[k], np.zeros(1), tangent=tangent)
                 for k, p in enumerate(self.pantographs)]

@@ -191,6 +191,67 @@ class PantographModel(SecondOrderModel):
         return self.dof_names[int(np.argmax(energy))] if self.dof_names else "mode"
 
 
+class TorqueActuatedPantograph(PantographModel):
+    """A pantograph raised by a torque on its lower arm (the rigid and the flexible DSA-380):
+    the torque M0 that makes the working position an equilibrium (2.14), and the ramp from
+    the lowered position's torque (3.3.1). Subclasses give :meth:`equilibrium` and
+    :attr:`working_height`."""
+
+    torque: float = 0.0
+    torque_lowered: float | None = None
+
+    @property
+    def working_height(self) -> float:
+        """Default contact height above the rail [m] (the parameter file's)."""
+        raise NotImplementedError
+
+    def equilibrium(self, contact_force: float, height: float) -> tuple[np.ndarray, float]:
+        """(q0, M0): shape and actuation torque with the contact point at ``height`` under
+        ``contact_force`` (no state is changed)."""
+        raise NotImplementedError
+
+    def static_equilibrium(self, contact_force=None, height=None):
+        """Equilibrium under ``contact_force`` [N] (default: mean uplift) with the contact
+        point at ``height`` [m above rail] (default: working height). Stores the actuation
+        torque M0 (2.14) in :attr:`torque` and returns q0 (2.11)-(2.13)."""
+        F = self.options.mean_uplift if contact_force is None else \
+            reject_nonfinite_force(contact_force)
+        if F < 0.0:
+            raise ParameterError("contact_force", contact_force, "must be >= 0", self.name)
+        h = self.working_height if height is None else float(height)
+        check_number("height", h, source=self.name, positive=True)
+        q0, M0 = self.equilibrium(F, h)
+        self.torque = M0
+        self.q_equilibrium = q0.copy()
+        self.static_contact_force = F
+        if self.options.ramp is not None:
+            self.lowered_equilibrium(self.options.ramp.lowered_height)
+        else:
+            self.torque_lowered = None
+        return q0
+
+    def lowered_equilibrium(self, height):
+        """Equilibrium without contact force at a lowered contact ``height`` (ramp start,
+        thesis 3.3.1): stores its torque M_low in :attr:`torque_lowered` and returns q."""
+        h = check_number("ramp.lowered_height", height, source=self.name, positive=True)
+        q, M_low = self.equilibrium(0.0, h)
+        self.torque_lowered = M_low
+        return q
+
+    def actuation_torque(self, t: float) -> float:
+        """Torque on bar 1 at time t (2.14), ramp-weighted (3.3.1)."""
+        ramp = self.options.ramp
+        if ramp is None or self.torque_lowered is None:
+            return self.torque
+        return self.torque_lowered + ramp.factor(t) * (self.torque - self.torque_lowered)
+
+    def equilibrium_info(self) -> dict:
+        """Extra equilibrium data for reports (used by ``pantocosim modal``)."""
+        return {"actuation_torque_nm": float(self.torque),
+                "lowered_torque_nm": None if self.torque_lowered is None
+                else float(self.torque_lowered)}
+
+
 def reject_nonfinite_force(F) -> float:
     """Contact force input check used by every model (NaN/inf are bad input)."""
     x = float(F)

@@ -26,7 +26,7 @@ from ..core.errors import ParameterError
 from ..core.model import Evaluation
 from ..core.params import Table, check_number, load_toml
 from . import dsa380_kinematics as kin
-from .base import PantographModel, PantographOptions, reject_nonfinite_force
+from .base import PantographOptions, TorqueActuatedPantograph, reject_nonfinite_force
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 PRESET_FILE = DATA_DIR / "dsa380-rigid.toml"
@@ -213,7 +213,7 @@ def read_parameters(path: str | Path) -> tuple[Dsa380Parameters, Table, dict]:
     return params, root, flags
 
 
-class Dsa380Model(PantographModel):
+class Dsa380Model(TorqueActuatedPantograph):
     """Rigid-body DSA-380 pantograph, q = (theta, x10, y10, theta7) (2.1).
 
     ``pitch_lock=True`` removes theta7 (A.37: theta7 = 0 and its derivatives vanish), leaving
@@ -262,13 +262,6 @@ class Dsa380Model(PantographModel):
                                  "the mechanism loops (A.1) cannot be closed at this angle",
                                  self.name)
         return self._vec, self._mat
-
-    def actuation_torque(self, t: float) -> float:
-        """Torque on bar 1 at time t (2.14), ramp-weighted (3.3.1)."""
-        ramp = self.options.ramp
-        if ramp is None or self.torque_lowered is None:
-            return self.torque
-        return self.torque_lowered + ramp.factor(t) * (self.torque - self.torque_lowered)
 
     def evaluate(self, t, q, v, a, inputs, tangent=True):
         """Residual pieces and exact tangents (A.36), (3.27)-(3.34), (B.19)."""
@@ -438,7 +431,11 @@ class Dsa380Model(PantographModel):
             th = step if min(a, b) < step < max(a, b) else 0.5 * (a + b)
         return th
 
-    def _equilibrium(self, F: float, height: float) -> tuple[np.ndarray, float]:
+    @property
+    def working_height(self) -> float:
+        return self.params.working_height
+
+    def equilibrium(self, F: float, height: float) -> tuple[np.ndarray, float]:
         """(2.12)-(2.14): collector drop, theta from (2.13), torque M0 from (2.14)."""
         o = self.options
         net = F - o.aero_force
@@ -457,41 +454,6 @@ class Dsa380Model(PantographModel):
         # (2.14) generalised: the torque balances gravity, springs and the transmitted load
         M0 = float(vec[1, 0])
         return q0, M0
-
-    def static_equilibrium(self, contact_force=None, height=None):
-        """Equilibrium under ``contact_force`` [N] (default: mean uplift) with point 10 at
-        ``height`` [m above rail] (default: the preset working height). Stores the actuation
-        torque M0 (2.14) in :attr:`torque` and returns q0 (2.11)-(2.13)."""
-        F = self.options.mean_uplift if contact_force is None else \
-            reject_nonfinite_force(contact_force)
-        if F < 0.0:
-            raise ParameterError("contact_force", contact_force, "must be >= 0", self.name)
-        h = self.params.working_height if height is None else float(height)
-        check_number("height", h, source=self.name, positive=True)
-        q0, M0 = self._equilibrium(F, h)
-        self.torque = M0
-        self.q_equilibrium = q0.copy()
-        self.static_contact_force = F
-        ramp = self.options.ramp
-        if ramp is not None:
-            self.lowered_equilibrium(ramp.lowered_height)
-        else:
-            self.torque_lowered = None
-        return q0
-
-    def lowered_equilibrium(self, height):
-        """Equilibrium without contact force at a lowered contact ``height`` (ramp start,
-        thesis 3.3.1): stores its torque M_low in :attr:`torque_lowered` and returns q."""
-        h = check_number("ramp.lowered_height", height, source=self.name, positive=True)
-        q, M_low = self._equilibrium(0.0, h)
-        self.torque_lowered = M_low
-        return q
-
-    def equilibrium_info(self) -> dict:
-        """Extra equilibrium data for reports (used by ``pantocosim modal``)."""
-        return {"actuation_torque_nm": float(self.torque),
-                "lowered_torque_nm": None if self.torque_lowered is None
-                else float(self.torque_lowered)}
 
 
 def load_dsa380(path: str | Path | None = None, options: PantographOptions | None = None,

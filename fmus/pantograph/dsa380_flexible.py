@@ -44,7 +44,7 @@ from ..core.errors import ParameterError
 from ..core.model import Evaluation
 from ..core.params import Table, check_number, load_toml
 from . import beam_ancf as beam
-from .base import PantographModel, PantographOptions, reject_nonfinite_force
+from .base import PantographOptions, TorqueActuatedPantograph, reject_nonfinite_force
 from .dsa380 import Dsa380Model, read_parameters
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -388,7 +388,7 @@ def _rot(alpha: float) -> np.ndarray:
     return np.array([[c, -s], [s, c]])
 
 
-class Dsa380FlexibleModel(PantographModel):
+class Dsa380FlexibleModel(TorqueActuatedPantograph):
     """Flexible-bar DSA-380 (thesis 2.2) on the HHT interface; same ports, options, springs,
     damper and actuation torque (with ramp, 3.3.1) as :class:`Dsa380Model`."""
 
@@ -576,13 +576,6 @@ class Dsa380FlexibleModel(PantographModel):
         return q
 
     # ------------------------------------------------------------------ evaluation
-    def actuation_torque(self, t: float) -> float:
-        """Torque on bar 1 at time t (2.14), ramp-weighted (3.3.1)."""
-        ramp = self.options.ramp
-        if ramp is None or self.torque_lowered is None:
-            return self.torque
-        return self.torque_lowered + ramp.factor(t) * (self.torque - self.torque_lowered)
-
     def _assemble(self, q, v, F, M_act, with_K=True, aero=None, friction=True):
         o = self.options
         r = self._reals
@@ -767,6 +760,10 @@ class Dsa380FlexibleModel(PantographModel):
                                  f"model found (residual {res:.3g} N)", self.name)
         return q, torque
 
+    @property
+    def working_height(self) -> float:
+        return self.params.rigid.working_height
+
     def equilibrium(self, contact_force: float, height: float):
         """(q0, M0): shape and actuation torque with point 10 at ``height`` under
         ``contact_force``; starts from the rigid solution (2.11)-(2.14)."""
@@ -786,37 +783,9 @@ class Dsa380FlexibleModel(PantographModel):
         q, _ = self._newton(q, contact_force, torque, height=None)
         return q
 
-    def static_equilibrium(self, contact_force=None, height=None):
-        """Equilibrium under ``contact_force`` [N] (default: mean uplift) with point 10 at
-        ``height`` [m above rail] (default: working height); stores the torque M0."""
-        F = self.options.mean_uplift if contact_force is None else \
-            reject_nonfinite_force(contact_force)
-        if F < 0.0:
-            raise ParameterError("contact_force", contact_force, "must be >= 0", self.name)
-        h = self.params.rigid.working_height if height is None else float(height)
-        check_number("height", h, source=self.name, positive=True)
-        q0, M0 = self.equilibrium(F, h)
-        self.torque = M0
-        self.q_equilibrium = q0.copy()
-        self.static_contact_force = F
-        if self.options.ramp is not None:
-            self.lowered_equilibrium(self.options.ramp.lowered_height)
-        else:
-            self.torque_lowered = None
-        return q0
-
-    def lowered_equilibrium(self, height):
-        """Equilibrium without contact at a lowered ``height`` (ramp start, 3.3.1)."""
-        h = check_number("ramp.lowered_height", height, source=self.name, positive=True)
-        q, M_low = self.equilibrium(0.0, h)
-        self.torque_lowered = M_low
-        return q
-
     def equilibrium_info(self) -> dict:
-        return {"actuation_torque_nm": float(self.torque),
-                "lowered_torque_nm": None if self.torque_lowered is None
-                else float(self.torque_lowered),
-                "n_dofs": self.n_dofs, "n_elements": self.n_elements}
+        return {**super().equilibrium_info(), "n_dofs": self.n_dofs,
+                "n_elements": self.n_elements}
 
     # ------------------------------------------------------------------ linear analysis
     def modes(self, q0=None, contact_force=None, n_modes: int = 8, shift_hz: float = 0.1):
