@@ -187,28 +187,30 @@ def test_run_cli_writes_outputs_and_json(tmp_path, capsys):
 def _scenario_file(tmp_path, **changes):
     text = Path(SHORT).read_text()
     for old, new in changes.items():
+        assert old in text, old
         text = text.replace(old, new)
     p = tmp_path / "bad.toml"
     p.write_text(text)
     return str(p)
 
 
-def test_bad_scenarios_name_the_field(tmp_path):
+@pytest.mark.parametrize("old, new, message", [
+    ('model = "en50318-2mass"', 'model = "no-such"', r"pantographs\[0\].model"),
+    ("speed_kmh = 250.0", "speed_kmh = 400.0", "speed_kmh = 400.0.*wave speed.*--force"),
+    ("window_m = [35.0, 60.0]", "window_m = [35.0, 900.0]", r"analysis.window_m"),
+    ("dt = 0.001", "dtt = 0.001", "simulation.dtt"),
+    ('newton_rtol = 1e-10', 'newton_rtol = 0.5', "simulation.newton_rtol = 0.5"),
+])
+def test_bad_scenarios_name_the_field(tmp_path, old, new, message):
+    bad = _scenario_file(tmp_path, **{old: new})
+    with pytest.raises(ParameterError, match=message):
+        prepare(bad)
+    assert main(["run", bad, "--quiet"]) == 2
+
+
+def test_unknown_scenario_is_named():
     with pytest.raises(ParameterError, match="scenario"):
         load_scenario("no-such-scenario")
-    bad = _scenario_file(tmp_path, **{'model = "en50318-2mass"': 'model = "no-such"'})
-    with pytest.raises(ParameterError, match=r"pantographs\[0\].model"):
-        prepare(bad)
-    fast = _scenario_file(tmp_path, **{"speed_kmh = 250.0": "speed_kmh = 400.0"})
-    with pytest.raises(ParameterError, match="speed_kmh = 400.0.*wave speed.*--force"):
-        prepare(fast)
-    outside = _scenario_file(tmp_path, **{"window_m = [35.0, 60.0]": "window_m = [35.0, 900.0]"})
-    with pytest.raises(ParameterError, match=r"analysis.window_m"):
-        prepare(outside)
-    typo = _scenario_file(tmp_path, **{"dt = 0.001": "dtt = 0.001"})
-    with pytest.raises(ParameterError, match="simulation.dtt"):
-        prepare(typo)
-    assert main(["run", fast, "--quiet"]) == 2
 
 
 class _Discarding:

@@ -50,6 +50,15 @@ class Bar:
     thetaG: float = 0.0
 
 
+#: kernel parameter slots (dsa380_kinematics) filled from each bar, offset by its number
+_BAR_SLOTS = ((kin.L1, "L"), (kin.M_, "m"), (kin.I_, "I"), (kin.LG_, "LG"), (kin.THG_, "thetaG"))
+#: kernel parameter slots filled from scalar fields of the parameter set
+_SCALAR_SLOTS = ((kin.TH34, "theta34"), (kin.R6, "r"), (kin.THR, "theta_r"), (kin.L1P, "L1p"),
+                 (kin.TH1P, "theta_1p"), (kin.SIG_LO, "lower_branch"),
+                 (kin.SIG_UP, "upper_branch"), (kin.KR, "k_r"), (kin.THR0, "theta_r0"),
+                 (kin.KL, "k_l"), (kin.LL0, "l0"), (kin.CDAMP, "c"), (kin.GRAV, "g"))
+
+
 @dataclass
 class Dsa380Parameters:
     """Geometry, inertia, springs and damper of the rigid DSA-380 model (Fig. 2.2-2.5).
@@ -90,24 +99,10 @@ class Dsa380Parameters:
         P[kin.X2], P[kin.Y2] = 0.0, yb
         P[kin.X13], P[kin.Y13] = self.p13[0], self.p13[1] + yb
         for i, b in enumerate(self.bars):
-            P[kin.L1 + i] = b.L
-            P[kin.M_ + i] = b.m
-            P[kin.I_ + i] = b.I
-            P[kin.LG_ + i] = b.LG
-            P[kin.THG_ + i] = b.thetaG
-        P[kin.TH34] = self.theta34
-        P[kin.R6] = self.r
-        P[kin.THR] = self.theta_r
-        P[kin.L1P] = self.L1p
-        P[kin.TH1P] = self.theta_1p
-        P[kin.SIG_LO] = self.lower_branch
-        P[kin.SIG_UP] = self.upper_branch
-        P[kin.KR] = self.k_r
-        P[kin.THR0] = self.theta_r0
-        P[kin.KL] = self.k_l
-        P[kin.LL0] = self.l0
-        P[kin.CDAMP] = self.c
-        P[kin.GRAV] = self.g
+            for index, attribute in _BAR_SLOTS:
+                P[index + i] = getattr(b, attribute)
+        for index, attribute in _SCALAR_SLOTS:
+            P[index] = getattr(self, attribute)
         return P
 
     # ------------------------------------------------------------------ validation
