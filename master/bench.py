@@ -59,20 +59,24 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None) -> d
     return summary
 
 
+def factorised_newton_matrix(model, h: float = 1e-3, alpha: float = -0.05):
+    """``solve`` of a catenary model's HHT Newton matrix at its static configuration."""
+    from pantocosim.core.hht import HHTSettings
+
+    n = model.n_dofs
+    ev = model.evaluate(0.0, model.q_static, np.zeros(n), np.zeros(n), None)
+    return model.factorize(model.effective_matrix(
+        ev, *HHTSettings(alpha=alpha).newton_coefficients(h)))
+
+
 def floor_per_step(catenary: str, spans: int, repeats: int = 200) -> float:
     """Seconds for one solve with a factorised catenary Newton matrix (HHT, 1 ms)."""
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.model import CatenaryModel
-    from pantocosim.core.hht import HHTSettings
 
     model = CatenaryModel(with_spans(load_catenary(catenary), spans), x0=(10.0,), speed=80.0)
-    s = HHTSettings(alpha=-0.05)
-    h = 1e-3
-    n = model.n_dofs
-    ev = model.evaluate(0.0, model.q_static, np.zeros(n), np.zeros(n), np.zeros(1))
-    S = model.effective_matrix(ev, 1 / (s.beta * h * h), s.gamma / (s.beta * h), 1 + s.alpha)
-    solve = model.factorize(S)
-    r = np.random.default_rng(0).standard_normal(n)
+    solve = factorised_newton_matrix(model)
+    r = np.random.default_rng(0).standard_normal(model.n_dofs)
     solve(r)
     t0 = time.perf_counter()
     for _ in range(repeats):

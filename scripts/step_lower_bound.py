@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 
+from pantocosim.master.bench import factorised_newton_matrix
 from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
 
@@ -27,11 +28,7 @@ def main(argv: list[str]) -> None:
     q = cat.q_static.copy()
     v = rng.random(cat.n_dofs) * 1e-3
     a = rng.random(cat.n_dofs) * 1e-2
-    h, alpha = sc.dt, sc.alpha
-    beta, gamma = 0.25 * (1 - alpha) ** 2, 0.5 - alpha
-    ev = cat.evaluate(0.0, q, v, a, None, tangent=True)
-    solve = cat.factorize(cat.effective_matrix(ev, 1 / (beta * h * h), gamma / (beta * h),
-                                               1 + alpha))
+    solve = factorised_newton_matrix(cat, sc.dt, sc.alpha)
     r = rng.random(cat.n_dofs)
     x = S.full(q)
     C = cat._damping(cat._slack_committed)

@@ -87,6 +87,11 @@ class HHTSettings:
     def beta(self) -> float:
         return 0.25 * (1.0 - self.alpha) ** 2
 
+    def newton_coefficients(self, h: float) -> tuple[float, float, float]:
+        """(c_a, c_v, c_f) of the Newton matrix c_a M + c_f (c_v C + K) for step h: da/dq,
+        dv/dq from (3.18) and the weight 1 + alpha of the forces at t + h."""
+        return 1.0 / (self.beta * h * h), self.gamma / (self.beta * h), 1.0 + self.alpha
+
 
 @njit(cache=True)
 def _predict(q, v, a, a_guess, f_rest, h, alpha, beta, gamma):
@@ -230,9 +235,7 @@ class HHTIntegrator:
         """Advance from t to t + h with the coupling inputs valid at t + h."""
         s = self.settings
         alpha, beta, gamma = s.alpha, s.beta, s.gamma
-        c_a = 1.0 / (beta * h * h)
-        c_v = gamma / (beta * h)
-        c_f = 1.0 + alpha
+        c_a, c_v, c_f = s.newton_coefficients(h)
         model = self.model
         t1 = self.t + h
         inputs = None if inputs is None else np.asarray(inputs, dtype=float)
