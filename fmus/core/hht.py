@@ -246,9 +246,6 @@ class HHTIntegrator:
         q_p, v_p, q, hist = _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, alpha,
                                      beta, gamma)
         n = q.shape[0]
-        # a model may state the size of its forces (e.g. its weight): the residual test then
-        # holds in quasi-static motion, where every force in R is small
-        force_floor = max(float(getattr(model, "force_scale", 0.0)), 1e-300)
 
         factor = self._factor if s.reuse_factorization is True and not self._stale else None
         if factor is not None and factor[1] != h:
@@ -276,7 +273,7 @@ class HHTIntegrator:
                 ev = model.evaluate(t1, q, v, a, inputs, tangent=True)
             R, res_norm, scale = _hht_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
                                                hist, c_f)
-            scale = max(scale, force_floor)
+            scale = max(scale, 1e-300)
             if not np.isfinite(res_norm):
                 raise ConvergenceError(
                     f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",

@@ -49,9 +49,6 @@ class SecondOrderModel:
     """Base class of the models the HHT-alpha integrator (:mod:`pantocosim.core.hht`) drives."""
 
     n_dofs: int = 0
-    #: typical size of the model's forces [N] (e.g. its weight); the integrator's relative
-    #: residual test never measures against less (0: only the forces in the residual)
-    force_scale: float = 0.0
 
     def evaluate(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                  inputs: np.ndarray | None, tangent: bool = True) -> Evaluation:
