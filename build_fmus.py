@@ -274,13 +274,10 @@ def pantograph_catenary_ssp(dest: Path, name: str, pantograph_fmu: Path, catenar
     handshake (``handshake``: static_force, wire_height, initial_height, support_x; default
     :func:`static_handshake`); returns the handshake figures and the parameter values
     written."""
-    stamps = {}
-    for f in (pantograph_fmu, catenary_fmu):
-        with zipfile.ZipFile(f) as z:
-            from pantocosim.fmi.slave_base import STAMP_FILE
+    from pantocosim.fmi.slave_base import bundled_stamp
 
-            stamps[Path(f).name] = z.read(f"resources/{STAMP_FILE}").decode().strip()
-    if len(set(stamps.values())) != 1:
+    stamps = {Path(f).name: bundled_stamp(f) for f in (pantograph_fmu, catenary_fmu)}
+    if None in stamps.values() or len(set(stamps.values())) != 1:
         raise SystemExit(f"the FMUs come from different builds (stamps {stamps}): they bundle "
                          "different pantocosim copies and cannot run in one process; rebuild "
                          "them together with build_fmus.py")

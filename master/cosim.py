@@ -165,21 +165,6 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
     return cat, pans
 
 
-def is_stale(fmu: Path) -> bool:
-    """True when the FMU bundles another version of the model package than the one installed
-    (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
-    import zipfile
-
-    from pantocosim.fmi.slave_base import STAMP_FILE, package_stamp
-
-    try:
-        with zipfile.ZipFile(fmu) as z:
-            built = z.read(f"resources/{STAMP_FILE}").decode().strip()
-    except (KeyError, OSError, zipfile.BadZipFile):
-        return True
-    return built != package_stamp()
-
-
 def fmu_subsystems(prep: Prepared, instances: list):
     """Instantiate and initialise the FMUs of the scenario in the static start."""
     from pantocosim.master.fmu_runtime import FmuInstance

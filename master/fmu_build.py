@@ -22,12 +22,18 @@ def build_fmus(out: Path = DEFAULT_OUT, only=None, quiet: bool = False):
     return _builder().build(Path(out), only=only, quiet=quiet)
 
 
+def is_stale(fmu: Path) -> bool:
+    """True when the FMU bundles another version of the model package than the one installed
+    (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
+    from pantocosim.fmi.slave_base import bundled_stamp, package_stamp
+
+    return bundled_stamp(fmu) != package_stamp()
+
+
 def ensure_fmus(paths, out: Path = DEFAULT_OUT) -> None:
     """Build the FMUs among ``paths`` (files in ``out``) that are missing or stale (built from
     another version of the model package than the installed one)."""
     import sys
-
-    from pantocosim.master.cosim import is_stale
 
     todo = sorted({Path(p).stem for p in paths
                    if Path(p).parent == Path(out) and (not Path(p).exists() or is_stale(p))})

@@ -46,6 +46,18 @@ def package_stamp(package_dir: str | Path | None = None) -> str:
     return h.hexdigest()[:16]
 
 
+def bundled_stamp(fmu: str | Path) -> str | None:
+    """The package stamp an FMU file was built with (None: not a pantocosim FMU, or
+    unreadable)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(fmu) as z:
+            return z.read(f"resources/{STAMP_FILE}").decode().strip()
+    except (KeyError, OSError, zipfile.BadZipFile):
+        return None
+
+
 class UnitReal(Real):
     """A Real variable with a ``unit`` attribute."""
 
