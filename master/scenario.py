@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.hht import RUN_RTOL
+from pantocosim.core.hht import RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -167,8 +167,10 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         pantographs=specs, window_supports=window_supports, window_m=window_m,
         dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
         alpha=sim.number("alpha", -0.05, minimum=-1.0 / 3.0, maximum=0.0),
-        newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True, maximum=1e-2),
-        coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True, maximum=1e-2),
+        newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True,
+                               maximum=RUN_RTOL_MAX),
+        coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True,
+                                 maximum=RUN_RTOL_MAX),
         duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))

@@ -164,7 +164,7 @@ class CatenarySlave(IntegratorSlave):
         from pantocosim.catenary.model import CatenaryModel
         from pantocosim.core.contact import PenaltyContact
         from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTIntegrator, HHTSettings
+        from pantocosim.core.hht import RUN_RTOL_MAX, HHTIntegrator, HHTSettings
 
         self.check_build_stamp()
         if self._error:
@@ -218,8 +218,8 @@ class CatenarySlave(IntegratorSlave):
             raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
                                  "per step) or 2 (reuse across steps)")
         rtol = self.finite("newton_rtol", self.newton_rtol)
-        if not 0.0 < rtol <= 1e-2:
-            raise ParameterError("newton_rtol", rtol, "must lie in (0, 1e-2]")
+        if not 0.0 < rtol <= RUN_RTOL_MAX:
+            raise ParameterError("newton_rtol", rtol, f"must lie in (0, {RUN_RTOL_MAX:g}]")
         settings = HHTSettings.for_runs(alpha, rtol)
         settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
         self._model, self._n, self._mode = model, n, mode
