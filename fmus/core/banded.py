@@ -15,7 +15,7 @@ from scipy.linalg.lapack import dpbtrf, dpbtrs
 
 
 class BandedCholesky:
-    """``solve = BandedCholesky.factor(ab)``; ``solve(r)``, ``solve.columns(dofs)``.
+    """``solve = BandedCholesky.factor(ab)``; ``solve(r)``, ``solve.solve_sparse(dofs, w)``.
 
     ``ab``: (bandwidth + 1, n) lower band storage (LAPACK 'L'); overwritten.
     ``factor`` returns None when the matrix is not positive definite."""
@@ -55,11 +55,6 @@ class BandedCholesky:
         while len(cache) > max(self.cache_size, len(dofs)):
             cache.popitem(last=False)
         return out
-
-    def columns(self, dofs) -> np.ndarray:
-        """(n, len(dofs)) array of A^-1 e_j for j in dofs (cached)."""
-        cols = self._cached(dofs)
-        return np.column_stack(cols) if cols else np.zeros((self.n, 0))
 
     def solve_sparse(self, dofs, values) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere)."""
