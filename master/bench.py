@@ -43,9 +43,8 @@ def scenario_text(name, catenary, spans, pantograph, speed, x0, duration) -> str
 
 
 def run_case(path: Path, coupling: str, out: Path, env: dict | None = None) -> dict:
-    cmd = [sys.executable, "-c", "from pantocosim.master.cli import console_main; "
-           "console_main()", "run", str(path), "--coupling", coupling, "--out", str(out),
-           "--json", "--no-plots", "--quiet"]
+    cmd = [sys.executable, "-m", "pantocosim.master.cli", "run", str(path), "--coupling",
+           coupling, "--out", str(out), "--json", "--no-plots", "--quiet"]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True,
                           env=None if env is None else {**os.environ, **env})

@@ -16,8 +16,7 @@ SHORT = Path(__file__).with_name("data") / "short-en50318.toml"
 
 
 def cli(*args, timeout=900):
-    proc = subprocess.run([sys.executable, "-c",
-                           "from pantocosim.master.cli import console_main; console_main()",
+    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli",
                            *map(str, args)], capture_output=True, text=True, timeout=timeout)
     return proc
 

@@ -5,8 +5,7 @@ import sys
 
 
 def test_regression_cases_match_references():
-    proc = subprocess.run([sys.executable, "-c",
-                           "from pantocosim.master.cli import console_main; console_main()",
+    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli",
                            "regress"], capture_output=True, text=True, timeout=1500)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rows = [l for l in proc.stdout.splitlines() if l.startswith(("pantograph-", "short-"))]
