@@ -132,7 +132,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     # so a pantograph that starts where the wire is higher or lower than the mean starts with
     # the matching force.
     F0 = np.array([pan.options.mean_uplift for pan in pantographs])
-    from pantocosim.master.operating_height import mean_dynamic_wire_height
+    from pantocosim.catenary.operating_height import mean_dynamic_wire_height
 
     z_mean = mean_dynamic_wire_height(catenary, F0, window, sc.dt, duration, sc.alpha)
     q_cat_guess = catenary.static_state(np.where(

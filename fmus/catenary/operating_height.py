@@ -1,0 +1,144 @@
+"""The mean operating height of each pantograph: where its actuation is set to deliver the
+mean uplift (static + aerodynamic).
+
+A pantograph's pneumatic actuation is regulated so that it presses with the target mean force
+at its operating height. With a stiff mechanism (the rigid DSA-380 has about 2 kN/m at the
+head) that height must be the mean height of the contact wire under the moving pantograph,
+which a moving load lifts more than a static one. It is computed here from the catenary
+linearised about its static configuration (M, C = alpha M + beta K0, K0) under the constant
+mean forces moving at the train speed, integrated with the project's HHT-alpha integrator (one
+banded factorization for the whole run), and averaged over the analysis window.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.model import Evaluation, SecondOrderModel
+
+
+class LinearisedCatenary(SecondOrderModel):
+    """M a + C v + K0 (q - q_static) = sum_k N_k(t)^T F_k on the catenary's own pattern."""
+
+    def __init__(self, catenary):
+        self.cat = catenary
+        self.n_dofs = catenary.n_dofs
+        st = catenary.structure
+        self.M = catenary.M
+        self.K0 = st.csr(catenary.K0_data)
+        self.C = st.csr(catenary._C_base)
+        self.q_static = catenary.q_static
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        f_rest = self.C @ v + self.K0 @ (q - self.q_static) - self.cat.input_vector(t, inputs)
+        ev = Evaluation(f_inertia=self.M @ a, f_rest=f_rest, structure_key=0)
+        if tangent:
+            ev.mass, ev.damping, ev.stiffness = self.M, self.C, self.K0
+        return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        return self.cat.effective_matrix(ev, c_a, c_v, c_f)
+
+    def factorize(self, S):
+        return self.cat.factorize(S)
+
+
+def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: float,
+                             duration: float, alpha: float = -0.05) -> np.ndarray:
+    """Mean contact-wire height under each moving constant force over the window [m]."""
+    model = LinearisedCatenary(catenary)
+    forces = np.asarray(forces, dtype=float)
+    q0 = catenary.static_state(forces)  # start from the static deflection: short transient
+    integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=True))
+    integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)
+    n = len(forces)
+    total = np.zeros(n)
+    count = np.zeros(n)
+    for _ in range(int(np.ceil(duration / dt - 1e-9))):
+        integ.step(dt, forces)
+        x = catenary.positions(integ.t)
+        inside = (x >= window[0]) & (x <= window[1])
+        if inside.any():
+            z = catenary.wire_height(integ.t, integ.q)
+            total[inside] += z[inside]
+            count[inside] += 1
+    if np.any(count == 0):
+        raise ValueError("a pantograph never enters the analysis window")
+    return total / count
+
+
+#: contact forces [N] between which the start laws below are secants (the range of mean and
+#: static contact forces of the project's pantographs)
+LAW_FORCES = (100.0, 200.0)
+
+
+@dataclass(frozen=True)
+class ContactHeightLaws:
+    """What the catenary tells a pantograph about its start, per pantograph, as contact
+    heights h(F) = offset + slope F (slope includes the penalty compliance 1/k_H):
+
+    - ``operating``: the pantograph's operating height under a mean uplift F (the mean
+      dynamic wire height of :func:`mean_dynamic_wire_height` + F / k_H), where its actuation
+      is set to deliver F;
+    - ``static``: its contact height at t0 when it presses with a static force F at its start
+      position (the static wire height under F + F / k_H).
+
+    Both are secants through :data:`LAW_FORCES` of laws that are linear up to the catenary's
+    geometric nonlinearity."""
+
+    operating_offset: np.ndarray
+    operating_slope: np.ndarray
+    static_offset: np.ndarray
+    static_slope: np.ndarray
+
+
+def mean_dynamic_height_law(catenary, k: int, window: tuple[float, float], dt: float,
+                            duration: float, alpha: float = -0.05) -> tuple[float, float]:
+    """(offset, slope): the mean dynamic wire height of :func:`mean_dynamic_wire_height` under
+    pantograph ``k``'s constant force F alone is offset + slope F. By superposition on the
+    linearised catenary: the unloaded static wire under the moving contact point, plus the
+    response to a unit force started from its linear static deflection (one run)."""
+    model = LinearisedCatenary(catenary)
+    forces = np.zeros(len(catenary.x0))
+    forces[k] = 1.0
+    deflection = catenary.factorize(model.K0)(catenary.input_vector(0.0, forces))
+    integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=True))
+    integ.initialize(0.0, model.q_static + deflection, np.zeros(model.n_dofs), forces)
+    unloaded = loaded = 0.0
+    count = 0
+    for _ in range(int(np.ceil(duration / dt - 1e-9))):
+        integ.step(dt, forces)
+        x = catenary.positions(integ.t)[k]
+        if window[0] <= x <= window[1]:
+            z0 = catenary.wire_height(integ.t, model.q_static)[k]
+            unloaded += z0
+            loaded += catenary.wire_height(integ.t, integ.q)[k] - z0
+            count += 1
+    if count == 0:
+        raise ValueError("a pantograph never enters the analysis window")
+    return unloaded / count, loaded / count
+
+
+def contact_height_laws(catenary, contact_stiffness: float, window: tuple[float, float],
+                        dt: float, duration: float, alpha: float = -0.05
+                        ) -> ContactHeightLaws:
+    """The start laws of every pantograph of ``catenary`` (a CatenaryModel); each force acts
+    alone (the cross terms of several pantographs are left out)."""
+    n = len(catenary.x0)
+    f1, f2 = LAW_FORCES
+    op = np.array([mean_dynamic_height_law(catenary, k, window, dt, duration, alpha)
+                   for k in range(n)])
+    st = np.empty((2, n))
+    for j, f in enumerate((f1, f2)):
+        for k in range(n):
+            forces = np.zeros(n)
+            forces[k] = f
+            st[j, k] = catenary.wire_height(0.0, catenary.static_state(forces))[k]
+    compliance = 1.0 / contact_stiffness
+    st_slope = (st[1] - st[0]) / (f2 - f1)
+    return ContactHeightLaws(operating_offset=op[:, 0], operating_slope=op[:, 1] + compliance,
+                             static_offset=st[0] - st_slope * f1,
+                             static_slope=st_slope + compliance)
