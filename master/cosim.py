@@ -176,7 +176,7 @@ def fmu_subsystems(prep: Prepared, instances: list):
         raise ParameterError("pantographs", n_p, "the catenary FMU takes at most 4", sc.source)
     cat_fmu = FmuInstance(cat_path, "catenary")
     instances.append(cat_fmu)
-    params = {"catenary": sc.catenary, "speed_kmh": sc.speed_kmh, "n_pantographs": n_p,
+    params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh, "n_pantographs": n_p,
               "hht_alpha": sc.alpha, "contact_mode": 0, "newton_rtol": sc.newton_rtol}
     if sc.spans:
         params["spans"] = sc.spans

@@ -53,6 +53,33 @@ class Prepared:
         return self.scenario.speed
 
 
+def analysis_window(sc: Scenario, definition) -> tuple[tuple[float, float], str, float]:
+    """(window [m], the scenario field that sets it, duration [s]): the analysis window
+    inside the model and the run's duration (by default until the last pantograph leaves the
+    window, plus 0.2 s)."""
+    support_x = definition.support_x
+    length = float(support_x[-1])
+    src = sc.source
+    if sc.window_supports is not None:
+        i, j = sc.window_supports
+        if j > definition.n_spans:
+            raise ParameterError("analysis.window_supports", list(sc.window_supports),
+                                 f"the model has supports 0..{definition.n_spans}", src)
+        window = (float(support_x[i]), float(support_x[j]))
+        wfield = "analysis.window_supports"
+    else:
+        window = sc.window_m
+        wfield = "analysis.window_m"
+        if window[0] < 0 or window[1] > length:
+            raise ParameterError(wfield, list(window),
+                                 f"outside the model (0 .. {length:g} m)", src)
+    if sc.duration_s is None:
+        duration = max((window[1] - p.position_m) / sc.speed for p in sc.pantographs) + 0.2
+    else:
+        duration = sc.duration_s
+    return window, wfield, float(duration)
+
+
 def prepare(scenario: Scenario | str | None, force: bool = False,
             element_size: float | None = None) -> Prepared:
     """Validate ``scenario`` and build the models and the static start."""
@@ -77,23 +104,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                              f"run anyway", src)
     support_x = definition.support_x
     length = float(support_x[-1])
-    if sc.window_supports is not None:
-        i, j = sc.window_supports
-        if j > definition.n_spans:
-            raise ParameterError("analysis.window_supports", list(sc.window_supports),
-                                 f"the model has supports 0..{definition.n_spans}", src)
-        window = (float(support_x[i]), float(support_x[j]))
-        wfield = "analysis.window_supports"
-    else:
-        window = sc.window_m
-        wfield = "analysis.window_m"
-        if window[0] < 0 or window[1] > length:
-            raise ParameterError(wfield, list(window),
-                                 f"outside the model (0 .. {length:g} m)", src)
-    if sc.duration_s is None:
-        duration = max((window[1] - p.position_m) / sc.speed for p in sc.pantographs) + 0.2
-    else:
-        duration = sc.duration_s
+    window, wfield, duration = analysis_window(sc, definition)
     for k, p in enumerate(sc.pantographs):
         if not (0.0 < p.position_m < length):
             raise ParameterError(f"pantographs[{k}].position_m", p.position_m,

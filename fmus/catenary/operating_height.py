@@ -122,23 +122,28 @@ def mean_dynamic_height_law(catenary, k: int, window: tuple[float, float], dt: f
     return unloaded / count, loaded / count
 
 
+def static_height_law(catenary, k: int) -> tuple[float, float]:
+    """(offset, slope): the static contact-wire height at pantograph ``k``'s start position
+    under its upward force F alone is offset + slope F (secant through :data:`LAW_FORCES`)."""
+    f1, f2 = LAW_FORCES
+    forces = np.zeros(len(catenary.x0))
+    z = []
+    for f in (f1, f2):
+        forces[k] = f
+        z.append(catenary.wire_height(0.0, catenary.static_state(forces))[k])
+    slope = (z[1] - z[0]) / (f2 - f1)
+    return z[0] - slope * f1, slope
+
+
 def contact_height_laws(catenary, contact_stiffness: float, window: tuple[float, float],
                         dt: float, duration: float, alpha: float = -0.05
                         ) -> ContactHeightLaws:
     """The start laws of every pantograph of ``catenary`` (a CatenaryModel); each force acts
     alone (the cross terms of several pantographs are left out)."""
     n = len(catenary.x0)
-    f1, f2 = LAW_FORCES
     op = np.array([mean_dynamic_height_law(catenary, k, window, dt, duration, alpha)
                    for k in range(n)])
-    st = np.empty((2, n))
-    for j, f in enumerate((f1, f2)):
-        for k in range(n):
-            forces = np.zeros(n)
-            forces[k] = f
-            st[j, k] = catenary.wire_height(0.0, catenary.static_state(forces))[k]
+    st = np.array([static_height_law(catenary, k) for k in range(n)])
     compliance = 1.0 / contact_stiffness
-    st_slope = (st[1] - st[0]) / (f2 - f1)
     return ContactHeightLaws(operating_offset=op[:, 0], operating_slope=op[:, 1] + compliance,
-                             static_offset=st[0] - st_slope * f1,
-                             static_slope=st_slope + compliance)
+                             static_offset=st[:, 0], static_slope=st[:, 1] + compliance)

@@ -41,7 +41,19 @@ import numpy as np
 from .slave_base import IntegratorSlave
 
 MAX_PANTOGRAPHS = 4
+#: a pantograph height at t0 that differs from the settled one by more settles it again [m]
+HEIGHT_TOL_M = 1e-9
 MAX_SUPPORTS = 64
+
+#: the start laws offered to pantograph FMUs in start_mode 2 (operating_height.py)
+LAW_OUTPUTS = (
+    ("operating_height", "m", "contact height where a pantograph of mean uplift F operates: "
+     "operating_height + operating_height_slope F (mean dynamic wire height over the "
+     "analysis window + F / k_H)"),
+    ("operating_height_slope", "m/N", "slope of the operating-height law"),
+    ("static_height", "m", "contact height at t0 under a static contact force F: "
+     "static_height + static_height_slope F"),
+    ("static_height_slope", "m/N", "slope of the static-height law"))
 
 TIMING = ("the value set before doStep(t, h) is the value at t + h; the value at t is the "
           "previous accepted step's (kept in the FMU state)")
@@ -62,9 +74,9 @@ class CatenarySlave(IntegratorSlave):
                             + ". contact_mode 0: contact forces are inputs (at t0: "
                             "static_force_k); contact_mode 1: built-in penalty contact from "
                             "pantograph_height_k/pantograph_velocity_k.")
-        self.string("catenary", "en50318", "catenary definition: preset name (en50318, ave64, "
-                    "benchmark55) or TOML file (relative paths are also looked up in the FMU "
-                    "resources)")
+        self.string("catenary_definition", "en50318", "catenary definition: preset name "
+                    "(en50318, ave64, benchmark55) or TOML file (relative paths are also looked "
+                    "up in the FMU resources)")
         self.integer("spans", 0, "number of spans (span data cycled); 0 = as defined")
         self.real("element_size", 0.0, "parameter", "m",
                   "target finite-element length; 0 = as defined")
@@ -90,6 +102,12 @@ class CatenarySlave(IntegratorSlave):
                      "the communication step (what a zero-order-hold master sets) and "
                      "extrapolate it with pantograph_velocity_k over the step; false: take it "
                      "as the height at t + h (an iterating master)")
+        self.real("window_start", 0.0, "parameter", "m", "analysis window start x: the "
+                  "operating-height law averages the wire height there (window_end <= "
+                  "window_start: the middle span of the line)")
+        self.real("window_end", 0.0, "parameter", "m", "analysis window end x")
+        self.real("averaging_step", 1e-3, "parameter", "s", "time step of the moving-load "
+                  "run behind the operating-height law")
         self.integer("n_substeps", 1, "integration steps per communication step (inputs "
                      "interpolated linearly)")
         self.integer("factorization", 2, "Newton matrix policy of the HHT solver: 0 = full "
@@ -120,6 +138,10 @@ class CatenarySlave(IntegratorSlave):
             self.real(f"contact_force_out_{k}", 0.0, "output", "N",
                       f"contact force of pantograph {k}: mode 1 the penalty force at the end "
                       "of the step, mode 0 the input force")
+        for k in range(1, MAX_PANTOGRAPHS + 1):
+            for name, unit, text in LAW_OUTPUTS:
+                self.real(f"{name}_{k}", 0.0, "output", unit, f"start law of pantograph {k} "
+                          f"(constant; available in initialisation mode): {text}")
         for j in range(MAX_SUPPORTS):
             self.real(f"support_uplift_{j}", 0.0, "output", "m",
                       f"uplift of the contact wire at support {j} relative to the unloaded "
@@ -135,23 +157,21 @@ class CatenarySlave(IntegratorSlave):
         self._mode = 0
         self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
         self._state_attributes = ["_integ_state", "_prev_inputs"]
+        self._cache: dict = {}    # model and start laws by the parameters they depend on
+        self.apply_start_values()
 
     # ------------------------------------------------------------------ lifecycle
     def setup_experiment(self, start_time, stop_time, tolerance):
         self._t0 = float(start_time)
 
-    def exit_initialization_mode(self):
-        self.guarded("initialisation", self._initialise)
-        return True
-
     def _catenary_source(self):
         from pantocosim.catenary.definition import load_catenary
+        from pantocosim.core.errors import ParameterError
 
-        name = str(self.catenary).strip()
+        name = str(self.catenary_definition).strip()
         if not name:
-            from pantocosim.core.errors import ParameterError
-
-            raise ParameterError("catenary", self.catenary, "empty catenary name")
+            raise ParameterError("catenary_definition", self.catenary_definition,
+                                 "empty catenary name")
         p = Path(name)
         if not p.is_absolute() and not p.exists() and self.resources:
             cand = Path(self.resources) / p
@@ -159,19 +179,113 @@ class CatenarySlave(IntegratorSlave):
                 return load_catenary(cand)
         return load_catenary(name)
 
-    def _initialise(self):
+    def _model(self):
+        """The catenary model of the current parameters (checked; cached)."""
         from pantocosim.catenary.definition import with_spans
         from pantocosim.catenary.model import CatenaryModel
+        from pantocosim.core.errors import ParameterError
+
+        n = int(self.n_pantographs)
+        if not 1 <= n <= MAX_PANTOGRAPHS:
+            raise ParameterError("n_pantographs", n, f"must be 1..{MAX_PANTOGRAPHS}")
+        speed = self.finite("speed_kmh", self.speed_kmh) / 3.6
+        esize = self.finite("element_size", self.element_size)
+        if esize < 0:
+            raise ParameterError("element_size", esize, "must be >= 0 (0 = as defined)")
+        spans = int(self.spans)
+        if spans < 0:
+            raise ParameterError("spans", spans, "must be >= 0 (0 = as defined)")
+        x0 = [self.finite(f"position_{k}", getattr(self, f"position_{k}"))
+              for k in range(1, n + 1)]
+        key = ("model", str(self.catenary_definition), spans, esize, speed, tuple(x0))
+        if key not in self._cache:
+            definition = self._catenary_source()
+            if spans:
+                definition = with_spans(definition, spans)
+            length = float(definition.support_x[-1])
+            for k, x in enumerate(x0, start=1):
+                if not 0.0 < x < length:
+                    raise ParameterError(f"position_{k}", x, f"must lie on the line (0 .. "
+                                         f"{length:g} m of catenary '{definition.name}')")
+            self._cache = {key: CatenaryModel(definition, x0=x0, speed=speed,
+                                              element_size=esize if esize > 0 else None)}
+        return self._cache[key]
+
+    def _contact(self):
         from pantocosim.core.contact import PenaltyContact
+        from pantocosim.core.errors import ParameterError
+
+        k_h = self.finite("contact_stiffness", self.contact_stiffness)
+        if not k_h > 0:
+            raise ParameterError("contact_stiffness", k_h, "must be > 0")
+        c_h = self.finite("contact_damping", self.contact_damping)
+        if c_h < 0:
+            raise ParameterError("contact_damping", c_h, "must be >= 0")
+        return PenaltyContact(k_h, c_h)
+
+    def _laws(self, model):
+        """The start laws (operating_height.ContactHeightLaws) of the current parameters."""
+        from pantocosim.catenary.operating_height import contact_height_laws
+        from pantocosim.core.errors import ParameterError
+
+        x = model.support_x
+        window = (self.finite("window_start", self.window_start),
+                  self.finite("window_end", self.window_end))
+        if window[1] <= window[0]:
+            mid = (len(x) - 1) // 2
+            window = (float(x[mid]), float(x[mid + 1]))
+        dt = self.finite("averaging_step", self.averaging_step)
+        if not dt > 0:
+            raise ParameterError("averaging_step", dt, "must be > 0")
+        speed = model.speed if model.speed > 0 else 1.0
+        duration = max(0.0, (window[1] - float(np.min(model.x0))) / speed) + 0.2
+        alpha = self.finite("hht_alpha", self.hht_alpha)
+        key = ("laws", window, dt, alpha, self._contact().stiffness)
+        if key not in self._cache:
+            self._cache[key] = contact_height_laws(model, self._contact().stiffness, window,
+                                                   dt, duration, alpha)
+        return self._cache[key]
+
+    def update_initial_outputs(self):
+        """In initialisation mode the start laws are outputs as soon as the parameters are
+        set (pantograph FMUs in start_mode 2 read them there)."""
+        self._set_law_outputs(self._laws(self._model()))
+
+    def _set_law_outputs(self, laws):
+        values = (laws.operating_offset, laws.operating_slope, laws.static_offset,
+                  laws.static_slope)
+        for (name, _, _), v in zip(LAW_OUTPUTS, values):
+            for k in range(1, len(v) + 1):
+                setattr(self, f"{name}_{k}", float(v[k - 1]))
+
+    def _static_forces(self, n):
+        from pantocosim.core.errors import ParameterError
+
+        F0 = []
+        for k in range(1, n + 1):
+            F = self.finite(f"static_force_{k}", getattr(self, f"static_force_{k}"))
+            if F < 0:
+                raise ParameterError(f"static_force_{k}", F, "must be >= 0 (upward force)")
+            F0.append(F)
+        return np.array(F0)
+
+    def _settle(self, model, heights, contact, forces):
+        """q0 of the catenary in static equilibrium with pantographs held at ``heights``
+        (penalty contact), from the static state under ``forces`` as the first guess."""
+        from pantocosim.core.coupled import CoupledSystem
+        from pantocosim.core.prescribed import PrescribedPantograph
+
+        system = CoupledSystem(model, [PrescribedPantograph(z, 0.0) for z in heights],
+                               contact)
+        return system.static_solve(model.static_state(forces))
+
+    def initialise(self):
         from pantocosim.core.errors import ParameterError
         from pantocosim.core.hht import RUN_RTOL_MAX, HHTIntegrator, HHTSettings
 
         self.check_build_stamp()
         if self._error:
             return
-        n = int(self.n_pantographs)
-        if not 1 <= n <= MAX_PANTOGRAPHS:
-            raise ParameterError("n_pantographs", n, f"must be 1..{MAX_PANTOGRAPHS}")
         mode = int(self.contact_mode)
         if mode not in (0, 1):
             raise ParameterError("contact_mode", mode, "must be 0 (force inputs) or 1 "
@@ -181,38 +295,10 @@ class CatenarySlave(IntegratorSlave):
         alpha = self.finite("hht_alpha", self.hht_alpha)
         if not -1.0 / 3.0 <= alpha <= 0.0:
             raise ParameterError("hht_alpha", alpha, "must lie in [-1/3, 0]")
-        speed = self.finite("speed_kmh", self.speed_kmh) / 3.6
-        esize = self.finite("element_size", self.element_size)
-        if esize < 0:
-            raise ParameterError("element_size", esize, "must be >= 0 (0 = as defined)")
-        spans = int(self.spans)
-        if spans < 0:
-            raise ParameterError("spans", spans, "must be >= 0 (0 = as defined)")
-        k_h = self.finite("contact_stiffness", self.contact_stiffness)
-        if not k_h > 0:
-            raise ParameterError("contact_stiffness", k_h, "must be > 0")
-        c_h = self.finite("contact_damping", self.contact_damping)
-        if c_h < 0:
-            raise ParameterError("contact_damping", c_h, "must be >= 0")
-        x0, F0 = [], []
-        for k in range(1, n + 1):
-            x0.append(self.finite(f"position_{k}", getattr(self, f"position_{k}")))
-            F = self.finite(f"static_force_{k}", getattr(self, f"static_force_{k}"))
-            if F < 0:
-                raise ParameterError(f"static_force_{k}", F, "must be >= 0 (upward force)")
-            F0.append(F)
-        definition = self._catenary_source()
-        if spans:
-            definition = with_spans(definition, spans)
-        length = float(definition.support_x[-1])
-        for k, x in enumerate(x0, start=1):
-            if not 0.0 < x < length:
-                raise ParameterError(f"position_{k}", x, f"must lie on the line (0 .. "
-                                     f"{length:g} m of catenary '{definition.name}')")
-        model = CatenaryModel(definition, x0=x0, speed=speed,
-                              element_size=esize if esize > 0 else None)
-        F0 = np.array(F0)
-        q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
+        model = self._model()
+        n = len(model.x0)
+        contact = self._contact()
+        F0 = self._static_forces(n)
         policy = int(self.factorization)
         if policy not in (0, 1, 2):
             raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
@@ -220,44 +306,70 @@ class CatenarySlave(IntegratorSlave):
         rtol = self.finite("newton_rtol", self.newton_rtol)
         if not 0.0 < rtol <= RUN_RTOL_MAX:
             raise ParameterError("newton_rtol", rtol, f"must lie in (0, {RUN_RTOL_MAX:g}]")
-        settings = HHTSettings.for_runs(alpha, rtol)
-        settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
-        self._model, self._n, self._mode = model, n, mode
+        self._settings = HHTSettings.for_runs(alpha, rtol)
+        self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
+        self._mode, self._n = mode, n
         if mode == 0:
-            integ = HHTIntegrator(model, settings)
+            q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
+            integ = HHTIntegrator(model, self._settings)
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
             self._system = model
             self._prev_inputs = F0.copy()
             for k in range(1, n + 1):
                 setattr(self, f"contact_force_{k}", float(F0[k - 1]))
+            self._integ = integ
         else:
-            from pantocosim.core.coupled import CoupledSystem
-            from pantocosim.core.prescribed import PrescribedPantograph
-
-            contact = PenaltyContact(k_h, c_h)
-            zw = model.wire_height(0.0, q0)
-            vw = model.wire_velocity(0.0, q0, np.zeros(model.n_dofs))
-            standins = []
-            for k in range(1, n + 1):
-                if F0[k - 1] > 0:
-                    z, v = float(zw[k - 1] + F0[k - 1] / k_h), float(vw[k - 1])
-                    setattr(self, f"pantograph_height_{k}", z)
-                    setattr(self, f"pantograph_velocity_{k}", v)
-                else:
-                    z = self.finite(f"pantograph_height_{k}",
-                                    getattr(self, f"pantograph_height_{k}"))
-                    v = self.finite(f"pantograph_velocity_{k}",
-                                    getattr(self, f"pantograph_velocity_{k}"))
-                standins.append(PrescribedPantograph(z, v))
-            system = CoupledSystem(model, standins, contact)
-            integ = HHTIntegrator(system, settings)
-            integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
-            self._system, self._standins = system, standins
-            self._prev_inputs = np.array([[s.height, s.velocity] for s in standins])
-        self._integ = integ
+            if np.all(F0 == 0.0):
+                # the handshake: the start laws are outputs, the pantographs' heights inputs
+                self._set_law_outputs(self._laws(model))
+            self._start_penalty(model, contact, F0, self._input_heights(n, F0))
         self.n_supports = float(len(model.support_x))
         self.apply_pending_state()
         self._update_outputs(initial=True)
+
+    def _input_heights(self, n, F0):
+        """Pantograph heights and velocities at t0: at z_w(F) + F / k_H for a static force F,
+        else the inputs."""
+        model = self._model()
+        k_h = self._contact().stiffness
+        zw = model.wire_height(0.0, model.static_state(F0)) if np.any(F0 > 0) else None
+        out = np.empty((n, 2))
+        for k in range(1, n + 1):
+            if F0[k - 1] > 0:
+                out[k - 1] = (float(zw[k - 1] + F0[k - 1] / k_h), 0.0)
+            else:
+                out[k - 1] = (self.finite(f"pantograph_height_{k}",
+                                          getattr(self, f"pantograph_height_{k}")),
+                              self.finite(f"pantograph_velocity_{k}",
+                                          getattr(self, f"pantograph_velocity_{k}")))
+        return out
+
+    def _start_penalty(self, model, contact, F0, heights):
+        """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
+        static start (settled against the heights where no static force is given)."""
+        from pantocosim.catenary.operating_height import static_height_law
+        from pantocosim.core.coupled import CoupledSystem
+        from pantocosim.core.hht import HHTIntegrator
+        from pantocosim.core.prescribed import PrescribedPantograph
+
+        if np.all(F0 > 0):
+            q0 = model.static_state(F0)
+        else:
+            guess = F0.copy()
+            for k in np.flatnonzero(F0 == 0):
+                off, slope = static_height_law(model, k)
+                guess[k] = max(0.0, (heights[k, 0] - off) / (slope + 1.0 / contact.stiffness))
+            q0 = self._settle(model, heights[:, 0], contact, guess)
+        standins = [PrescribedPantograph(z, v) for z, v in heights]
+        for k, (z, v) in enumerate(heights, start=1):
+            setattr(self, f"pantograph_height_{k}", float(z))
+            setattr(self, f"pantograph_velocity_{k}", float(v))
+        system = CoupledSystem(model, standins, contact)
+        integ = HHTIntegrator(system, self._settings)
+        integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
+        self._system, self._standins, self._integ = system, standins, integ
+        self._settled_forces = F0
+        self._prev_inputs = np.array(heights, float)
 
     # ------------------------------------------------------------------ stepping
     def _read_inputs(self):
@@ -294,6 +406,8 @@ class CatenarySlave(IntegratorSlave):
             return False
         saved = self._integ.get_state()
         try:
+            if self._mode == 1 and self.extrapolate_heights and self._integ.t == 0.0:
+                new = self._first_step_heights(new)
             n = int(self.n_substeps)
             h = step_size / n
             old = self._prev_inputs
@@ -317,6 +431,20 @@ class CatenarySlave(IntegratorSlave):
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: "
                      f"{type(exc).__name__}: {exc}", _discard())
             return False
+
+    def _first_step_heights(self, new):
+        """A zero-order-hold master passes the pantographs' heights at t0 before the first
+        step: where the start was settled against the heights (no static force), a new
+        positive height settles it again (the master delivered the t0 value only now); else
+        the start's heights stand (fmpy's SSP support passes 0)."""
+        F0 = self._settled_forces
+        held = self._prev_inputs.copy()
+        given = (F0 == 0.0) & (new[:, 0] > 0.0)
+        if np.any(given & (np.abs(new[:, 0] - held[:, 0]) > HEIGHT_TOL_M)):
+            held[given] = new[given]
+            self._start_penalty(self._model(), self._contact(), F0, held)
+            self._update_outputs(initial=True)
+        return held
 
     def _update_outputs(self, initial: bool = False):
         model, integ = self._model, self._integ

@@ -24,6 +24,13 @@ import numpy as np
 
 from .slave_base import IntegratorSlave
 
+#: 0 = static at initial_height under initial_contact_force, 1 = ramp raising (3.3.1),
+#: 2 = static on the catenary's start laws (the FMU handshake)
+START_MODES = (0, 1, 2)
+#: inputs carrying the catenary's start laws (catenary.operating_height.ContactHeightLaws)
+LAW_INPUTS = ("operating_height", "operating_height_slope", "static_height",
+              "static_height_slope")
+
 FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
                 "force at t is the previous accepted step's (kept in the FMU state).")
 
@@ -63,8 +70,10 @@ class PantographSlave(IntegratorSlave):
         self.real("initial_contact_force", -1.0, "parameter", "N",
                   "contact force at t0 for a static start; < 0 means static + aerodynamic "
                   "uplift")
-        self.integer("start_mode", 0, "0 = static start in contact, 1 = ramp raising "
-                     "(thesis 3.3.1)")
+        self.integer("start_mode", 0, "0 = static start in contact at initial_height under "
+                     "initial_contact_force, 1 = ramp raising (thesis 3.3.1), 2 = static start "
+                     "on the catenary's start laws (inputs operating_height.., connected to the "
+                     "catenary FMU's outputs of the same names)")
         self.real("ramp_start_time", 0.0, "parameter", "s", "ramp raising: start time")
         self.real("ramp_duration", 1.0, "parameter", "s", "ramp raising: duration")
         self.real("lowered_height", 5.0, "parameter", "m",
@@ -73,7 +82,18 @@ class PantographSlave(IntegratorSlave):
         self.boolean("force_extrapolation", False,
                      "take contact_force as the force at the start of the communication step "
                      "(what a zero-order-hold master sets) and extrapolate it linearly to "
-                     "t + h from the previous input: F(t+h) = max(0, 2 F(t) - F(t-h))")
+                     "t + h from the previous input: F(t+h) = max(0, 2 F(t) - F(t-h)); the "
+                     "input of the first step is not read (the force at t0 is the start's)")
+        for name, unit, text in (
+                ("operating_height", "m", "operating contact height h_op = operating_height + "
+                 "operating_height_slope F under a mean uplift F: the actuation delivers the "
+                 "mean uplift there"),
+                ("operating_height_slope", "m/N", "slope of the operating-height law"),
+                ("static_height", "m", "contact height at t0 under a static contact force F: "
+                 "static_height + static_height_slope F"),
+                ("static_height_slope", "m/N", "slope of the static-height law")):
+            self.real(name, 0.0, "input", unit, f"start_mode 2: the catenary's start law, "
+                      f"read in initialisation mode: {text}")
         self.string("parameter_file", "", "parameter file (TOML) replacing the preset; a path "
                     "or a file name in the FMU resources")
         self.real("newton_iterations", 0.0, "local", None,
@@ -82,21 +102,14 @@ class PantographSlave(IntegratorSlave):
         self._force_prev = 0.0
         self._input_prev = 0.0
         self._state_attributes = ["_integ_state", "_force_prev", "_input_prev"]
+        self.apply_start_values()
 
     # ------------------------------------------------------------------ lifecycle
-    def exit_initialization_mode(self):
-        self.guarded("initialisation", self._initialise)
-        return True
-
-    def _initialise(self):
+    def _load_model(self):
         from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTIntegrator, HHTSettings
         from pantocosim.pantograph.base import Ramp
         from pantocosim.pantograph.presets import load_pantograph
 
-        self.check_build_stamp()
-        if self._error:
-            return
         source = self.preset
         if self.parameter_file:
             p = Path(self.parameter_file)
@@ -114,8 +127,10 @@ class PantographSlave(IntegratorSlave):
             "friction_smoothing": self.finite("friction_smoothing", self.friction_smoothing),
             "one_way_damper": bool(self.one_way_damper),
         }
-        if self.start_mode not in (0, 1):
-            raise ParameterError("start_mode", self.start_mode, "must be 0 (static) or 1 (ramp)")
+        if self.start_mode not in START_MODES:
+            raise ParameterError("start_mode", self.start_mode, "must be 0 (static at "
+                                 "initial_height), 1 (ramp) or 2 (static on the catenary's "
+                                 "start laws)")
         if self.n_substeps < 1:
             raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
         if self.start_mode == 1:
@@ -123,24 +138,54 @@ class PantographSlave(IntegratorSlave):
                                      duration=self.finite("ramp_duration", self.ramp_duration),
                                      lowered_height=self.finite("lowered_height",
                                                                 self.lowered_height))
-        model = load_pantograph(source, **overrides)
-        alpha = self.finite("hht_alpha", self.hht_alpha)
+        return load_pantograph(source, **overrides)
+
+    def _laws(self) -> tuple[float, float, float, float]:
+        return tuple(self.finite(name, getattr(self, name)) for name in LAW_INPUTS)
+
+    def _start(self, model):
+        """(q0, F0): the start shape and the contact force at t0 of ``start_mode``."""
+        if self.start_mode == 2:
+            from pantocosim.pantograph.static_start import static_start_on_laws
+
+            return static_start_on_laws(model, *self._laws())
         height = self.finite("initial_height", self.initial_height)
         F0 = self.finite("initial_contact_force", self.initial_contact_force)
         if F0 < 0:
             F0 = model.options.mean_uplift
         q_static = model.static_equilibrium(F0, height)
         if self.start_mode == 1:
-            q0 = model.lowered_equilibrium(self.lowered_height)
-            F0 = 0.0
-        else:
-            q0 = q_static
+            return model.lowered_equilibrium(self.lowered_height), 0.0
+        return q_static, F0
+
+    def update_initial_outputs(self):
+        """In initialisation mode the contact height of the start is an output as soon as
+        the parameters (and, for start_mode 2, the catenary's laws) are set."""
+        key = (self._laws(), self.start_mode, self.initial_height, self.speed_kmh)
+        if key == getattr(self, "_preview_key", None):
+            return
+        self._preview_key = key
+        model = self._load_model()
+        q0, _ = self._start(model)
+        self.contact_height = float(model.contact_height(q0))
+        self.contact_velocity = 0.0
+
+    def initialise(self):
+        from pantocosim.core.hht import HHTIntegrator, HHTSettings
+
+        self.check_build_stamp()
+        if self._error:
+            return
+        model = self._load_model()
+        alpha = self.finite("hht_alpha", self.hht_alpha)
+        q0, F0 = self._start(model)
         integ = HHTIntegrator(model, HHTSettings(alpha=alpha))
         integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
         self._model, self._integ = model, integ
         self._force_prev = F0
         self._input_prev = F0
         self.contact_force = F0
+        self._laws_used = self._laws()
         self.apply_pending_state()
         self._update_outputs()
 
@@ -160,6 +205,10 @@ class PantographSlave(IntegratorSlave):
                 return False
             u = F
             if self.force_extrapolation:
+                if self._integ.t == 0.0:
+                    # the force at t0 is the start's: masters disagree on what they pass
+                    # at the first step (fmpy's SSP support passes 0)
+                    u = self._input_prev
                 F = max(0.0, 2.0 * u - self._input_prev)
             n = int(self.n_substeps)
             h = step_size / n

@@ -30,7 +30,9 @@ STAMP_FILE = "pantocosim_build_stamp.txt"
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:
-    """SHA-256 over the package's source and data files (relative path + content)."""
+    """SHA-256 over the model package's source and data files (relative path + content); the
+    ``master`` subpackage of an installed package is not part of the model (FMUs do not
+    bundle it)."""
     if package_dir is None:
         import pantocosim
 
@@ -38,8 +40,11 @@ def package_stamp(package_dir: str | Path | None = None) -> str:
     root = Path(package_dir)
     h = hashlib.sha256()
     for f in sorted(root.rglob("*")):
+        rel = f.relative_to(root)
+        if rel.parts[0] == "master":
+            continue
         if f.suffix in (".py", ".toml") and "__pycache__" not in f.parts and f.is_file():
-            h.update(f.relative_to(root).as_posix().encode())
+            h.update(rel.as_posix().encode())
             h.update(b"\0")
             h.update(f.read_bytes())
             h.update(b"\0")
@@ -77,6 +82,9 @@ class GuardedSlave(Fmi2Slave):
 
     author = "pantocosim"
     license = "MIT"
+    #: start values baked in by the FMU build (a scenario's FMUs, master/fmu_scenario.py):
+    #: variable name -> value, given by :meth:`apply_start_values` at the end of __init__
+    start_values: dict = {}
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -85,6 +93,28 @@ class GuardedSlave(Fmi2Slave):
         self._error: str | None = None
         #: names of internal attributes that make up the FMU state besides registered vars
         self._state_attributes: list[str] = []
+        self._in_initialization = False
+
+    # ------------------------------------------------------------------ initialisation mode
+    def enter_initialization_mode(self):
+        self._in_initialization = True
+
+    def exit_initialization_mode(self):
+        self._in_initialization = False
+        self.guarded("initialisation", self.initialise)
+        return True
+
+    def initialise(self) -> None:
+        """Build the model and its start from the parameters (subclasses)."""
+
+    def update_initial_outputs(self) -> None:
+        """Outputs a master may read in initialisation mode, from the parameters and inputs
+        set so far (subclasses; called by the output getters in that mode)."""
+
+    def _output_value(self, name: str):
+        if self._in_initialization:
+            self.guarded("initialisation outputs", self.update_initial_outputs)
+        return getattr(self, name)
 
     # ------------------------------------------------------------------ variables
     def real(self, name: str, value: float, causality: str, unit: str | None = None,
@@ -99,7 +129,8 @@ class GuardedSlave(Fmi2Slave):
             kwargs.update(causality=Fmi2Causality.input, variability=Fmi2Variability.continuous)
         elif causality == "output":
             kwargs.update(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                          initial=Fmi2Initial.exact)
+                          initial=Fmi2Initial.exact,
+                          getter=lambda: self._output_value(name))
         else:
             kwargs.update(causality=Fmi2Causality.local, variability=Fmi2Variability.continuous)
         if unit:
@@ -124,8 +155,20 @@ class GuardedSlave(Fmi2Slave):
                                       variability=Fmi2Variability.fixed,
                                       description=description))
 
+    def apply_start_values(self) -> None:
+        """Give the baked :attr:`start_values` to the registered variables."""
+        names = {v.name for v in self.vars.values()}
+        for name, value in self.start_values.items():
+            if name not in names:
+                raise KeyError(f"start value for an unknown variable {name!r}")
+            setattr(self, name, type(getattr(self, name))(value))
+
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
         root = super().to_xml(model_options)
+        # every output is a state output (no direct feedthrough within a step): declaring it
+        # lets masters that check algebraic loops (OMSimulator) see there is none
+        for unknown in root.iterfind("ModelStructure/Outputs/Unknown"):
+            unknown.set("dependencies", "")
         if self._units:
             units = Element("UnitDefinitions")
             for u in sorted(self._units):

@@ -7,15 +7,16 @@ from pathlib import Path
 
 def add_parser(sub):
     p = sub.add_parser("build-fmus", help="build the FMUs (pythonfmu) into dist/fmus/",
-                       description="Build one FMU per pantograph preset, the catenary FMU and "
-                       "the SSP file of the default scenario.")
+                       description="Build one FMU per pantograph preset and the catenary FMU, "
+                       "then the default scenario's FMUs, SSP file and CoFmuPy configuration.")
     p.add_argument("--out", default=None, help="output folder (default dist/fmus)")
-    p.add_argument("--only", nargs="*", help="build only these FMUs")
+    p.add_argument("--only", nargs="*", help="build only these FMUs (no scenario files)")
+    p.add_argument("--no-ssp", action="store_true", help="skip the scenario FMUs and SSP file")
     return p
 
 
 def run(args) -> int:
-    from pantocosim.master.fmu_build import DEFAULT_OUT, build_fmus
+    from pantocosim.master.fmu_build import build_all
 
-    build_fmus(Path(args.out) if args.out else DEFAULT_OUT, only=args.only)
+    build_all(Path(args.out) if args.out else None, only=args.only, ssp=not args.no_ssp)
     return 0

@@ -1,0 +1,302 @@
+"""A scenario as files any FMI master runs unaided: the scenario's FMUs (start values baked
+in), an SSP 1.0 file and a CoFmuPy configuration (``pantocosim build-fmus`` writes them for
+the default scenario into ``dist/fmus/<scenario>/`` and ``dist/fmus/<scenario>.ssp``).
+
+The SSP holds one pantograph FMU and the catenary FMU in ``contact_mode`` 1 (built-in penalty
+contact). Nothing in it belongs to one pantograph model: the two FMUs settle the static start
+between themselves (docs/third-party.md, "The static start handshake"): the catenary offers
+its start laws as outputs in initialisation mode (operating height and static contact height
+against the force, :mod:`pantocosim.catenary.operating_height`), the pantograph (start_mode 2)
+sets its actuation and start on them (:mod:`pantocosim.pantograph.static_start`), and the
+catenary settles its static state against the pantograph's height at t0. So replacing the
+pantograph FMU in the SSP by any other pantograph FMU is a file swap.
+
+The SSD is written with ElementTree and validated against the SSP 1.0 schemas fmpy ships;
+names are identifiers (letters, digits, underscores); String parameters stay in the FMUs'
+start values (fmpy's SSP support and OMSimulator do not take them from an SSD).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from pantocosim.core.errors import ParameterError
+
+SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+OSP = "http://opensimulationplatform.com/SSP/OSPAnnotations"
+OMS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+for _prefix, _uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("osp", OSP), ("oms", OMS)):
+    ET.register_namespace(_prefix, _uri)
+
+#: name of the SSP parameter set (ecos applies the set named at init, merged over components)
+PARAMETER_SET = "default"
+#: the scenarios written by ``build-fmus``
+DEFAULT_SCENARIOS = ("dsa380-ave-300",)
+#: connections of the pantograph and the catenary FMU (pantograph k = 1)
+PORTS = [("pantograph", "contact_height", "catenary", "pantograph_height_1"),
+         ("pantograph", "contact_velocity", "catenary", "pantograph_velocity_1"),
+         ("catenary", "contact_force_out_1", "pantograph", "contact_force")] + [
+    ("catenary", f"{law}_1", "pantograph", law)
+    for law in ("operating_height", "operating_height_slope", "static_height",
+                "static_height_slope")]
+
+
+def identifier(name: str) -> str:
+    """``name`` as an identifier (letters, digits, underscores; not starting with a digit)."""
+    out = "".join(c if c.isalnum() or c == "_" else "_" for c in name)
+    return out if out and not out[0].isdigit() else "_" + out
+
+
+# ------------------------------------------------------------------ the scenario's values
+def scenario_start_values(scenario) -> dict:
+    """{"catenary": {...}, "pantograph": {...}, "<model>": {...}, "stop_time", "window"}:
+    the start values of the scenario's FMUs. The catenary gets the scenario's parameters and
+    contact_mode 1; every pantograph FMU the scenario's speed and integrator, start_mode 2 and
+    the catenary's start laws as the start values of its law inputs (what a master that
+    exchanges nothing in initialisation mode gives it). The catenary's pantograph_height_1
+    start value is the scenario pantograph's start height (a master that passes no height at
+    t0, fmpy's SSP support, starts from it)."""
+    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.catenary.model import CatenaryModel
+    from pantocosim.catenary.operating_height import contact_height_laws
+    from pantocosim.master.run import analysis_window
+    from pantocosim.master.scenario import load_scenario
+    from pantocosim.pantograph.presets import load_pantograph
+    from pantocosim.pantograph.static_start import static_start_on_laws
+
+    sc = load_scenario(scenario)
+    if len(sc.pantographs) != 1 or sc.pantographs[0].start != "static":
+        raise ParameterError("pantographs", len(sc.pantographs), "an SSP export takes one "
+                             "pantograph with a static start", sc.source)
+    (spec,) = sc.pantographs
+    definition = load_catenary(sc.catenary)
+    if sc.spans:
+        definition = with_spans(definition, sc.spans)
+    window, _, duration = analysis_window(sc, definition)
+    catenary = CatenaryModel(definition, x0=[spec.position_m], speed=sc.speed)
+    laws = contact_height_laws(catenary, sc.contact_stiffness, window, sc.dt, duration,
+                               sc.alpha)
+    law_values = {"operating_height": float(laws.operating_offset[0]),
+                  "operating_height_slope": float(laws.operating_slope[0]),
+                  "static_height": float(laws.static_offset[0]),
+                  "static_height_slope": float(laws.static_slope[0])}
+    pan = load_pantograph(spec.model, speed_kmh=sc.speed_kmh, **spec.options)
+    q0, _ = static_start_on_laws(pan, *law_values.values())
+    cat = {"catenary_definition": sc.catenary, "spans": int(sc.spans or 0),
+           "speed_kmh": float(sc.speed_kmh), "n_pantographs": 1,
+           "position_1": float(spec.position_m), "static_force_1": 0.0,
+           "hht_alpha": float(sc.alpha), "contact_mode": 1,
+           "contact_stiffness": float(sc.contact_stiffness),
+           "contact_damping": float(sc.contact_damping), "extrapolate_heights": True,
+           "newton_rtol": float(sc.newton_rtol), "window_start": float(window[0]),
+           "window_end": float(window[1]), "averaging_step": float(sc.dt),
+           "pantograph_height_1": float(pan.contact_height(q0))}
+    pantograph = {"speed_kmh": float(sc.speed_kmh), "hht_alpha": float(sc.alpha),
+                  "start_mode": 2, "force_extrapolation": True}
+    stop = math.ceil(duration / sc.dt - 1e-9) * sc.dt
+    return {"scenario": sc, "catenary": cat, "pantograph": pantograph, "laws": law_values,
+            "options": dict(spec.options), "stop_time": stop, "window": window}
+
+
+def fmu_start_values(values: dict, model: str) -> dict:
+    """The start values baked into the scenario's FMU ``model``."""
+    from pantocosim.master.fmu_build import CATENARY_FMU
+
+    if model == CATENARY_FMU:
+        return dict(values["catenary"])
+    out = dict(values["pantograph"], **values["laws"])
+    if model == values["scenario"].pantographs[0].model:
+        out.update(values["options"])
+    return out
+
+
+# ------------------------------------------------------------------ the SSD
+def _sub(parent, ns: str, tag: str, **attrib) -> ET.Element:
+    return ET.SubElement(parent, f"{{{ns}}}{tag}", {k: str(v) for k, v in attrib.items()})
+
+
+def _ssd_type(value) -> tuple[str, str]:
+    if isinstance(value, bool):
+        return "Boolean", "true" if value else "false"
+    if isinstance(value, int):
+        return "Integer", str(value)
+    return "Real", repr(float(value))
+
+
+def system_structure(name: str, components: list[dict], connections: list[tuple],
+                     stop_time: float, step_size: float) -> ET.ElementTree:
+    """SystemStructure.ssd (SSP 1.0). ``components``: dicts with ``name``, ``source``,
+    ``connectors`` [(name, kind, type)] and ``parameters`` {name: value}."""
+    root = ET.Element(f"{{{SSD}}}SystemStructureDescription", version="1.0", name=name)
+    system = _sub(root, SSD, "System", name=name)
+    elements = _sub(system, SSD, "Elements")
+    for c in components:
+        comp = _sub(elements, SSD, "Component", name=c["name"], source=c["source"],
+                    type="application/x-fmu-sharedlibrary")
+        conns = _sub(comp, SSD, "Connectors")
+        for cname, kind, typ in c["connectors"]:
+            _sub(_sub(conns, SSD, "Connector", name=cname, kind=kind), SSC, typ)
+        if c.get("parameters"):
+            values = _sub(_sub(_sub(comp, SSD, "ParameterBindings"), SSD, "ParameterBinding"),
+                          SSD, "ParameterValues")
+            params = _sub(_sub(values, SSV, "ParameterSet", version="1.0",
+                               name=PARAMETER_SET), SSV, "Parameters")
+            for pname, value in c["parameters"].items():
+                typ, text = _ssd_type(value)
+                _sub(_sub(params, SSV, "Parameter", name=pname), SSV, typ, value=text)
+    links = _sub(system, SSD, "Connections")
+    for a, ac, b, bc in connections:
+        _sub(links, SSD, "Connection", startElement=a, startConnector=ac, endElement=b,
+             endConnector=bc)
+    _oms_annotation(system, stop_time, step_size)
+    exp = _sub(root, SSD, "DefaultExperiment", startTime="0.0", stopTime=repr(stop_time))
+    note = _sub(_sub(exp, SSD, "Annotations"), SSC, "Annotation",
+                type="com.opensimulationplatform")
+    _sub(note, OSP, "StepSize", value=repr(float(step_size)))
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def _oms_annotation(system: ET.Element, stop_time: float, step_size: float) -> None:
+    """OMSimulator's system annotation: a co-simulation system with a fixed-step master."""
+    note = _sub(_sub(system, SSD, "Annotations"), SSC, "Annotation", type="org.openmodelica")
+    info = _sub(_sub(note, OMS, "Annotations"), OMS, "SimulationInformation")
+    _sub(info, OMS, "FixedStepMaster", description="oms-ma", stepSize=repr(float(step_size)),
+         absoluteTolerance="0.0001", relativeTolerance="0.0001")
+
+
+def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
+    from fmpy import read_model_description
+
+    types = {v.name: v.type for v in read_model_description(str(fmu)).modelVariables}
+    causality = {v.name: v.causality for v in read_model_description(str(fmu)).modelVariables}
+    missing = [n for n in list(parameters) + ports if n not in types]
+    if missing:
+        raise ParameterError("fmu", str(fmu), f"has no variable {missing[0]!r}: not a "
+                             "pantocosim FMU of this version (rebuild the FMUs)")
+    return ([(n, "parameter", types[n]) for n in parameters]
+            + [(n, causality[n], types[n]) for n in ports])
+
+
+def _ssp_parameters(values: dict) -> dict:
+    """The values an SSD binds: non-String parameters (inputs stay connections)."""
+    return {k: v for k, v in values.items()
+            if not isinstance(v, str) and not k.startswith("pantograph_")}
+
+
+def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
+              values: dict, step_size: float) -> Path:
+    """The SSP file of one pantograph FMU on the catenary FMU (see the module docstring);
+    validated against the SSP 1.0 schema."""
+    from pantocosim.fmi.slave_base import bundled_stamp
+
+    stamps = {Path(f).name: bundled_stamp(f) for f in (pantograph_fmu, catenary_fmu)}
+    if None in stamps.values() or len(set(stamps.values())) != 1:
+        raise ParameterError("fmu", str(pantograph_fmu), f"the FMUs come from different "
+                             f"builds (stamps {stamps}): they bundle different pantocosim "
+                             "copies and cannot run in one process; rebuild them together")
+    pan_params = _ssp_parameters(values["pantograph"])
+    cat_params = _ssp_parameters(values["catenary"])
+    pan_ports = sorted({p for a, ap, b, bp in PORTS for el, p in ((a, ap), (b, bp))
+                        if el == "pantograph"})
+    cat_ports = sorted({p for a, ap, b, bp in PORTS for el, p in ((a, ap), (b, bp))
+                        if el == "catenary"})
+    components = [
+        {"name": "pantograph", "source": f"resources/{Path(pantograph_fmu).name}",
+         "connectors": _connectors(pantograph_fmu, pan_params, pan_ports),
+         "parameters": pan_params},
+        {"name": "catenary", "source": f"resources/{Path(catenary_fmu).name}",
+         "connectors": _connectors(catenary_fmu, cat_params, cat_ports),
+         "parameters": cat_params}]
+    tree = system_structure(identifier(name), components, PORTS, values["stop_time"],
+                            step_size)
+    dest = Path(dest)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest.with_name(dest.name + ".part")
+    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", ET.tostring(tree.getroot(), encoding="unicode",
+                                                      xml_declaration=True) + "\n")
+        z.write(pantograph_fmu, f"resources/{Path(pantograph_fmu).name}")
+        z.write(catenary_fmu, f"resources/{Path(catenary_fmu).name}")
+    try:
+        validate_ssp(tmp)
+        tmp.replace(dest)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return dest
+
+
+def validate_ssp(ssp: Path) -> None:
+    """Validate the SSD against fmpy's SSP 1.0 schemas (raises on a violation)."""
+    from fmpy.ssp.ssd import read_ssd
+
+    read_ssd(str(ssp), validate=True)
+
+
+# ------------------------------------------------------------------ CoFmuPy
+def cofmupy_config(fmus: dict, connections: list[tuple], stop_time: float,
+                   step_size: float) -> dict:
+    """A CoFmuPy configuration (Jacobi loop, no start values: the FMUs' own are the
+    scenario's)."""
+    return {
+        "fmus": [{"id": name, "path": str(path), "initialization": {}}
+                 for name, path in fmus.items()],
+        "connections": [{"source": {"type": "fmu", "id": a, "variable": ap, "unit": ""},
+                         "target": [{"type": "fmu", "id": b, "variable": bp, "unit": ""}]}
+                        for a, ap, b, bp in connections],
+        "edge_sep": " -> ",
+        "root": "",
+        "cosim_method": "jacobi",
+        "iterative": False,
+        "loop_solver": "jacobi",
+        "stop_time": stop_time,
+        "step_size": step_size,
+    }
+
+
+# ------------------------------------------------------------------ the package
+def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
+                           quiet: bool = False) -> list[Path]:
+    """For each scenario: its FMUs in ``out/<scenario>/``, ``out/<scenario>.ssp`` and
+    ``out/<scenario>/cofmupy.json``."""
+    from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
+
+    written = []
+    for name in scenarios:
+        values = scenario_start_values(name)
+        sc = values["scenario"]
+        folder = Path(out) / name
+        baked = {m: fmu_start_values(values, m) for m in FMU_NAMES}
+        written += build_fmus(folder, quiet=True, start_values=baked, scenario=name)
+        model = sc.pantographs[0].model
+        ssp = write_ssp(Path(out) / f"{name}.ssp", name, folder / f"{model}.fmu",
+                        folder / f"{CATENARY_FMU}.fmu", values, sc.dt)
+        config = folder / "cofmupy.json"
+        config.write_text(json.dumps(cofmupy_config(
+            {"pantograph": f"{model}.fmu", "catenary": f"{CATENARY_FMU}.fmu"}, PORTS,
+            values["stop_time"], sc.dt), indent=2) + "\n")
+        written += [ssp, config]
+        if not quiet:
+            cat = values["catenary"]
+            print(f"wrote {ssp} and {folder}/ (scenario FMUs, cofmupy.json): stop "
+                  f"{values['stop_time']:g} s, window {values['window'][0]:g}.."
+                  f"{values['window'][1]:g} m, start height {cat['pantograph_height_1']:.6f} m")
+    return written
+
+
+def scenario_support_x(values: dict) -> np.ndarray:
+    """Support positions of the scenario's line."""
+    from pantocosim.catenary.definition import load_catenary, with_spans
+
+    d = load_catenary(values["catenary_definition"])
+    if int(values.get("spans", 0)):
+        d = with_spans(d, int(values["spans"]))
+    return np.asarray(d.support_x, float)
