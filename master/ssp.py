@@ -31,9 +31,8 @@ from pantocosim.core.errors import ParameterError
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
-OSP = "http://opensimulationplatform.com/SSP/OSPAnnotations"
 OMS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
-for _prefix, _uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("osp", OSP), ("oms", OMS)):
+for _prefix, _uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("oms", OMS)):
     ET.register_namespace(_prefix, _uri)
 
 #: name of the SSP parameter set (ecos applies the set named at init, merged over components)
@@ -157,16 +156,17 @@ def system_structure(name: str, components: list[dict], connections: list[tuple]
         _sub(links, SSD, "Connection", startElement=a, startConnector=ac, endElement=b,
              endConnector=bc)
     _oms_annotation(system, stop_time, step_size)
-    exp = _sub(root, SSD, "DefaultExperiment", startTime="0.0", stopTime=repr(stop_time))
-    note = _sub(_sub(exp, SSD, "Annotations"), SSC, "Annotation",
-                type="com.opensimulationplatform")
-    _sub(note, OSP, "StepSize", value=repr(float(step_size)))
+    # OMSimulator 3.0 takes no other root children than System, Units, Enumerations and
+    # DefaultExperiment, and reads its step from the system annotation
+    _sub(root, SSD, "DefaultExperiment", startTime="0.0", stopTime=repr(stop_time))
     ET.indent(root)
     return ET.ElementTree(root)
 
 
 def _oms_annotation(system: ET.Element, stop_time: float, step_size: float) -> None:
-    """OMSimulator's system annotation: a co-simulation system with a fixed-step master."""
+    """OMSimulator's system annotation (without it OMSimulator 3.0 cannot make the system:
+    ``[NewSystem] internal error``): a co-simulation system with its fixed-step master
+    ``oms-ma``, as OMSimulator's own SSD export writes it."""
     note = _sub(_sub(system, SSD, "Annotations"), SSC, "Annotation", type="org.openmodelica")
     info = _sub(_sub(note, OMS, "Annotations"), OMS, "SimulationInformation")
     _sub(info, OMS, "FixedStepMaster", description="oms-ma", stepSize=repr(float(step_size)),

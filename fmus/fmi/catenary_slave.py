@@ -179,7 +179,7 @@ class CatenarySlave(IntegratorSlave):
                 return load_catenary(cand)
         return load_catenary(name)
 
-    def _model(self):
+    def _build_model(self):
         """The catenary model of the current parameters (checked; cached)."""
         from pantocosim.catenary.definition import with_spans
         from pantocosim.catenary.model import CatenaryModel
@@ -249,7 +249,7 @@ class CatenarySlave(IntegratorSlave):
     def update_initial_outputs(self):
         """In initialisation mode the start laws are outputs as soon as the parameters are
         set (pantograph FMUs in start_mode 2 read them there)."""
-        self._set_law_outputs(self._laws(self._model()))
+        self._set_law_outputs(self._laws(self._build_model()))
 
     def _set_law_outputs(self, laws):
         values = (laws.operating_offset, laws.operating_slope, laws.static_offset,
@@ -295,7 +295,7 @@ class CatenarySlave(IntegratorSlave):
         alpha = self.finite("hht_alpha", self.hht_alpha)
         if not -1.0 / 3.0 <= alpha <= 0.0:
             raise ParameterError("hht_alpha", alpha, "must lie in [-1/3, 0]")
-        model = self._model()
+        model = self._model = self._build_model()
         n = len(model.x0)
         contact = self._contact()
         F0 = self._static_forces(n)
@@ -330,7 +330,7 @@ class CatenarySlave(IntegratorSlave):
     def _input_heights(self, n, F0):
         """Pantograph heights and velocities at t0: at z_w(F) + F / k_H for a static force F,
         else the inputs."""
-        model = self._model()
+        model = self._build_model()
         k_h = self._contact().stiffness
         zw = model.wire_height(0.0, model.static_state(F0)) if np.any(F0 > 0) else None
         out = np.empty((n, 2))
@@ -442,7 +442,7 @@ class CatenarySlave(IntegratorSlave):
         given = (F0 == 0.0) & (new[:, 0] > 0.0)
         if np.any(given & (np.abs(new[:, 0] - held[:, 0]) > HEIGHT_TOL_M)):
             held[given] = new[given]
-            self._start_penalty(self._model(), self._contact(), F0, held)
+            self._start_penalty(self._build_model(), self._contact(), F0, held)
             self._update_outputs(initial=True)
         return held
 

@@ -164,6 +164,8 @@ class PantographSlave(IntegratorSlave):
         key = (self._laws(), self.start_mode, self.initial_height, self.speed_kmh)
         if key == getattr(self, "_preview_key", None):
             return
+        if self.start_mode == 2 and min(key[0][1], key[0][3]) <= 0.0:
+            return  # the catenary's laws are not there yet
         self._preview_key = key
         model = self._load_model()
         q0, _ = self._start(model)

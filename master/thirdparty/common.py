@@ -1,11 +1,11 @@
-"""Shared helpers of the third-party recipes (run_libcosim.py, run_ecos.py, run_fmpy_single.py).
+"""Shared helpers of the third-party recipes (``python -m pantocosim.master.thirdparty.X``
+for X in libcosim, ecos, fmpy_ssp, cofmupy, fmpy_single; docs/third-party.md).
 
-Not a recipe itself. Every recipe runs the foreign master in a child process (``--child``)
-that imports only numpy, scipy and the master (never ``pantocosim``: the FMUs import the copy
-bundled in their resources, and pythonfmu may abort at process exit, design/fmi-toolchain.md
-B5); the child writes the time series as CSV, prints its wall time and ends with
-``os._exit(0)``. The parent reads the CSV and prints the EN 50317 statistics computed with
-``pantocosim.master.statistics.contact_statistics``.
+Not a recipe itself. Every recipe runs the foreign master in a child process (``--child``):
+pythonfmu may abort at process exit (docs/third-party.md, "Process exit"), so the child
+imports scipy.sparse.linalg before any FMU, writes the time series as CSV, prints its wall
+time and ends with ``os._exit``. The parent reads the CSV and prints the EN 50317 statistics
+computed with ``pantocosim.master.statistics.contact_statistics``.
 """
 
 from __future__ import annotations
@@ -22,40 +22,51 @@ from types import SimpleNamespace
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_SSP = ROOT / "dist" / "fmus" / "dsa380-ave-300.ssp"
+DEFAULT_SSP = Path("dist") / "fmus" / "dsa380-ave-300.ssp"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
 
 
 # ------------------------------------------------------------------------- SSP
 def read_ssd(ssp: str | Path) -> dict:
-    """Parameters per component, connections and the default stop time of an SSP file."""
+    """Per component: its values (the FMU's start values, overlaid by the SSD's parameter
+    values); the connections and the default stop time of an SSP file."""
+    from fmpy import read_model_description
+
     with zipfile.ZipFile(ssp) as z:
         root = ET.fromstring(z.read("SystemStructure.ssd"))
-    params: dict = {}
+        params: dict = {}
+        for comp in root.iter(f"{{{NS['ssd']}}}Component"):
+            with z.open(comp.get("source")) as f:
+                md = read_model_description(f)
+            p = params.setdefault(comp.get("name"), {})
+            for v in md.modelVariables:
+                if v.start is not None:
+                    p[v.name] = _typed(v.type, v.start)
+            for par in comp.iter(f"{{{NS['ssv']}}}Parameter"):
+                (val,) = list(par)
+                p[par.get("name")] = _typed(val.tag.split("}")[1], val.get("value"))
     sets = sorted({ps.get("name") for ps in root.iter(f"{{{NS['ssv']}}}ParameterSet")})
-    for comp in root.iter(f"{{{NS['ssd']}}}Component"):
-        p = params.setdefault(comp.get("name"), {})
-        for par in comp.iter(f"{{{NS['ssv']}}}Parameter"):
-            (val,) = list(par)
-            kind = val.tag.split("}")[1]
-            text = val.get("value")
-            p[par.get("name")] = (float(text) if kind == "Real" else int(text)
-                                  if kind == "Integer" else text)
     exp = root.find("ssd:DefaultExperiment", NS)
     stop = float(exp.get("stopTime")) if exp is not None and exp.get("stopTime") else None
     return {"parameters": params, "stop_time": stop, "parameter_sets": sets}
 
 
+def _typed(kind: str, text: str):
+    if kind == "Real":
+        return float(text)
+    if kind == "Integer":
+        return int(text)
+    if kind == "Boolean":
+        return text in ("true", "1", True)
+    return text
+
+
 def catenary_layout(cat_params: dict) -> np.ndarray:
     """Support positions of the catenary the SSP's catenary FMU builds."""
-    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.master.ssp import scenario_support_x
 
-    d = load_catenary(cat_params.get("catenary", "en50318"))
-    if int(cat_params.get("spans", 0)):
-        d = with_spans(d, int(cat_params["spans"]))
-    return np.asarray(d.support_x, float)
+    return scenario_support_x(cat_params)
 
 
 def columns(n_supports: int) -> list[str]:
@@ -82,16 +93,16 @@ def read_csv(path: str | Path) -> dict:
 
 
 # ------------------------------------------------------------------------- parent side
-def run_child(script: str | Path, args: list) -> tuple:
-    """Run ``script --child ARGS``; returns its wall time (printed as ``WALL <s>``), the part
-    of it spent in initialisation (``INIT <s>``: model set-up and numba JIT) and the process
-    CPU time of the run (``CPU <s>``), the last two None when not printed."""
-    cmd = [sys.executable, str(script), "--child", *map(str, args)]
+def run_child(module: str, args: list) -> tuple:
+    """Run ``python -m MODULE --child ARGS``; returns its wall time (printed as ``WALL <s>``),
+    the part of it spent in initialisation (``INIT <s>``: model set-up and numba JIT) and the
+    process CPU time of the run (``CPU <s>``), the last two None when not printed."""
+    cmd = [sys.executable, "-m", module, "--child", *map(str, args)]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     wall = [l for l in proc.stdout.splitlines() if l.startswith("WALL ")]
     if proc.returncode != 0 or not wall:
         sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
-        raise SystemExit(f"{Path(script).name}: the co-simulation failed "
+        raise SystemExit(f"{module}: the co-simulation failed "
                          f"(exit code {proc.returncode})")
     init = None
     cpu = None
@@ -136,25 +147,27 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     return SimpleNamespace(
         tool=tool, ssd=ssd, cat=cat, support_x=support_x,
         stop=a.stop if a.stop is not None else ssd["stop_time"],
-        window=a.window or default_window(support_x),
+        window=a.window or ssp_window(cat, support_x),
         out=a.out or Path("results") / f"{a.ssp.stem}-{tool}.csv",
         n_sup=min(len(support_x), 64))
 
 
-def run_ssp_child(script: str | Path, a: argparse.Namespace, r: SimpleNamespace,
+def run_ssp_child(module: str, a: argparse.Namespace, r: SimpleNamespace,
                   *extra) -> None:
     """Run an SSP recipe's child (arguments: SSP, step, stop, CSV, supports, x0, V, extra)
     and report its statistics."""
-    wall = run_child(script, ["--", a.ssp.resolve(), a.step, r.stop, r.out, r.n_sup,
+    wall = run_child(module, ["--", a.ssp.resolve(), a.step, r.stop, r.out, r.n_sup,
                               r.cat["position_1"], r.cat["speed_kmh"] / 3.6, *extra])
     report(r.tool, r.out, r.window, r.support_x, wall, {"ssp": str(a.ssp), "step_s": a.step})
 
 
-def default_window(support_x: np.ndarray) -> tuple[float, float]:
-    """Supports 5..6 (the thesis' spans 5-6) when the line has them."""
-    if len(support_x) < 7:
-        raise SystemExit("the line has fewer than 6 spans: give --window START END (m)")
-    return float(support_x[5]), float(support_x[6])
+def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
+    """The analysis window of the catenary FMU's parameters (window_start, window_end), else
+    the middle span of the line (the FMU's own default)."""
+    if cat.get("window_end", 0.0) > cat.get("window_start", 0.0):
+        return float(cat["window_start"]), float(cat["window_end"])
+    mid = (len(support_x) - 1) // 2
+    return float(support_x[mid]), float(support_x[mid + 1])
 
 
 def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> dict:

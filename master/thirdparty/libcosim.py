@@ -1,11 +1,10 @@
-#!/usr/bin/env python3
 """Run an SSP file of pantocosim FMUs in libcosim (Open Simulation Platform) via libcosimpy.
 
 Recipe (docs/third-party.md)::
 
     pip install -e ".[thirdparty]"          # libcosimpy
-    python build_fmus.py                    # dist/fmus/*.fmu + dist/fmus/dsa380-ave-300.ssp
-    python scripts/run_libcosim.py [--ssp dist/fmus/dsa380-ave-300.ssp] [--step 0.001]
+    pantocosim build-fmus                    # dist/fmus/*.fmu + dist/fmus/dsa380-ave-300.ssp
+    python -m pantocosim.master.thirdparty.libcosim [--ssp dist/fmus/dsa380-ave-300.ssp] [--step 0.001]
                                    [--stop SECONDS] [--window START END] [--out CSV]
 
 libcosim loads the SSP (SystemStructure.ssd + resources/*.fmu), applies its parameter values
@@ -22,8 +21,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import run_common  # noqa: E402
+from pantocosim.master.thirdparty import common as run_common
+
+MODULE = "pantocosim.master.thirdparty.libcosim"
 
 
 def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: float,
@@ -87,7 +87,7 @@ def main(argv=None) -> int:
         ssp, step, stop, out, n_sup, x0, speed = a.child_args
         child(ssp, float(step), float(stop), out, int(n_sup), float(x0), float(speed))
         return 0
-    run_common.run_ssp_child(__file__, a, run_common.ssp_run(a, "libcosim"))
+    run_common.run_ssp_child(MODULE, a, run_common.ssp_run(a, "libcosim"))
     return 0
 
 

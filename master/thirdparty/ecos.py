@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Run an SSP file of pantocosim FMUs in ecos (the PythonFMU author's co-simulation engine)
 via ecospy.
 
@@ -6,8 +5,8 @@ Recipe (docs/third-party.md)::
 
     apt-get install -y libtbb12            # ecospy's native library needs libtbb.so.12
     pip install -e ".[thirdparty]"          # ecospy
-    python build_fmus.py                    # dist/fmus/*.fmu + dist/fmus/dsa380-ave-300.ssp
-    python scripts/run_ecos.py [--ssp dist/fmus/dsa380-ave-300.ssp] [--step 0.001]
+    pantocosim build-fmus                    # dist/fmus/*.fmu + dist/fmus/dsa380-ave-300.ssp
+    python -m pantocosim.master.thirdparty.ecos [--ssp dist/fmus/dsa380-ave-300.ssp] [--step 0.001]
                                [--stop SECONDS] [--window START END] [--out CSV]
 
 ecos loads the SSP (SystemStructure.ssd + resources/*.fmu), applies its parameter values and
@@ -22,8 +21,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import run_common  # noqa: E402
+from pantocosim.master.thirdparty import common as run_common
+
+MODULE = "pantocosim.master.thirdparty.ecos"
 
 
 def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: float,
@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     if len(sets) > 1:
         raise SystemExit(f"{a.ssp}: several parameter set names {sets}; ecos applies one set "
                          "(by name) to every component")
-    run_common.run_ssp_child(__file__, a, r, sets[0] if sets else "")
+    run_common.run_ssp_child(MODULE, a, r, sets[0] if sets else "")
     return 0
 
 

@@ -1,10 +1,9 @@
-#!/usr/bin/env python3
 """Run one pantograph FMU under a prescribed contact force with fmpy's ``simulate_fmu``.
 
 Recipe (docs/third-party.md)::
 
-    python build_fmus.py --only en50318-2mass
-    python scripts/run_fmpy_single.py [--fmu dist/fmus/en50318-2mass.fmu]
+    pantocosim build-fmus --only en50318-2mass
+    python -m pantocosim.master.thirdparty.fmpy_single [--fmu dist/fmus/en50318-2mass.fmu]
         [--force "120 + 30*sin(2*pi*5*t)"] [--stop 2.0] [--step 0.001] [--speed-kmh 300]
         [--out CSV]
 
@@ -24,10 +23,11 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import run_common  # noqa: E402
+from pantocosim.master.thirdparty import common as run_common
 
-DEFAULT_FMU = run_common.ROOT / "dist" / "fmus" / "en50318-2mass.fmu"
+MODULE = "pantocosim.master.thirdparty.fmpy_single"
+
+DEFAULT_FMU = Path("dist") / "fmus" / "en50318-2mass.fmu"
 
 
 def child(fmu: str, signal_file: str, step: float, stop: float, out: str, speed: float,
@@ -87,7 +87,7 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         sig_file = Path(tmp) / "signal.npy"
         np.save(sig_file, sig)
-        wall = run_common.run_child(__file__, ["--", a.fmu.resolve(), sig_file, a.step,
+        wall = run_common.run_child(MODULE, ["--", a.fmu.resolve(), sig_file, a.step,
                                                a.stop, out, speed, a.speed_kmh])
     run_common.report("fmpy simulate_fmu", out, (0.0, speed * a.stop), np.zeros(0), wall,
                       {"fmu": str(a.fmu), "force": a.force, "step_s": a.step})
