@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.fmi.catenary_slave import MAX_SUPPORTS
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -209,6 +210,9 @@ def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
                         if el == "pantograph"})
     cat_ports = sorted({p for a, ap, b, bp in PORTS for el, p in ((a, ap), (b, bp))
                         if el == "catenary"})
+    # unconnected outputs a master records with the connectors (fmpy, OMSimulator)
+    n_sup = min(len(scenario_support_x(values["catenary"])), MAX_SUPPORTS)
+    cat_ports += ["wire_height_1"] + [f"support_uplift_{j}" for j in range(n_sup)]
     components = [
         {"name": "pantograph", "source": f"resources/{Path(pantograph_fmu).name}",
          "connectors": _connectors(pantograph_fmu, pan_params, pan_ports),

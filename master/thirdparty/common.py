@@ -69,6 +69,22 @@ def catenary_layout(cat_params: dict) -> np.ndarray:
     return scenario_support_x(cat_params)
 
 
+def swap_pantograph(ssp: str | Path, fmu: str | Path, dest: str | Path) -> Path:
+    """A copy of ``ssp`` whose pantograph FMU file is replaced by ``fmu`` (same entry name,
+    nothing else edited): the swap a user makes by hand."""
+    with zipfile.ZipFile(ssp) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+        (comp,) = [c for c in root.iter(f"{{{NS['ssd']}}}Component")
+                   if c.get("name") == "pantograph"]
+        with zipfile.ZipFile(dest, "w", zipfile.ZIP_DEFLATED) as out:
+            for item in z.infolist():
+                if item.filename == comp.get("source"):
+                    out.write(fmu, item.filename)
+                else:
+                    out.writestr(item, z.read(item.filename))
+    return Path(dest)
+
+
 def columns(n_supports: int) -> list[str]:
     return (["time", "x_1", "contact_force_1", "contact_height_1", "wire_height_1"]
             + [f"support_uplift_{j}" for j in range(n_supports)])

@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""The figures table of docs/third-party.md, from runs: the shipped SSP of the default
+scenario in each third-party master, and with its pantograph FMU swapped for every other
+pantograph FMU (a file swap inside the SSP, nothing else edited), against ``pantocosim run``
+of the same scenario with that pantograph (monolithic).
+
+    python scripts/third_party_figures.py [--work DIR] [--masters libcosim ecos fmpy cofmupy]
+        [--models dsa380-rigid en50318-2mass dsa380-lumped3] [--docs docs/third-party.md]
+
+Writes the table between the markers ``<!-- figures:start -->`` and ``<!-- figures:end -->``
+of the docs page and prints it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+START, END = "<!-- figures:start -->", "<!-- figures:end -->"
+MASTERS = {"libcosim": "libcosim", "ecos": "ecos", "fmpy": "fmpy_ssp", "cofmupy": "cofmupy"}
+
+
+def reference(scenario: str, model: str) -> dict:
+    """``pantocosim run`` (monolithic) of the scenario with ``model`` as its pantograph."""
+    from pantocosim.master.run import prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    sc = load_scenario(scenario)
+    sc.pantographs = [dataclasses.replace(sc.pantographs[0], model=model, fmu=None)]
+    t = time.perf_counter()
+    res = run_monolithic(prepare(sc), None, progress=False)
+    out = res.statistics()[0].as_dict()
+    out["wall_time_s"] = time.perf_counter() - t
+    return out
+
+
+def third_party(master: str, ssp: Path, work: Path) -> dict:
+    module = f"pantocosim.master.thirdparty.{MASTERS[master]}"
+    csv = work / f"{ssp.stem}-{master}.csv"
+    proc = subprocess.run([sys.executable, "-m", module, "--ssp", str(ssp), "--out", str(csv)],
+                          capture_output=True, text=True, cwd=work)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("STATISTICS ")]
+    if proc.returncode != 0 or not lines:
+        return {"error": (proc.stdout + proc.stderr).strip().splitlines()[-1:]}
+    return json.loads(lines[-1][len("STATISTICS "):])
+
+
+def table(rows: list[dict]) -> str:
+    out = ["| master | pantograph FMU | mean [N] | ref. mean | Δ mean | σ [N] | ref. σ | Δ σ "
+           "| max uplift [mm] | wall [s] |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        s, ref = r["stats"], r["ref"]
+        if "error" in s:
+            out.append(f"| {r['master']} | {r['model']} | failed: {s['error']} |||||||| |")
+            continue
+        dm = 100 * (s["mean_n"] / ref["mean_n"] - 1)
+        ds = 100 * (s["std_n"] / ref["std_n"] - 1)
+        out.append(f"| {r['master']} | {r['model']} | {s['mean_n']:.2f} | {ref['mean_n']:.2f} "
+                   f"| {dm:+.2f} % | {s['std_n']:.2f} | {ref['std_n']:.2f} | {ds:+.2f} % "
+                   f"| {1e3 * s['max_uplift_at_support_m']:.1f} | {s['wall_time_s']:.0f} |")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    from pantocosim.master.fmu_build import build_all
+    from pantocosim.master.thirdparty.common import swap_pantograph
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", type=Path, default=ROOT / "out" / "third-party")
+    ap.add_argument("--masters", nargs="*", default=list(MASTERS), choices=list(MASTERS))
+    ap.add_argument("--models", nargs="*",
+                    default=["dsa380-rigid", "en50318-2mass", "dsa380-lumped3"])
+    ap.add_argument("--scenario", default="dsa380-ave-300")
+    ap.add_argument("--docs", type=Path, default=ROOT / "docs" / "third-party.md")
+    a = ap.parse_args(argv)
+    a.work.mkdir(parents=True, exist_ok=True)
+    fmus = a.work / "dist" / "fmus"
+    build_all(fmus, quiet=True)
+    shipped = fmus / f"{a.scenario}.ssp"
+    rows = []
+    for model in a.models:
+        ref = reference(a.scenario, model)
+        ssp = a.work / f"{a.scenario}-{model}.ssp"
+        swap_pantograph(shipped, fmus / a.scenario / f"{model}.fmu", ssp)
+        for master in a.masters:
+            rows.append({"master": master, "model": model, "ref": ref,
+                         "stats": third_party(master, ssp, a.work)})
+            print(table(rows[-1:]).splitlines()[-1], flush=True)
+    text = table(rows)
+    print(text)
+    page = a.docs.read_text()
+    if START in page and END in page:
+        head, rest = page.split(START, 1)
+        page = head + START + "\n" + text + "\n" + END + rest.split(END, 1)[1]
+        a.docs.write_text(page)
+    (a.work / "figures.json").write_text(json.dumps(rows, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
