@@ -246,23 +246,18 @@ def validate_ssp(ssp: Path) -> None:
 
 
 # ------------------------------------------------------------------ CoFmuPy
-def cofmupy_config(fmus: dict, connections: list[tuple], stop_time: float,
-                   step_size: float) -> dict:
-    """A CoFmuPy configuration (Jacobi loop, no start values: the FMUs' own are the
-    scenario's)."""
+def cofmupy_config(fmus: dict, connections: list[tuple]) -> dict:
+    """A CoFmuPy 1.0 configuration: the FMUs (paths relative to the configuration's folder)
+    with no start values (CoFmuPy sets every value with fmi2SetReal; the scenario's FMUs
+    carry the scenario), the connections, Jacobi coupling without iterations."""
     return {
         "fmus": [{"id": name, "path": str(path), "initialization": {}}
                  for name, path in fmus.items()],
-        "connections": [{"source": {"type": "fmu", "id": a, "variable": ap, "unit": ""},
-                         "target": [{"type": "fmu", "id": b, "variable": bp, "unit": ""}]}
+        "connections": [{"source": {"type": "fmu", "id": a, "variable": ap},
+                         "target": [{"type": "fmu", "id": b, "variable": bp}]}
                         for a, ap, b, bp in connections],
-        "edge_sep": " -> ",
-        "root": "",
         "cosim_method": "jacobi",
         "iterative": False,
-        "loop_solver": "jacobi",
-        "stop_time": stop_time,
-        "step_size": step_size,
     }
 
 
@@ -285,8 +280,8 @@ def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
                         folder / f"{CATENARY_FMU}.fmu", values, sc.dt)
         config = folder / "cofmupy.json"
         config.write_text(json.dumps(cofmupy_config(
-            {"pantograph": f"{model}.fmu", "catenary": f"{CATENARY_FMU}.fmu"}, PORTS,
-            values["stop_time"], sc.dt), indent=2) + "\n")
+            {"pantograph": f"{model}.fmu", "catenary": f"{CATENARY_FMU}.fmu"}, PORTS),
+            indent=2) + "\n")
         written += [ssp, config]
         if not quiet:
             cat = values["catenary"]

@@ -137,7 +137,7 @@ def catenary_bad_input(fmu, args):
     """Each bad input gives fmi2Discard (status 2) with a message; the process survives."""
     base = args.get("params", {})
     cases = {
-        "unknown_catenary": ({"catenary": "no-such-catenary.toml"}, None),
+        "unknown_catenary": ({"catenary_definition": "no-such-catenary.toml"}, None),
         "nan_force": ({}, ("contact_force_1", float("nan"))),
         "negative_force": ({}, ("contact_force_1", -5.0)),
         "bad_n_pantographs": ({"n_pantographs": 7}, None),

@@ -14,23 +14,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from recipes import read_csv, run_recipe
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = Path(__file__).with_name("fmu_catenary_probe.py")
-SCRIPTS = ROOT / "scripts"
-SHORT = {"catenary": "en50318", "spans": 4, "speed_kmh": 300.0}
+SHORT = {"catenary_definition": "en50318", "spans": 4, "speed_kmh": 300.0}
 H = 1e-3
-
-
-@pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    sys.path.insert(0, str(ROOT))
-    import build_fmus
-
-    out = tmp_path_factory.mktemp("fmus")
-    paths = build_fmus.build(out, only=["catenary", "en50318-2mass", "dsa380-rigid"],
-                             quiet=True)
-    return {p.stem: p for p in paths}
 
 
 def probe(check, fmu, python=sys.executable, **args):
@@ -59,16 +48,17 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
     md = read_model_description(str(path))
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
     v = {x.name: x for x in md.modelVariables}
-    params = {"catenary": "String", "spans": "Integer", "element_size": "Real",
+    params = {"catenary_definition": "String", "spans": "Integer", "element_size": "Real",
               "speed_kmh": "Real", "n_pantographs": "Integer", "hht_alpha": "Real",
               "contact_mode": "Integer", "contact_stiffness": "Real",
               "contact_damping": "Real", "n_substeps": "Integer",
-              "factorization": "Integer"}
+              "factorization": "Integer", "window_start": "Real", "window_end": "Real",
+              "averaging_step": "Real"}
     for k in range(1, 5):
         params[f"position_{k}"] = params[f"static_force_{k}"] = "Real"
     for name, typ in params.items():
         assert v[name].causality == "parameter" and v[name].type == typ, name
-    assert v["catenary"].start == "en50318" and float(v["hht_alpha"].start) == -0.05
+    assert v["catenary_definition"].start == "en50318" and float(v["hht_alpha"].start) == -0.05
     assert float(v["contact_stiffness"].start) == 50000.0
     assert int(v["factorization"].start) == 2
     ports = {(x.name, x.causality, x.unit) for x in md.modelVariables
@@ -83,6 +73,11 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
                      (f"contact_force_out_{k}", "output", "N")}
     expected |= {(f"support_uplift_{j}", "output", "m") for j in range(64)}
     expected |= {("n_supports", "output", "1")}
+    for k in range(1, 5):
+        expected |= {(f"operating_height_{k}", "output", "m"),
+                     (f"operating_height_slope_{k}", "output", "m/N"),
+                     (f"static_height_{k}", "output", "m"),
+                     (f"static_height_slope_{k}", "output", "m/N")}
     assert ports == expected
     assert "t + h" in v["contact_force_1"].description
     assert "t + h" in v["pantograph_height_1"].description
@@ -202,157 +197,13 @@ def test_mode1_builtin_penalty_reproduces_the_monolithic_catenary(fmus):
     assert res["rollback_equal"] and res["serialized_equal"]
 
 
-# ------------------------------------------------------------------------- SSP
-def test_default_ssp_has_the_system_and_the_static_handshake(fmus, tmp_path):
-    import xml.etree.ElementTree as ET
-
-    import build_fmus
-
-    # the default SSP from FMUs in a folder (copies of the module's builds)
-    import shutil
-
-    for name in ("catenary", "dsa380-rigid"):
-        shutil.copy(fmus[name], tmp_path / f"{name}.fmu")
-    (ssp,) = build_fmus.write_default_ssp(tmp_path, quiet=True)
-    assert ssp.name == "dsa380-ave-300.ssp"
-    with zipfile.ZipFile(ssp) as z:
-        names = set(z.namelist())
-        ssd = z.read("SystemStructure.ssd").decode()
-    assert names == {"SystemStructure.ssd", "resources/dsa380-rigid.fmu",
-                     "resources/catenary.fmu"}
-    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
-          "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
-    root = ET.fromstring(ssd)
-    assert root.get("version") == "1.0"
-    params = {}
-    for comp in root.iter(f"{{{ns['ssd']}}}Component"):
-        for p in comp.iter(f"{{{ns['ssv']}}}Parameter"):
-            (val,) = list(p)
-            params[(comp.get("name"), p.get("name"))] = val.get("value")
-    conns = {(c.get("startElement"), c.get("startConnector"), c.get("endElement"),
-              c.get("endConnector")) for c in root.iter(f"{{{ns['ssd']}}}Connection")}
-    assert conns == {("pantograph", "contact_height", "catenary", "pantograph_height_1"),
-                     ("pantograph", "contact_velocity", "catenary", "pantograph_velocity_1"),
-                     ("catenary", "contact_force_out_1", "pantograph", "contact_force")}
-    assert params[("catenary", "catenary")] == "ave64"
-    assert params[("catenary", "contact_mode")] == "1"
-    assert float(params[("catenary", "speed_kmh")]) == 300.0
-    assert float(params[("pantograph", "speed_kmh")]) == 300.0
-    assert float(params[("catenary", "position_1")]) == 32.0
-    # the static start of the monolithic run / our master (pantocosim.master.run.prepare)
-    from pantocosim.master.run import prepare
-
-    prep = prepare(str(ROOT / "master" / "scenarios" / "dsa380-ave-300.toml"))
-    F = float(prep.static_forces[0])
-    h = float(prep.pantographs[0].contact_height(prep.q_pan0[0]))
-    z_w = float(prep.catenary.wire_height(0.0, prep.q_cat0)[0])
-    assert float(params[("catenary", "static_force_1")]) == F
-    assert float(params[("pantograph", "initial_contact_force")]) == F
-    assert float(params[("pantograph", "initial_height")]) == h
-    assert h == pytest.approx(z_w + F / 5e4, abs=1e-12)
-    stop = float(root.find("ssd:DefaultExperiment", ns).get("stopTime"))
-    assert stop == pytest.approx(prep.n_steps * 1e-3)
-
-
-# ------------------------------------------------------------------------- third-party masters
-@pytest.fixture(scope="module")
-def short_ssp(fmus, tmp_path_factory):
-    """The SSP recipe on a short scenario: en50318 catenary cut to 4 spans, the 2-mass
-    pantograph at x0 = 30 m, 300 km/h, 1 s; Newton converged to round-off, so that masters
-    can be compared far below the production tolerance."""
-    import build_fmus
-
-    ssp = tmp_path_factory.mktemp("ssp") / "short.ssp"
-    info = build_fmus.pantograph_catenary_ssp(
-        ssp, "short", fmus["en50318-2mass"], fmus["catenary"], "en50318", 300.0, 30.0,
-        "en50318-2mass", 1.0, spans=4, newton_rtol=1e-10)
-    return ssp, info
-
-
-@pytest.fixture(scope="module")
-def monolithic_1s():
-    return monolithic_short(1000)
-
-
-def run_script(script, *args, timeout=900):
-    proc = subprocess.run([sys.executable, str(SCRIPTS / script), *map(str, args)],
-                          capture_output=True, text=True, timeout=timeout, cwd=str(ROOT))
-    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-4000:]
-    lines = [l for l in proc.stdout.splitlines() if l.startswith("STATISTICS ")]
-    assert lines, proc.stdout[-4000:] + proc.stderr[-4000:]
-    return json.loads(lines[-1][len("STATISTICS "):]), proc.stdout
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.reader(f))
-    data = np.array(rows[1:], dtype=float)
-    return {h: data[:, i] for i, h in enumerate(rows[0])}
-
-
-_RUNS: dict = {}
-
-
-def third_party_run(short_ssp, tmp_path_factory, script, package):
-    pytest.importorskip(package, reason=f"{package} is not installed (pip install -e "
-                        "'.[thirdparty]'; ecospy also needs Debian's libtbb12)")
-    if package not in _RUNS:
-        ssp, info = short_ssp
-        out = tmp_path_factory.mktemp(package) / "timeseries.csv"
-        stats, _ = run_script(script, "--ssp", ssp, "--stop", 1.0, "--step", H,
-                              "--window", 60.0, 110.0, "--out", out)
-        _RUNS[package] = (read_csv(out), stats, info)
-    return _RUNS[package]
-
-
-def check_against_monolithic(c, stats, info, monolithic_1s):
-    from pantocosim.master.statistics import contact_statistics
-
-    mono, F0 = monolithic_1s
-    assert len(c["time"]) == 1001 and c["time"][-1] == pytest.approx(1.0)
-    assert np.all(np.isfinite(c["contact_force_1"]))
-    # the SSP's static start: the contact force at t0 is the pantograph's mean uplift
-    assert info["handshake"]["static_force"] == F0
-    assert c["contact_force_1"][0] == pytest.approx(F0, rel=1e-9)
-    assert c["contact_height_1"][0] == info["handshake"]["initial_height"]
-    # explicit coupling (fixed step 1 ms) vs the monolithic solve: statistics close
-    x = 30.0 + 300 / 3.6 * mono[:, 0]
-    ref = contact_statistics(mono[:, 0], mono[:, 1], x, (60.0, 110.0))
-    assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=0.02)
-    assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.10)
-    assert stats["loss_of_contact_percent"] == 0.0
-
-
-@pytest.mark.slow
-def test_libcosim_runs_the_ssp(short_ssp, tmp_path_factory, monolithic_1s):
-    c, stats, info = third_party_run(short_ssp, tmp_path_factory, "run_libcosim.py",
-                                     "libcosimpy")
-    check_against_monolithic(c, stats, info, monolithic_1s)
-    assert stats["master"] == "libcosim"
-
-
-@pytest.mark.slow
-def test_ecos_runs_the_ssp(short_ssp, tmp_path_factory, monolithic_1s):
-    c, stats, info = third_party_run(short_ssp, tmp_path_factory, "run_ecos.py", "ecospy")
-    check_against_monolithic(c, stats, info, monolithic_1s)
-    assert stats["master"] == "ecos"
-
-
-@pytest.mark.slow
-def test_libcosim_and_ecos_agree(short_ssp, tmp_path_factory):
-    a = third_party_run(short_ssp, tmp_path_factory, "run_libcosim.py", "libcosimpy")[0]
-    b = third_party_run(short_ssp, tmp_path_factory, "run_ecos.py", "ecospy")[0]
-    # both are fixed-step Jacobi masters on the same FMUs
-    assert np.max(np.abs(a["contact_force_1"] - b["contact_force_1"])) < 1e-5
-    assert np.max(np.abs(a["wire_height_1"] - b["wire_height_1"])) < 1e-9
-
-
+# ------------------------------------------------------------------------- fmpy
 def test_fmpy_simulate_fmu_on_a_pantograph_under_a_prescribed_force(fmus, tmp_path):
     from pantocosim.master.standalone import simulate_pantograph
     from pantocosim.pantograph.presets import load_pantograph
 
     out = tmp_path / "single.csv"
-    stats, _ = run_script("run_fmpy_single.py", "--fmu", fmus["en50318-2mass"], "--stop", 0.5,
+    stats, _ = run_recipe("fmpy_single", "--fmu", fmus["en50318-2mass"], "--stop", 0.5,
                           "--step", H, "--force", "120 + 30*sin(2*pi*5*t)", "--out", out)
     c = read_csv(out)
     ref = simulate_pantograph(load_pantograph("en50318-2mass"),

@@ -15,13 +15,9 @@ ALL = LUMPED + ["dsa380-rigid"]
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    sys.path.insert(0, str(ROOT))
-    import build_fmus
-
-    out = tmp_path_factory.mktemp("fmus")
-    paths = build_fmus.build(out, only=ALL, quiet=True)
-    return {p.stem: p for p in paths}
+def fmus(fmus):
+    """The session's pantograph FMUs of :data:`ALL`."""
+    return {name: fmus[name] for name in ALL}
 
 
 def probe(check, fmu, **args):
