@@ -137,9 +137,6 @@ class CatenarySlave(IntegratorSlave):
         self._state_attributes = ["_integ_state", "_prev_inputs"]
 
     # ------------------------------------------------------------------ lifecycle
-    def setup_experiment(self, start_time, stop_time, tolerance):
-        self._t0 = float(start_time)
-
     def exit_initialization_mode(self):
         self.guarded("initialisation", self._initialise)
         return True
@@ -281,7 +278,7 @@ class CatenarySlave(IntegratorSlave):
                 out[k - 1, j] = x
         return out, None
 
-    def do_step(self, current_time, step_size):
+    def advance(self, current_time, step_size):
         if self._error or self._integ is None:
             self.log(self._error or "not initialised", _discard())
             return False
