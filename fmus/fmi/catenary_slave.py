@@ -161,8 +161,6 @@ class CatenarySlave(IntegratorSlave):
         self.apply_start_values()
 
     # ------------------------------------------------------------------ lifecycle
-    def setup_experiment(self, start_time, stop_time, tolerance):
-        self._t0 = float(start_time)
 
     def _catenary_source(self):
         from pantocosim.catenary.definition import load_catenary
@@ -393,7 +391,7 @@ class CatenarySlave(IntegratorSlave):
                 out[k - 1, j] = x
         return out, None
 
-    def do_step(self, current_time, step_size):
+    def advance(self, current_time, step_size):
         if self._error or self._integ is None:
             self.log(self._error or "not initialised", _discard())
             return False

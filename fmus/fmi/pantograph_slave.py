@@ -191,10 +191,7 @@ class PantographSlave(IntegratorSlave):
         self.apply_pending_state()
         self._update_outputs()
 
-    def setup_experiment(self, start_time, stop_time, tolerance):
-        self._t0 = float(start_time)
-
-    def do_step(self, current_time, step_size):
+    def advance(self, current_time, step_size):
         if self._error or self._integ is None:
             self.log(self._error or "not initialised", Fmi2StatusDiscard())
             return False

@@ -9,7 +9,17 @@ Works around the pythonfmu 0.7.0 behaviour measured in design/fmi-toolchain.md:
 - several FMUs bundle the same package ``pantocosim``; a process imports it once, so each
   slave checks that the imported package is the one it was built with (build stamp);
 - units and a UnitDefinitions section are added to the model description;
-- outputs are declared ``initial="exact"`` so that ``fmpy validate`` passes.
+- outputs are declared ``initial="exact"`` so that ``fmpy validate`` passes;
+- the FMI 2.0 state machine is checked here (:meth:`GuardedSlave.do_step`): a step after
+  fmi2Terminate, a step size <= 0 and a communication point other than the FMU's current time
+  are discarded with a message; FMU states carry the model and instance they belong to.
+
+Non-OK statuses reachable from Python (pythonfmu 0.7.0, src/pythonfmu/PySlaveInstance.cpp and
+fmi2.cpp): only ``do_step`` returning False gives one (fmi2Discard). A Python exception in any
+callback gives fmi2Fatal and releases the slave (``handle_py_exception``), and the return values
+of the setters and of ``_set_fmu_state`` are ignored (fmi2OK). So a refused call (wrongly typed
+or unknown variable, a fixed parameter set after initialisation, a foreign FMU state) is logged
+with status fmi2Error, not applied, and the next doStep returns fmi2Discard naming it.
 """
 
 from __future__ import annotations
@@ -18,6 +28,7 @@ import hashlib
 import math
 import pickle
 import traceback
+import uuid
 from pathlib import Path
 from typing import Any, Callable
 from xml.etree.ElementTree import Element, SubElement
@@ -27,6 +38,46 @@ from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 STAMP_FILE = "pantocosim_build_stamp.txt"
+
+#: accepted distance between doStep's communication point and the FMU's current time:
+#: TIME_RTOL * max(1, |t|) + STEP_RTOL * h. The FMU's time after a step is the master's
+#: ``t + h`` (as pythonfmu's fmi2LastSuccessfulTime), so only the master's own rounding
+#: (``t += h``, ``t = t0 + k h``, integer nanoseconds) has to be absorbed: a few ulps of t.
+TIME_RTOL = 1e-9
+STEP_RTOL = 1e-6
+
+_INT32 = 2 ** 31
+
+
+def fmi_type(var) -> str:
+    """FMI type name of a pythonfmu variable."""
+    for cls in (Real, Integer, Boolean, String):
+        if isinstance(var, cls):
+            return cls.__name__
+    return type(var).__name__
+
+
+#: the Python value of each FMI type, as pythonfmu's own getters return it
+_NORMALISE = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+_GET_DEFAULT = {"Real": float("nan"), "Integer": 0, "Boolean": False, "String": ""}
+
+
+def lossless(value, kind: str):
+    """``value`` (float, int, bool or str) as FMI type ``kind`` if nothing is lost (Real 2.0
+    -> Integer 2, Real 1.0 -> Boolean true, Integer -> Real, ...), else None. Strings never
+    convert to or from the other types."""
+    if isinstance(value, str) or kind == "String":
+        return value if isinstance(value, str) and kind == "String" else None
+    x = float(value)  # exact for bool, int32 and float
+    if kind == "Real":
+        return x
+    if not math.isfinite(x) or x != math.floor(x):
+        return None
+    if kind == "Integer":
+        return int(x) if -_INT32 <= x < _INT32 else None
+    if kind == "Boolean":
+        return bool(x) if x in (0.0, 1.0) else None
+    return None
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:
@@ -94,6 +145,37 @@ class GuardedSlave(Fmi2Slave):
         #: names of internal attributes that make up the FMU state besides registered vars
         self._state_attributes: list[str] = []
         self._in_initialization = False
+        #: refused calls since the last doStep; the next doStep discards naming them
+        self._refused: list[str] = []
+        #: the FMU's current time: the start time, then the end of each accepted step
+        self._t0 = 0.0
+        self._time = 0.0
+        self._terminated = False
+        self._model_id = self._model_identity()
+        # The instance an in-memory FMU state belongs to. pythonfmu 0.7.0 passes the address of
+        # the C++ component's logger as ``logger`` (PySlaveInstance.cpp ``initialize``); it is
+        # unique among live instances and survives fmi2Reset (which re-creates this object).
+        logger = kwargs.get("logger")
+        self._instance_id = (f"component@{logger:#x}" if isinstance(logger, int) and logger
+                             else uuid.uuid4().hex)
+
+    def _model_identity(self) -> str:
+        """Class, preset and build stamp: FMU states are exchanged only within one model."""
+        cls = type(self)
+        stamp = ""
+        try:
+            if self.resources and (Path(self.resources) / STAMP_FILE).exists():
+                stamp = (Path(self.resources) / STAMP_FILE).read_text().strip()
+        except OSError:
+            pass
+        preset = getattr(self, "preset", None)
+        return (f"{cls.__module__}.{cls.__qualname__}"
+                + (f" preset {preset!r}" if preset else "") + (f" build {stamp}" if stamp else ""))
+
+    @property
+    def initialised(self) -> bool:
+        """True after a successful fmi2ExitInitializationMode (fixed parameters are frozen)."""
+        return False
 
     # ------------------------------------------------------------------ initialisation mode
     def enter_initialization_mode(self):
@@ -183,10 +265,152 @@ class GuardedSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ errors
     def fail(self, message: str, status: Fmi2Status = Fmi2Status.error) -> None:
-        """Record and log an error; the next do_step returns fmi2Discard."""
+        """Record and log an error; every later do_step returns fmi2Discard."""
         if self._error is None:
             self._error = message
         self.log(message, status)
+
+    def refuse(self, message: str) -> None:
+        """A call that is not applied: logged (fmi2Error), reported by the next do_step only."""
+        self._refused.append(message)
+        self.log(message, Fmi2Status.error)
+
+    # ------------------------------------------------------------------ FMI state machine
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        try:
+            t0 = float(start_time)
+            if not math.isfinite(t0):
+                self.fail(f"fmi2SetupExperiment: startTime = {start_time!r}: must be finite")
+                return
+            self._t0 = self._time = t0
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            self.fail(f"fmi2SetupExperiment: {type(exc).__name__}: {exc}")
+
+    def terminate(self):
+        self._terminated = True
+
+    def time_tolerance(self, step_size: float) -> float:
+        return TIME_RTOL * max(1.0, abs(self._time)) + STEP_RTOL * abs(step_size)
+
+    def _step_refusal(self, t: float, h: float) -> str | None:
+        """Why doStep(t, h) is not taken (FMI 2.0 state machine), or None."""
+        call = f"fmi2DoStep(t = {t!r}, h = {h!r})"
+        if self._terminated:
+            return f"{call} after fmi2Terminate: only fmi2Reset or fmi2FreeInstance may follow"
+        if self._refused:
+            msgs, self._refused = self._refused, []
+            more = f" (and {len(msgs) - 3} more)" if len(msgs) > 3 else ""
+            return (f"{call} not taken: refused since the last step: "
+                    + " | ".join(msgs[:3]) + more)
+        if not (math.isfinite(h) and h > 0.0):
+            return f"{call}: the communication step size must be finite and > 0"
+        if not math.isfinite(t) or abs(t - self._time) > self.time_tolerance(h):
+            return (f"{call}: the communication point {t!r} is not the FMU's current time "
+                    f"{self._time!r} (the start time, the end of the last accepted step, or "
+                    f"the time of the FMU state set last)")
+        return None
+
+    def do_step(self, current_time, step_size):
+        """The FMI 2.0 checks, then :meth:`advance`; the FMU's time moves on success."""
+        try:
+            t, h = float(current_time), float(step_size)
+            problem = self._step_refusal(t, h)
+            if problem is not None:
+                self.log(problem, Fmi2Status.discard)
+                return False
+            ok = bool(self.advance(t, h))
+            if ok:
+                self._time = t + h
+            return ok
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            self.log(f"fmi2DoStep(t = {current_time!r}, h = {step_size!r}): "
+                     f"{type(exc).__name__}: {exc}", Fmi2Status.discard)
+            return False
+
+    def advance(self, current_time: float, step_size: float) -> bool:
+        """The model's step from ``current_time`` (checked) by ``step_size`` (> 0)."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ typed get/set
+    def _not_settable(self, var) -> str | None:
+        if var.setter is None:
+            return "it cannot be set"
+        if not self.initialised:
+            return None
+        if var.causality == Fmi2Causality.input:
+            return None
+        if (var.causality == Fmi2Causality.parameter
+                and var.variability == Fmi2Variability.tunable):
+            return None
+        return (f"a {var.variability.name} {var.causality.name} can only be set before "
+                f"fmi2ExitInitializationMode (FMI 2.0)")
+
+    def _set(self, call: str, kind: str, vrs, values) -> None:
+        for vr, value in zip(vrs, values):
+            try:
+                var = self.vars.get(vr)
+                if var is None:
+                    self.refuse(f"{call}: unknown value reference {vr}: not applied")
+                    continue
+                what = f"{call}: {var.name!r} (vr {vr}, {fmi_type(var)})"
+                why = self._not_settable(var)
+                if why:
+                    self.refuse(f"{what}: {why}: {value!r} not applied")
+                    continue
+                target = fmi_type(var)
+                x = value if target == kind else lossless(value, target)
+                if x is None:
+                    self.refuse(f"{what}: the {kind} value {value!r} does not convert to "
+                                f"{target} without loss: not applied")
+                    continue
+                var.setter(x)
+            except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+                self.refuse(f"{call}: vr {vr}: {type(exc).__name__}: {exc}: not applied")
+
+    def _get(self, call: str, kind: str, vrs) -> list:
+        out = []
+        for vr in vrs:
+            x = None
+            try:
+                var = self.vars.get(vr)
+                if var is None:
+                    self.refuse(f"{call}: unknown value reference {vr}")
+                else:
+                    source = fmi_type(var)
+                    value = _NORMALISE[source](var.getter())
+                    x = value if source == kind else lossless(value, kind)
+                    if x is None:
+                        self.refuse(f"{call}: {var.name!r} (vr {vr}) is a {source} variable; "
+                                    f"its value {value!r} does not convert to {kind} without "
+                                    "loss")
+            except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+                self.refuse(f"{call}: vr {vr}: {type(exc).__name__}: {exc}")
+            out.append(_GET_DEFAULT[kind] if x is None else x)
+        return out
+
+    def set_real(self, vrs, values):
+        self._set("fmi2SetReal", "Real", vrs, values)
+
+    def set_integer(self, vrs, values):
+        self._set("fmi2SetInteger", "Integer", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._set("fmi2SetBoolean", "Boolean", vrs, values)
+
+    def set_string(self, vrs, values):
+        self._set("fmi2SetString", "String", vrs, values)
+
+    def get_real(self, vrs):
+        return self._get("fmi2GetReal", "Real", vrs)
+
+    def get_integer(self, vrs):
+        return self._get("fmi2GetInteger", "Integer", vrs)
+
+    def get_boolean(self, vrs):
+        return self._get("fmi2GetBoolean", "Boolean", vrs)
+
+    def get_string(self, vrs):
+        return self._get("fmi2GetString", "String", vrs)
 
     def guarded(self, what: str, fn: Callable[[], Any]) -> bool:
         """Run ``fn`` and turn any exception into a logged error (never escapes)."""
@@ -229,19 +453,56 @@ class GuardedSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ state
     def _get_fmu_state(self) -> dict:
-        state = {"vars": {v.name: v.getter() for v in self.vars.values()},
-                 "error": self._error}
-        for name in self._state_attributes:
-            state[name] = self._copy_attribute(name)
-        return state
+        try:
+            state = {"model": self._model_id, "instance": self._instance_id,
+                     "instance_name": self.instance_name, "deserialized": False,
+                     "time": self._time,
+                     "vars": {v.name: v.getter() for v in self.vars.values()},
+                     "error": self._error}
+            for name in self._state_attributes:
+                state[name] = self._copy_attribute(name)
+            return state
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            msg = f"fmi2GetFMUstate: {type(exc).__name__}: {exc}"
+            self.refuse(msg)
+            return {"invalid": msg}
 
-    def _set_fmu_state(self, state: dict) -> None:
-        for v in self.vars.values():
-            if v.name in state["vars"] and v.setter is not None:
-                v.setter(state["vars"][v.name])
-        self._error = state.get("error")
-        for name in self._state_attributes:
-            self._restore_attribute(name, state[name])
+    def _state_refusal(self, state) -> str | None:
+        """Why ``state`` may not be set into this instance, or None. A state belongs to one
+        model (class, preset, build); an in-memory state also to one instance, a deserialized
+        one may go into any instance of its model (FMI 2.0)."""
+        if not isinstance(state, dict):
+            return "not a pantocosim FMU state"
+        if "invalid" in state:
+            return str(state["invalid"])
+        if "model" not in state:
+            return "not a pantocosim FMU state"
+        if state["model"] != self._model_id:
+            return f"the state is one of model {state['model']}; this FMU is {self._model_id}"
+        if not state.get("deserialized") and state.get("instance") != self._instance_id:
+            return (f"in-memory state of another instance ({state.get('instance_name')!r}; "
+                    f"this is {self.instance_name!r}); copy a state between instances with "
+                    "fmi2SerializeFMUstate and fmi2DeSerializeFMUstate")
+        return None
+
+    def _set_fmu_state(self, state) -> None:
+        try:
+            problem = self._state_refusal(state)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            problem = f"{type(exc).__name__}: {exc}"
+        if problem is not None:
+            self.refuse(f"fmi2SetFMUstate: {problem}: state not applied")
+            return
+        try:
+            for v in self.vars.values():
+                if v.name in state["vars"] and v.setter is not None:
+                    v.setter(state["vars"][v.name])
+            self._error = state.get("error")
+            self._time = float(state["time"])
+            for name in self._state_attributes:
+                self._restore_attribute(name, state[name])
+        except Exception as exc:  # noqa: BLE001 - partly applied: the instance is unusable
+            self.fail(f"fmi2SetFMUstate: {type(exc).__name__}: {exc}")
 
     def _copy_attribute(self, name: str):
         """Deep copy of an internal attribute for the FMU state (override for big objects)."""
@@ -251,12 +512,28 @@ class GuardedSlave(Fmi2Slave):
         setattr(self, name, pickle.loads(pickle.dumps(value)))
 
     @staticmethod
-    def _fmu_state_to_bytes(state: dict) -> bytes:
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    def _picklable_state(state: dict) -> dict:
+        return state
+
+    @classmethod
+    def _fmu_state_to_bytes(cls, state: dict) -> bytes:
+        try:
+            return pickle.dumps(cls._picklable_state(state), protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            return pickle.dumps({"invalid": f"fmi2SerializeFMUstate failed: "
+                                            f"{type(exc).__name__}: {exc}"})
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes) -> dict:
-        return pickle.loads(data)
+        """The state, marked as deserialized (it may go into any instance of its model)."""
+        try:
+            state = pickle.loads(data)
+        except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
+            return {"invalid": f"fmi2DeSerializeFMUstate: the bytes are not a pantocosim FMU "
+                               f"state ({type(exc).__name__}: {exc})"}
+        if isinstance(state, dict):
+            state["deserialized"] = True
+        return state
 
 
 class IntegratorSlave(GuardedSlave):
@@ -298,11 +575,15 @@ class IntegratorSlave(GuardedSlave):
             return
         super()._restore_attribute(name, value)
 
+    @property
+    def initialised(self) -> bool:
+        return self._integ is not None
+
     @staticmethod
-    def _fmu_state_to_bytes(state: dict) -> bytes:
+    def _picklable_state(state: dict) -> dict:
         from pantocosim.core.hht import HHTIntegrator
 
         out = dict(state)
         if out.get("_integ_state") is not None:
             out["_integ_state"] = HHTIntegrator.picklable_state(out["_integ_state"])
-        return pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+        return out
