@@ -19,7 +19,6 @@ from pantocosim.master.coupling import Coupler, CouplingSettings
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run import Prepared, RunResult, column_names, progress_bar
 
-ROOT = Path(__file__).resolve().parents[1]
 MAX_SUPPORTS = 64
 
 
@@ -140,23 +139,25 @@ def in_process_subsystems(prep: Prepared):
 
 
 def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
-    """FMU files of the scenario (default ``dist/fmus/<model>.fmu``), built if missing."""
+    """FMU files of the scenario: a pantograph's ``fmu`` (relative to the working folder, else
+    to the scenario file), by default ``dist/fmus/<model>.fmu`` of the working folder; the
+    default ones are built if missing or stale."""
+    from pantocosim.master.fmu_build import default_out, ensure_fmus
+
     sc = prep.scenario
     base = Path(sc.source).resolve().parent
-    dist = ROOT / "dist" / "fmus"
+    dist = default_out()
     pans = []
     for spec in sc.pantographs:
         if spec.fmu:
             p = Path(spec.fmu)
-            if not p.is_absolute():
-                p = (ROOT / p) if (ROOT / p).exists() or not (base / p).exists() else base / p
+            if not p.is_absolute() and not p.exists() and (base / p).exists():
+                p = base / p
         else:
             p = dist / f"{spec.model}.fmu"
         pans.append(p)
     cat = dist / "catenary.fmu"
     if build:
-        from pantocosim.master.fmu_build import ensure_fmus
-
         ensure_fmus(pans + [cat], dist)
     missing = [p for p in pans + [cat] if not p.exists()]
     if missing:

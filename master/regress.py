@@ -78,9 +78,9 @@ def _coupled_case(scheme: str) -> CaseResult:
 
 
 def cases() -> dict:
-    from pantocosim.master.cosim import ROOT
+    from pantocosim.master.fmu_build import default_out
 
-    dist = ROOT / "dist" / "fmus"
+    dist = default_out()
     out = {}
     for preset in ("dsa380-rigid", "dsa380-lumped3", "en50318-2mass"):
         out[f"pantograph-{preset}"] = (lambda p=preset: _pantograph_case(p, dist / f"{p}.fmu"))
@@ -113,10 +113,9 @@ def run_regression(update: bool = False, reason: str | None = None,
                    only: list[str] | None = None, printer=print) -> bool:
     if update and not reason:
         raise ParameterError("--reason", reason, "an update of the references needs a reason")
-    from pantocosim.master.cosim import ROOT
-    from pantocosim.master.fmu_build import ensure_fmus
+    from pantocosim.master.fmu_build import default_out, ensure_fmus
 
-    dist = ROOT / "dist" / "fmus"
+    dist = default_out()
     names = ["dsa380-rigid", "dsa380-lumped3", "en50318-2mass", "catenary"]
     ensure_fmus([dist / f"{n}.fmu" for n in names], dist)
     all_ok = True

@@ -264,14 +264,15 @@ def cofmupy_config(fmus: dict, connections: list[tuple]) -> dict:
 # ------------------------------------------------------------------ the package
 def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
                            quiet: bool = False) -> list[Path]:
-    """For each scenario: its FMUs in ``out/<scenario>/``, ``out/<scenario>.ssp`` and
-    ``out/<scenario>/cofmupy.json``."""
+    """For each scenario (preset name or file): its FMUs in ``out/<name>/``,
+    ``out/<name>.ssp`` and ``out/<name>/cofmupy.json`` (``name``: the scenario's)."""
     from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
 
     written = []
-    for name in scenarios:
-        values = scenario_start_values(name)
+    for scenario in scenarios:
+        values = scenario_start_values(scenario)
         sc = values["scenario"]
+        name = sc.name
         folder = Path(out) / name
         baked = {m: fmu_start_values(values, m) for m in FMU_NAMES}
         written += build_fmus(folder, quiet=True, start_values=baked, scenario=name)

@@ -75,7 +75,6 @@ def test_master_reports_the_fmu_message(tmp_path):
     """A bad parameter set through FMI: the FMU discards the step with a message naming the
     parameter, the master's FMU layer raises it as an FmuError, the process survives."""
     code = (
-        "from pantocosim.master.cosim import ROOT\n"
         "from pantocosim.master.fmu_build import build_fmus\n"
         "from pantocosim.master.fmu_runtime import FmuInstance, FmuError\n"
         "import os\n"
