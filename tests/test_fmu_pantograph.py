@@ -45,7 +45,10 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
         timing = next(v for v in md.modelVariables if v.name == "contact_force").description
         assert "t + h" in timing
     assert ports == [("contact_force", "input", "N"), ("contact_height", "output", "m"),
-                     ("contact_velocity", "output", "m/s")]
+                     ("contact_velocity", "output", "m/s"),
+                     ("operating_height", "input", "m"),
+                     ("operating_height_slope", "input", "m/N"),
+                     ("static_height", "input", "m"), ("static_height_slope", "input", "m/N")]
 
 
 @pytest.mark.parametrize("name", ALL)

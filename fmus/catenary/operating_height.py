@@ -98,28 +98,17 @@ class ContactHeightLaws:
 def mean_dynamic_height_law(catenary, k: int, window: tuple[float, float], dt: float,
                             duration: float, alpha: float = -0.05) -> tuple[float, float]:
     """(offset, slope): the mean dynamic wire height of :func:`mean_dynamic_wire_height` under
-    pantograph ``k``'s constant force F alone is offset + slope F. By superposition on the
-    linearised catenary: the unloaded static wire under the moving contact point, plus the
-    response to a unit force started from its linear static deflection (one run)."""
-    model = LinearisedCatenary(catenary)
+    pantograph ``k``'s constant force F alone is offset + slope F (secant through
+    :data:`LAW_FORCES`: the runs start from the nonlinear static state, as the monolithic
+    start's does)."""
+    f1, f2 = LAW_FORCES
     forces = np.zeros(len(catenary.x0))
-    forces[k] = 1.0
-    deflection = catenary.factorize(model.K0)(catenary.input_vector(0.0, forces))
-    integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=True))
-    integ.initialize(0.0, model.q_static + deflection, np.zeros(model.n_dofs), forces)
-    unloaded = loaded = 0.0
-    count = 0
-    for _ in range(int(np.ceil(duration / dt - 1e-9))):
-        integ.step(dt, forces)
-        x = catenary.positions(integ.t)[k]
-        if window[0] <= x <= window[1]:
-            z0 = catenary.wire_height(integ.t, model.q_static)[k]
-            unloaded += z0
-            loaded += catenary.wire_height(integ.t, integ.q)[k] - z0
-            count += 1
-    if count == 0:
-        raise ValueError("a pantograph never enters the analysis window")
-    return unloaded / count, loaded / count
+    z = []
+    for f in (f1, f2):
+        forces[k] = f
+        z.append(mean_dynamic_wire_height(catenary, forces, window, dt, duration, alpha)[k])
+    slope = (z[1] - z[0]) / (f2 - f1)
+    return z[0] - slope * f1, slope
 
 
 def static_height_law(catenary, k: int) -> tuple[float, float]:

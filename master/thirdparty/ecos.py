@@ -11,7 +11,7 @@ Recipe (docs/third-party.md)::
 
 ecos loads the SSP (SystemStructure.ssd + resources/*.fmu), applies its parameter values and
 connections and runs fixed-step coupling. The co-simulation runs in a child process (see
-run_common.py); the time series goes to a CSV file and the statistics are printed.
+common.py); the time series goes to a CSV file and the statistics are printed.
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ Recipe (docs/third-party.md)::
 libcosim loads the SSP (SystemStructure.ssd + resources/*.fmu), applies its parameter values
 and connections and runs fixed-step Jacobi coupling. The pantograph x(t) = position_1 + V t of
 the catenary FMU's parameters locates the analysis window (default: supports 5..6). The
-co-simulation runs in a child process (see run_common.py); the time series goes to a CSV file
+co-simulation runs in a child process (see common.py); the time series goes to a CSV file
 and the statistics are printed.
 """
 
