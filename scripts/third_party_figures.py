@@ -23,7 +23,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- figures:start -->", "<!-- figures:end -->"
-MASTERS = {"libcosim": "libcosim", "ecos": "ecos", "fmpy": "fmpy_ssp", "cofmupy": "cofmupy"}
+MASTERS = {"libcosim": "libcosim", "ecos": "ecos", "fmpy": "fmpy_ssp",
+           "cofmupy": "cofmupy_json"}
 
 
 def reference(scenario: str, model: str) -> dict:

@@ -10,7 +10,7 @@ import numpy as np
 
 
 def run_recipe(name, *args, cwd=None, timeout=1200):
-    """(statistics, stdout) of recipe ``name`` (libcosim, ecos, fmpy_ssp, cofmupy,
+    """(statistics, stdout) of recipe ``name`` (libcosim, ecos, fmpy_ssp, cofmupy_json,
     fmpy_single)."""
     proc = subprocess.run([sys.executable, "-m", f"pantocosim.master.thirdparty.{name}",
                            *map(str, args)], capture_output=True, text=True, timeout=timeout,

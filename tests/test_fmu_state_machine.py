@@ -26,18 +26,14 @@ CATENARY = {"params": {"catenary": "en50318", "spans": 4, "speed_kmh": 300.0,
                        "position_1": 30.0, "static_force_1": 120.0},
             "inputs": {"contact_force_1": 120.0},
             "outputs": ["wire_height_1", "wire_velocity_1", "support_uplift_1"],
-            "string_param": "catenary", "bool_param": "extrapolate_heights"}
+            "string_param": "catenary_definition", "bool_param": "extrapolate_heights"}
 CASES = {"en50318-2mass": PANTOGRAPH, "catenary": CATENARY}
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    sys.path.insert(0, str(ROOT))
-    import build_fmus
-
-    out = tmp_path_factory.mktemp("fmus")
-    paths = build_fmus.build(out, only=list(CASES), quiet=True)
-    return {p.stem: p for p in paths}
+def fmus(fmus):
+    """The session's FMUs of :data:`CASES`."""
+    return {name: fmus[name] for name in CASES}
 
 
 def probe(check, fmu, **args):

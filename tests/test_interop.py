@@ -169,7 +169,7 @@ def test_cofmupy_runs_the_shipped_config(built, fmpy_default_1s, tmp_path):
     """CoFmuPy with the shipped configuration (Jacobi, no start values set): the same run as
     fmpy's SSP support (both pass 0 at the first step and couple by Jacobi)."""
     out = tmp_path / "cofmupy.csv"
-    stats, _ = run_recipe("cofmupy", "--ssp", built / "dsa380-ave-300.ssp", "--python",
+    stats, _ = run_recipe("cofmupy_json", "--ssp", built / "dsa380-ave-300.ssp", "--python",
                           cofmupy_python(), "--stop", 1.0, "--window", 40.0, 110.0,
                           "--out", out)
     c = read_csv(out)
@@ -223,7 +223,7 @@ def test_non_editable_install_builds_and_runs_from_any_folder(tmp_path):
     work.mkdir()
     scenario = work / "short.toml"
     scenario.write_text((ROOT / "tests" / "data" / "short-en50318.toml").read_text()
-                        .replace("[simulation]", "[simulation]\nduration_s = 0.3"))
+                        .replace("[simulation]", "[simulation]\nduration_s = 0.5"))
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 
     def run(*args):

@@ -1,5 +1,5 @@
 """Shared helpers of the third-party recipes (``python -m pantocosim.master.thirdparty.X``
-for X in libcosim, ecos, fmpy_ssp, cofmupy, fmpy_single; docs/third-party.md).
+for X in libcosim, ecos, fmpy_ssp, cofmupy_json, fmpy_single; docs/third-party.md).
 
 Not a recipe itself. Every recipe runs the foreign master in a child process (``--child``):
 pythonfmu may abort at process exit (docs/third-party.md, "Process exit"), so the child

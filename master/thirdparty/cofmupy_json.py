@@ -5,7 +5,7 @@ Recipe (docs/third-party.md)::
 
     python -m venv cofmupy-venv && cofmupy-venv/bin/pip install cofmupy==1.0.0 numba
     pantocosim build-fmus
-    python -m pantocosim.master.thirdparty.cofmupy --python cofmupy-venv/bin/python
+    python -m pantocosim.master.thirdparty.cofmupy_json --python cofmupy-venv/bin/python
         [--config dist/fmus/dsa380-ave-300/cofmupy.json] [--ssp dist/fmus/dsa380-ave-300.ssp]
         [--step 0.001] [--stop SECONDS] [--window START END] [--out CSV]
 
@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-MODULE = "pantocosim.master.thirdparty.cofmupy"
+MODULE = "pantocosim.master.thirdparty.cofmupy_json"
 OUTPUTS = [("catenary", "contact_force_out_1"), ("pantograph", "contact_height"),
            ("catenary", "wire_height_1")]
 
