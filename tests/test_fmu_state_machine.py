@@ -22,7 +22,7 @@ OK, DISCARD, ERROR = 0, 2, 3
 PANTOGRAPH = {"params": {"initial_contact_force": 120.0}, "inputs": {"contact_force": 120.0},
               "outputs": ["contact_height", "contact_velocity"],
               "string_param": "parameter_file", "bool_param": "one_way_damper"}
-CATENARY = {"params": {"catenary": "en50318", "spans": 4, "speed_kmh": 300.0,
+CATENARY = {"params": {"catenary_definition": "en50318", "spans": 4, "speed_kmh": 300.0,
                        "position_1": 30.0, "static_force_1": 120.0},
             "inputs": {"contact_force_1": 120.0},
             "outputs": ["wire_height_1", "wire_velocity_1", "support_uplift_1"],

@@ -25,18 +25,18 @@ NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
 IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
-def monolithic(scenario, model=None, duration=None):
+def monolithic(scenario, model=None, steps=None):
     """``pantocosim run`` (monolithic) of ``scenario``, optionally with another pantograph
-    model or duration: (Prepared, RunResult)."""
+    model, or only its first ``steps`` steps (same start): (Prepared, RunResult)."""
     from pantocosim.master.run import prepare, run_monolithic
     from pantocosim.master.scenario import load_scenario
 
     sc = load_scenario(scenario)
     if model:
         sc.pantographs = [dataclasses.replace(sc.pantographs[0], model=model, fmu=None)]
-    if duration:
-        sc.duration_s = duration
     prep = prepare(sc)
+    if steps:
+        prep = dataclasses.replace(prep, n_steps=steps)
     return prep, run_monolithic(prep, None, progress=False)
 
 
@@ -122,7 +122,7 @@ def test_handshake_start_is_the_monolithic_static_start():
 # ------------------------------------------------------------------------- masters
 @pytest.fixture(scope="module")
 def default_monolithic_1s():
-    return monolithic("dsa380-ave-300", duration=1.0)
+    return monolithic("dsa380-ave-300", steps=1000)
 
 
 @pytest.fixture(scope="module")

@@ -336,8 +336,8 @@ class CatenarySlave(IntegratorSlave):
             if F0[k - 1] > 0:
                 out[k - 1] = (float(zw[k - 1] + F0[k - 1] / k_h), 0.0)
             else:
-                out[k - 1] = (self.finite(f"pantograph_height_{k}",
-                                          getattr(self, f"pantograph_height_{k}")),
+                name = f"pantograph_height_{k}"
+                out[k - 1] = (self.finite(name, self.given_or_start(name, lambda z: z > 0.0)),
                               self.finite(f"pantograph_velocity_{k}",
                                           getattr(self, f"pantograph_velocity_{k}")))
         return out

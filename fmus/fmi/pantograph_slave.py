@@ -141,7 +141,12 @@ class PantographSlave(IntegratorSlave):
         return load_pantograph(source, **overrides)
 
     def _laws(self) -> tuple[float, float, float, float]:
-        return tuple(self.finite(name, getattr(self, name)) for name in LAW_INPUTS)
+        """The catenary's start laws: the inputs, or their start values where the master
+        passed none (a slope is > 0)."""
+        if min(self.operating_height_slope, self.static_height_slope) > 0.0:
+            return tuple(self.finite(name, getattr(self, name)) for name in LAW_INPUTS)
+        return tuple(self.finite(name, self.given_or_start(name, lambda v: False))
+                     for name in LAW_INPUTS)
 
     def _start(self, model):
         """(q0, F0): the start shape and the contact force at t0 of ``start_mode``."""

@@ -145,6 +145,7 @@ class GuardedSlave(Fmi2Slave):
         #: names of internal attributes that make up the FMU state besides registered vars
         self._state_attributes: list[str] = []
         self._in_initialization = False
+        self._logged_fallbacks: set[str] = set()
         #: refused calls since the last doStep; the next doStep discards naming them
         self._refused: list[str] = []
         #: the FMU's current time: the start time, then the end of each accepted step
@@ -240,6 +241,19 @@ class GuardedSlave(Fmi2Slave):
         self.register_variable(String(name, causality=Fmi2Causality.parameter,
                                       variability=Fmi2Variability.fixed,
                                       description=description))
+
+    def given_or_start(self, name: str, given) -> float:
+        """The value of input ``name``, or its baked start value where the master passed none
+        (``given(value)`` false: masters that never set an input pass 0, CoFmuPy sets every
+        input to 0 before initialisation)."""
+        value = getattr(self, name)
+        if given(value) or name not in self.start_values:
+            return value
+        if name not in self._logged_fallbacks:
+            self._logged_fallbacks.add(name)
+            self.log(f"{name} = {value!r} was not given by the master: using its start value "
+                     f"{self.start_values[name]!r} (this FMU's scenario)", Fmi2Status.warning)
+        return self.start_values[name]
 
     def apply_start_values(self) -> None:
         """Give the baked :attr:`start_values` to the registered variables."""
