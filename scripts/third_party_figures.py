@@ -41,11 +41,11 @@ def reference(scenario: str, model: str) -> dict:
     return out
 
 
-def third_party(master: str, ssp: Path, work: Path) -> dict:
+def third_party(master: str, ssp: Path, work: Path, extra=()) -> dict:
     module = f"pantocosim.master.thirdparty.{MASTERS[master]}"
     csv = work / f"{ssp.stem}-{master}.csv"
-    proc = subprocess.run([sys.executable, "-m", module, "--ssp", str(ssp), "--out", str(csv)],
-                          capture_output=True, text=True, cwd=work)
+    proc = subprocess.run([sys.executable, "-m", module, "--ssp", str(ssp), "--out", str(csv),
+                           *extra], capture_output=True, text=True, cwd=work)
     lines = [l for l in proc.stdout.splitlines() if l.startswith("STATISTICS ")]
     if proc.returncode != 0 or not lines:
         return {"error": (proc.stdout + proc.stderr).strip().splitlines()[-1:]}
@@ -80,6 +80,9 @@ def main(argv=None) -> int:
                     default=["dsa380-rigid", "en50318-2mass", "dsa380-lumped3"])
     ap.add_argument("--scenario", default="dsa380-ave-300")
     ap.add_argument("--docs", type=Path, default=ROOT / "docs" / "third-party.md")
+    ap.add_argument("--cofmupy-python", default=str(Path.home() / ".cache" / "pantocosim"
+                                                    / "cofmupy-venv" / "bin" / "python"),
+                    help="the Python of a venv with CoFmuPy 1.0 and numba")
     a = ap.parse_args(argv)
     a.work.mkdir(parents=True, exist_ok=True)
     fmus = a.work / "dist" / "fmus"
@@ -91,8 +94,9 @@ def main(argv=None) -> int:
         ssp = a.work / f"{a.scenario}-{model}.ssp"
         swap_pantograph(shipped, fmus / a.scenario / f"{model}.fmu", ssp)
         for master in a.masters:
+            extra = ["--python", a.cofmupy_python] if master == "cofmupy" else []
             rows.append({"master": master, "model": model, "ref": ref,
-                         "stats": third_party(master, ssp, a.work)})
+                         "stats": third_party(master, ssp, a.work, extra)})
             print(table(rows[-1:]).splitlines()[-1], flush=True)
     text = table(rows)
     print(text)
