@@ -43,7 +43,7 @@ def static_report(model, elasticity_force: float = 100.0, step: float = 2.0) -> 
     Tm = d.messenger.tension if d is not None else float("nan")
     report = {
         "n_dofs": int(model.n_dofs),
-        "n_elements": int(S.cable_dofs.shape[0] + S.bar_dofs.shape[0]),
+        "n_elements": int(len(S.cables) + len(S.bars)),
         "contact_wire_height_at_droppers_m": [float(v) for v in z_dr],
         "design_height_at_droppers_m": [float(v) for v in mesh.dropper_design_z],
         "max_height_error_m": float(np.max(np.abs(z_dr - mesh.dropper_design_z))),

@@ -26,6 +26,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .structure import scatter_add
+
 #: 5-point Gauss-Legendre on [0, 1]: exact for the degree-8 integrands of force and tangent
 _GX, _GW = np.polynomial.legendre.leggauss(5)
 GAUSS_XI = 0.5 * (_GX + 1.0)
@@ -233,3 +235,65 @@ def element_forces(E, Le, EA, EI, N0, want_K=True):
     K = np.empty((ne, 12, 12) if want_K else (1, 12, 12))
     cable_forces(E, np.zeros((ne, 3)), arr(Le), arr(EA), arr(EI), arr(N0), GAUSS_XI, GAUSS_W, want_K, f, K)
     return f, (K if want_K else None)
+
+
+class CableSet:
+    """All ANCF cable elements of a structure (the :class:`~.structure.Element` protocol).
+
+    dofs: (n, 12) full DOFs [r_i, r_i', r_j, r_j']; per element the reference length ``Le``,
+    mass per length ``mu``, ``EA``, ``EI`` and the index ``group`` of its pre-tension in
+    ``N0_group`` (one unknown per wire span in the initial-configuration problem)."""
+
+    def __init__(self, dofs, Le, mu, EA, EI, group, N0_group):
+        self.dofs = np.ascontiguousarray(np.asarray(dofs, dtype=np.int64).reshape(-1, 12))
+        self.Le = np.asarray(Le, dtype=float)
+        self.mu = np.asarray(mu, dtype=float)
+        self.EA = np.asarray(EA, dtype=float)
+        self.EI = np.asarray(EI, dtype=float)
+        self.group = np.asarray(group, dtype=np.int64)
+        self.N0_group = np.asarray(N0_group, dtype=float)
+
+    def __len__(self) -> int:
+        return self.dofs.shape[0]
+
+    def N0(self) -> np.ndarray:
+        return self.N0_group[self.group]
+
+    def bind(self, structure, pos) -> None:
+        off = structure.offset
+        self.dX = np.ascontiguousarray(off[self.dofs[:, 6:9]] - off[self.dofs[:, 0:3]])
+        self.pos = pos
+        self._f = np.empty((len(self), 12))
+        self._K = np.empty((len(self), 12, 12))
+
+    def add_mass(self, M, f_weight, gravity) -> None:
+        n = len(self)
+        if not n:
+            return
+        Me = np.empty((n, 12, 12))
+        ge = np.empty((n, 12))
+        for e in range(n):   # build time only
+            Me[e] = mass_matrix(self.mu[e], self.Le[e])
+            ge[e] = gravity_vector(self.mu[e], self.Le[e], gravity)
+        scatter_add(M, self.pos, Me.ravel())
+        scatter_add(f_weight, self.dofs.ravel(), ge.ravel())
+
+    def add_forces(self, x_full, f, K, tension_only) -> None:
+        cable_forces(x_full[self.dofs], self.dX, self.Le, self.EA, self.EI, self.N0(),
+                     GAUSS_XI, GAUSS_W, K is not None, self._f, self._K)
+        scatter_add(f, self.dofs.ravel(), self._f.ravel())
+        if K is not None:
+            scatter_add(K, self.pos, self._K.ravel())
+
+    def tensions(self, x_full) -> np.ndarray:
+        """True axial tension N |r'| at the mid-point of every element."""
+        E = x_full[self.dofs]
+        L = self.Le
+        d = shape_dxi(0.5, 1.0)            # [dS1, dS2/L, dS3, dS4/L] / dxi
+        rp = (d[0] * E[:, 0:3] + d[1] * L[:, None] * E[:, 3:6] + d[2] * E[:, 6:9]
+              + d[3] * L[:, None] * E[:, 9:12] + d[2] * self.dX) / L[:, None]
+        lam2 = np.einsum("ij,ij->i", rp, rp)
+        return (self.N0() + self.EA * 0.5 * (lam2 - 1.0)) * np.sqrt(lam2)
+
+    def outputs(self, x_full) -> dict[str, np.ndarray]:
+        return {"tension": self.tensions(x_full)}

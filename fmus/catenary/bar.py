@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .structure import scatter_add
+
 
 def mass_matrix(mass: float) -> np.ndarray:
     """Consistent 6x6 mass matrix of a bar of total mass ``mass``."""
@@ -68,3 +70,70 @@ def element_forces(X, l0, EA, tension_only=False, want_K=True):
     slack = np.empty(nb, dtype=np.bool_)
     bar_forces(X, np.zeros((nb, 3)), arr(l0), arr(EA), arr(tension_only, np.bool_), want_K, f, K, slack)
     return f, (K if want_K else None), slack
+
+
+class BarSet:
+    """All bars of a structure (the :class:`~.structure.Element` protocol): droppers
+    (tension-only) and steady arms. dofs: (n, 6) full DOFs [r_i, r_j]; per bar the
+    unstretched length ``l0``, ``EA``, total ``mass`` and ``tension_only``. After each force
+    evaluation ``slack`` holds the bars that carried no force."""
+
+    def __init__(self, dofs, l0, EA, mass, tension_only):
+        self.dofs = np.ascontiguousarray(np.asarray(dofs, dtype=np.int64).reshape(-1, 6))
+        self.l0 = np.asarray(l0, dtype=float)
+        self.EA = np.asarray(EA, dtype=float)
+        self.mass = np.asarray(mass, dtype=float)
+        self.tension_only = np.ascontiguousarray(tension_only, dtype=np.bool_)
+
+    def __len__(self) -> int:
+        return self.dofs.shape[0]
+
+    def bind(self, structure, pos) -> None:
+        off = structure.offset
+        self.dX = np.ascontiguousarray(off[self.dofs[:, 3:6]] - off[self.dofs[:, 0:3]])
+        self.pos = pos
+        self.pos_blocks = pos.reshape(-1, 36)
+        n = len(self)
+        self._f = np.empty((n, 6))
+        self._K = np.empty((n, 6, 6))
+        self.slack = np.zeros(n, dtype=np.bool_)
+        self._bilateral = np.zeros(n, dtype=np.bool_)
+
+    def _law(self, tension_only: bool) -> np.ndarray:
+        return self.tension_only if tension_only else self._bilateral
+
+    def add_mass(self, M, f_weight, gravity) -> None:
+        if not len(self):
+            return
+        Mb = self.mass[:, None, None] * mass_matrix(1.0)[None]
+        gb = self.mass[:, None] * gravity_vector(1.0, gravity)[None]
+        scatter_add(M, self.pos, Mb.ravel())
+        scatter_add(f_weight, self.dofs.ravel(), gb.ravel())
+
+    def add_forces(self, x_full, f, K, tension_only) -> None:
+        bar_forces(x_full[self.dofs], self.dX, self.l0, self.EA, self._law(tension_only),
+                   K is not None, self._f, self._K, self.slack)
+        scatter_add(f, self.dofs.ravel(), self._f.ravel())
+        if K is not None:
+            scatter_add(K, self.pos, self._K.ravel())
+
+    def tangent_blocks(self, x_full, tension_only: bool = False):
+        """Per-bar 6x6 tangents and forces at x_full (for damping and reports)."""
+        n = len(self)
+        f, K, s = np.empty((n, 6)), np.empty((n, 6, 6)), np.empty(n, dtype=np.bool_)
+        bar_forces(x_full[self.dofs], self.dX, self.l0, self.EA, self._law(tension_only),
+                   True, f, K, s)
+        return f, K, s
+
+    def axial_forces(self, x_full, tension_only: bool = True) -> np.ndarray:
+        """Axial force N of every bar (tension positive; zero when slack if tension_only)."""
+        X = x_full[self.dofs]
+        d = X[:, 3:] - X[:, :3] + self.dX
+        ln = np.linalg.norm(d, axis=1)
+        N = self.EA * (ln - self.l0) / self.l0
+        if tension_only:
+            N = np.where(self.tension_only & (N < 0), 0.0, N)
+        return N
+
+    def outputs(self, x_full) -> dict[str, np.ndarray]:
+        return {"axial_force": self.axial_forces(x_full)}

@@ -44,12 +44,12 @@ class ContactLocator:
         S = mesh.structure
         self.mesh = mesh
         self.elems = np.asarray(mesh.contact_elems)
-        self.Le = S.cable_Le[self.elems]
-        E = S.absolute(x_full_ref)[S.cable_dofs[self.elems]]
+        self.Le = S.cables.Le[self.elems]
+        E = S.absolute(x_full_ref)[S.cables.dofs[self.elems]]
         self.E_x = E[:, [0, 3, 6, 9]]          # x, x', x_j, x_j'
         self.x_start = E[:, 0]
         self.x_end = E[:, 6]
-        zd = S.cable_dofs[self.elems][:, [2, 5, 8, 11]]
+        zd = S.cables.dofs[self.elems][:, [2, 5, 8, 11]]
         self.z_full_dofs = zd
         self.z_free = S.fmap[zd]                 # -1 for fixed
         self.x_full_ref = x_full_ref

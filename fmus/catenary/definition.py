@@ -17,6 +17,7 @@ y lateral, z up). Layout (see ``data/en50318.toml`` for a commented example)::
     [contact_support]  type = "steady_arm" (length, mass, EA; pinned at the mast, in tension
                        from the stagger) | "spring" (stiffness, mass) | "fixed"
     [messenger_support] type = "fixed" | "spring" (stiffness)
+                       (one class per type in :mod:`.supports`, which validates its table)
     [damping]          ratios = [z1, z2] at frequencies_hz = [f1, f2] (Rayleigh, (3.1))
 
 The two end supports anchor both wires (x, y, z fixed). Errors are :class:`ParameterError`
@@ -33,6 +34,7 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.params import Table, load_toml
+from .supports import Support, parse_support
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
@@ -65,8 +67,8 @@ class CatenaryDefinition:
     dropper_stiffness: float | None
     clamp_mass_contact: float
     clamp_mass_messenger: float
-    contact_support: dict
-    messenger_support: dict
+    contact_support: Support
+    messenger_support: Support
     damping_ratios: tuple[float, float]
     damping_frequencies_hz: tuple[float, float]
     gravity: float = 9.81
@@ -190,34 +192,9 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
     clamp_c = dr.number("clamp_mass_contact", 0.0, nonnegative=True)
     clamp_m = dr.number("clamp_mass_messenger", 0.0, nonnegative=True)
 
-    cs = t.sub("contact_support")
-    ctype = cs.string("type", choices=["steady_arm", "spring", "fixed"])
-    contact_support = {"type": ctype}
-    if ctype == "steady_arm":
-        cs.unknown_keys(["type", "length", "mass", "EA"])
-        contact_support.update(length=cs.number("length", positive=True),
-                               mass=cs.number("mass", nonnegative=True),
-                               EA=cs.number("EA", 2.0e7, positive=True))
-        st = [stagger[i % len(stagger)] for i in range(1, len(lengths))]
-        for i, s in enumerate(st):
-            if s == 0.0:
-                raise ParameterError("geometry.stagger", stagger,
-                                     f"a steady arm needs non-zero stagger (support {i + 2})",
-                                     source)
-    elif ctype == "spring":
-        cs.unknown_keys(["type", "stiffness", "mass"])
-        contact_support.update(stiffness=cs.number("stiffness", positive=True),
-                               mass=cs.number("mass", 0.0, nonnegative=True))
-    else:
-        cs.unknown_keys(["type"])
-    ms = t.sub("messenger_support")
-    mtype = ms.string("type", choices=["fixed", "spring"])
-    messenger_support = {"type": mtype}
-    if mtype == "spring":
-        ms.unknown_keys(["type", "stiffness"])
-        messenger_support["stiffness"] = ms.number("stiffness", positive=True)
-    else:
-        ms.unknown_keys(["type"])
+    contact_support = parse_support(t.sub("contact_support"), "contact")
+    contact_support.check_line(stagger, len(lengths), source)
+    messenger_support = parse_support(t.sub("messenger_support"), "messenger")
 
     dm = t.sub("damping")
     dm.unknown_keys(["ratios", "frequencies_hz"])

@@ -14,32 +14,38 @@ the kink over the neighbouring elements and make the sag depend on the mesh).
 The node positions built here are only the start of the initial-configuration Newton solve
 (:mod:`pantocosim.catenary.statics`): contact wire at the design heights, messenger and stitch
 wire as parabolas with an estimated sag.
+
+:func:`build_mesh` runs in stages: geometry (stations, first-guess shapes), topology (nodes
+and DOF numbering), elements (cables, droppers) and supports (line ends here, the masts'
+supports from :mod:`pantocosim.catenary.supports`); the structure then collects the element
+sets (:mod:`pantocosim.catenary.structure`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .ancf_cable import CableSet
 from .definition import CatenaryDefinition
+from .parts import Anchor, MeshParts
 from .structure import Structure
+from .supports import Site
 
+__all__ = ["Anchor", "CatenaryMesh", "build_mesh", "straight_wire"]
 
-@dataclass
-class Anchor:
-    """A support whose height is an unknown of the initial-configuration problem: the pin of
-    a steady arm (``kind='pin'``, ``index`` = full DOF of the pin coordinate ``comp``: 1 for
-    y, 2 for z) or the ground end of a spring (``kind='spring'``, ``index`` = spring
-    number), chosen so that the supported coordinate (full DOF ``target``) takes the
-    ``design`` value (stagger or height)."""
-
-    kind: str
-    index: int
-    target: int
-    design: float
-    bar: int = -1
-    comp: int = 2
+X_DIGITS = 9                  # x positions are matched to 1e-9 m (stations, supports, ends)
+X_TOL = 1e-9
+DROPPER_LENGTH_GUESS = 0.8    # m per dropper: its mass in the messenger-sag estimate
+STITCH_DIP_FACTOR = 0.25      # stitch-wire dip under the mast: 0.25 P (l/2) / T_stitch with
+                              # P the weight of l/2 of contact wire (l: stitch-wire length)
+SPRING_PRELOAD_LENGTH = 10.0  # m of contact wire whose weight a spring support is assumed to
+                              # carry (first guess of its ground end)
+TANGENT_STEP = 1e-4           # m, central difference for the node slopes
+HINGE_STEP = 1e-6             # m, one-sided differences either side of a messenger hinge
+STITCH_END_STEP = 1e-3        # m, one-sided difference at the stitch-wire ends
 
 
 @dataclass
@@ -71,312 +77,313 @@ class CatenaryMesh:
 
 def _stations(d: CatenaryDefinition) -> np.ndarray:
     xs = d.support_x
-    pts = set(np.round(xs, 9))
+    pts = set(np.round(xs, X_DIGITS))
     for s, pos in enumerate(d.dropper_positions):
-        pts.update(np.round(xs[s] + np.asarray(pos), 9))
+        pts.update(np.round(xs[s] + np.asarray(pos), X_DIGITS))
     if d.stitch is not None:
         for x in xs[1:-1]:
-            pts.update(np.round([x - d.stitch.length / 2, x + d.stitch.length / 2], 9))
+            pts.update(np.round([x - d.stitch.length / 2, x + d.stitch.length / 2], X_DIGITS))
     key = np.array(sorted(pts))
     out = [key[:1]]
     for a, b in zip(key[:-1], key[1:]):
-        n = max(1, int(np.ceil((b - a) / d.element_size - 1e-9)))
+        n = max(1, int(np.ceil((b - a) / d.element_size - X_TOL)))
         out.append(a + (b - a) * np.arange(1, n + 1) / n)
     return np.concatenate(out)
 
 
-def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> CatenaryMesh:
-    """Mesh of ``d`` (optionally with another target element size)."""
-    if element_size is not None:
-        import dataclasses
-        d = dataclasses.replace(d, element_size=float(element_size))
-    g = d.gravity
-    xs = d.support_x
-    st = _stations(d)
-    h_c = d.contact_wire_height
-    h_m = h_c + d.system_height
-    stag = d.support_stagger()
+# ==================================================================== geometry
+class _Geometry:
+    """Stations and the first-guess shapes of the wires: contact wire at its design heights,
+    messenger and stitch wire as parabolas with an estimated sag."""
 
-    def y_of(x):
-        return np.interp(x, xs, stag)
+    def __init__(self, d: CatenaryDefinition):
+        self.d = d
+        self.xs = d.support_x
+        self.stations = _stations(d)
+        self.station_of = {round(x, X_DIGITS): i for i, x in enumerate(self.stations)}
+        self.h_c = d.contact_wire_height
+        self.h_m = self.h_c + d.system_height
+        self.stag = d.support_stagger()
+        half = d.stitch.length / 2 if d.stitch is not None else 0.0
+        self.stitch_ranges = ([(x - half, x, x + half) for x in self.xs[1:-1]]
+                              if d.stitch is not None else [])
 
-    def y_slope(x):
-        s = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, len(xs) - 2)
-        return (stag[s + 1] - stag[s]) / (xs[s + 1] - xs[s])
+    def y(self, x):
+        return np.interp(x, self.xs, self.stag)
 
-    # messenger sag estimate: whole line load carried by the messenger tension
-    def mess_z(x):
+    def _span(self, x):
+        return np.clip(np.searchsorted(self.xs, x, side="right") - 1, 0, len(self.xs) - 2)
+
+    def y_slope(self, x):
+        s = self._span(x)
+        return (self.stag[s + 1] - self.stag[s]) / (self.xs[s + 1] - self.xs[s])
+
+    def z_contact(self, x) -> float:
+        return float(self.d.design_contact_height(np.array([x]))[0])
+
+    def z_messenger(self, x) -> float:
+        """Sag estimate: the whole line load carried by the messenger tension."""
+        d, xs = self.d, self.xs
         x = np.atleast_1d(x)
-        s = np.clip(np.searchsorted(xs, x, side="right") - 1, 0, len(xs) - 2)
+        s = self._span(x)
         L = xs[s + 1] - xs[s]
-        w = g * (d.contact.mass_per_length + d.messenger.mass_per_length
-                 + (d.dropper_mass_per_length * 0.8 + d.clamp_mass_contact
-                    + d.clamp_mass_messenger) * len(d.dropper_positions[0]) / L)
+        w = d.gravity * (d.contact.mass_per_length + d.messenger.mass_per_length
+                         + (d.dropper_mass_per_length * DROPPER_LENGTH_GUESS
+                            + d.clamp_mass_contact + d.clamp_mass_messenger)
+                         * len(d.dropper_positions[0]) / L)
         sag = w * L * L / (8 * d.messenger.tension)
         xi = (x - xs[s]) / L
-        return h_m - 4 * sag * xi * (1 - xi)
+        return float((self.h_m - 4 * sag * xi * (1 - xi))[0])
 
-    # stitch ranges (intermediate supports)
-    stitch_ranges = []
-    if d.stitch is not None:
-        for x in xs[1:-1]:
-            stitch_ranges.append((x - d.stitch.length / 2, x, x + d.stitch.length / 2))
-
-    def stitch_z(x, rng):
+    def z_stitch(self, x, rng) -> float:
+        d = self.d
         a, c, b = rng
         u = (x - c) / (b - c) if x >= c else (x - c) / (c - a)
-        # dip under the support from the hanging droppers (estimate)
-        P = g * d.contact.mass_per_length * (b - a) / 2
-        dip = 0.25 * P * (b - a) / 2 / d.stitch.tension
-        return mess_z(x)[0] - dip * (1 - u * u)
+        P = d.gravity * d.contact.mass_per_length * (b - a) / 2
+        dip = STITCH_DIP_FACTOR * P * (b - a) / 2 / d.stitch.tension
+        return self.z_messenger(x) - dip * (1 - u * u)
 
-    # ---------------------------------------------------------------- nodes and DOFs
-    node_dofs = []
-    node_pos = []   # guessed position
-    node_slope = []
-    contact_nodes, messenger_nodes, messenger_right = [], [], []
-    stitch_nodes = [[] for _ in stitch_ranges]
-    ndof = 0
-
-    def tangent(x, f):
-        h = 1e-4
+    def tangent(self, x, f) -> np.ndarray:
+        h = TANGENT_STEP
         dz = (f(x + h) - f(x - h)) / (2 * h)
-        t = np.array([1.0, y_slope(x), dz])
+        t = np.array([1.0, self.y_slope(x), dz])
         return t / np.linalg.norm(t)
 
-    zc = lambda x: float(d.design_contact_height(np.array([x]))[0])
-    zm = lambda x: float(mess_z(x)[0])
-    for x in st:
-        # contact
-        node_dofs.append(list(range(ndof, ndof + 6)))
-        ndof += 6
-        node_pos.append([x, y_of(x), zc(x)])
-        node_slope.append(tangent(x, zc))
-        contact_nodes.append(len(node_dofs) - 1)
-        # messenger
-        node_dofs.append(list(range(ndof, ndof + 6)))
-        ndof += 6
-        node_pos.append([x, y_of(x), zm(x)])
-        mnode = len(node_dofs) - 1
-        messenger_nodes.append(mnode)
-        messenger_right.append(mnode)
-        if any(abs(x - xsup) < 1e-9 for xsup in xs[1:-1]):
-            # hinge over an intermediate support: the right span gets its own slopes
-            hh = 1e-6
-            tl = np.array([hh, y_of(x) - y_of(x - hh), zm(x) - zm(x - hh)])
-            tr = np.array([hh, y_of(x + hh) - y_of(x), zm(x + hh) - zm(x)])
-            node_slope.append(tl / np.linalg.norm(tl))
-            node_dofs.append(node_dofs[mnode][:3] + list(range(ndof, ndof + 3)))
-            ndof += 3
-            node_pos.append(node_pos[mnode])
-            node_slope.append(tr / np.linalg.norm(tr))
-            messenger_right[-1] = len(node_dofs) - 1
-        else:
-            node_slope.append(tangent(x, zm))
-        # stitch
-        for k, rng in enumerate(stitch_ranges):
-            a, c, b = rng
-            if a - 1e-9 <= x <= b + 1e-9:
-                fz = lambda xx, rng=rng: stitch_z(xx, rng)
-                end = abs(x - a) < 1e-9 or abs(x - b) < 1e-9
-                if end:
-                    dofs = node_dofs[mnode][:3] + list(range(ndof, ndof + 3))
-                    ndof += 3
-                    pos = node_pos[mnode]
-                else:
-                    dofs = list(range(ndof, ndof + 6))
-                    ndof += 6
-                    pos = [x, y_of(x), fz(x)]
-                node_dofs.append(dofs)
-                node_pos.append(pos)
-                # one-sided tangent at the ends
-                if end:
-                    xe = x + (1e-3 if abs(x - a) < 1e-9 else -1e-3)
-                    t = np.array([xe - x, y_of(xe) - y_of(x), fz(xe) - fz(x)])
-                    t *= np.sign(t[0])
-                    node_slope.append(t / np.linalg.norm(t))
-                else:
-                    node_slope.append(tangent(x, fz))
-                stitch_nodes[k].append(len(node_dofs) - 1)
-    # pins of steady arms (3 fixed DOFs each) are appended below
-    contact_nodes = np.array(contact_nodes)
-    messenger_nodes = np.array(messenger_nodes)
-    station_of = {round(x, 9): i for i, x in enumerate(st)}
 
-    # ---------------------------------------------------------------- supports (counts)
-    cs = d.contact_support
-    n_pins = (len(xs) - 2) if cs["type"] == "steady_arm" else 0
-    pin_base = ndof
-    ndof += 3 * n_pins
-    S = Structure(ndof, gravity=g)
-    nd_arr = -np.ones((len(node_dofs) + n_pins, 6), dtype=np.int64)
-    for i, dd in enumerate(node_dofs):
-        nd_arr[i, :len(dd)] = dd
-    for i in range(n_pins):
-        nd_arr[len(node_dofs) + i, :3] = pin_base + 3 * i + np.arange(3)
+# ==================================================================== topology
+@dataclass
+class _Nodes:
+    """Nodes with their full DOFs, guessed positions and slopes, numbered station by
+    station (contact, messenger, messenger hinge, stitch wire) to keep the band narrow."""
+
+    dofs: list = field(default_factory=list)
+    pos: list = field(default_factory=list)
+    slope: list = field(default_factory=list)
+    ndof: int = 0
+    contact: list = field(default_factory=list)
+    messenger: list = field(default_factory=list)
+    messenger_right: list = field(default_factory=list)   # start of the next element
+    stitch: list = field(default_factory=list)
+
+    def node(self, pos, slope, shares: int | None = None) -> int:
+        """A node with 6 new DOFs, or with the position DOFs of node ``shares`` and 3 new
+        slope DOFs (a pinned joint)."""
+        shared = [] if shares is None else self.dofs[shares][:3]
+        new = 6 - len(shared)
+        dofs = shared + list(range(self.ndof, self.ndof + new))
+        self.ndof += new
+        self.dofs.append(dofs)
+        self.pos.append(pos)
+        self.slope.append(slope)
+        return len(self.dofs) - 1
+
+
+def _topology(geo: _Geometry) -> _Nodes:
+    t = _Nodes(stitch=[[] for _ in geo.stitch_ranges])
+    for x in geo.stations:
+        t.contact.append(t.node([x, geo.y(x), geo.z_contact(x)],
+                                geo.tangent(x, geo.z_contact)))
+        m = _messenger_node(t, geo, x)
+        for k, rng in enumerate(geo.stitch_ranges):
+            if rng[0] - X_TOL <= x <= rng[2] + X_TOL:
+                t.stitch[k].append(_stitch_node(t, geo, x, rng, m))
+    return t
+
+
+def _messenger_node(t: _Nodes, geo: _Geometry, x) -> int:
+    """The messenger node at x; over an intermediate support a hinge: a second node with the
+    same position and its own slopes starts the next span (the messenger kinks there)."""
+    zm, y = geo.z_messenger, geo.y
+    pos = [x, y(x), zm(x)]
+    if any(abs(x - xsup) < X_TOL for xsup in geo.xs[1:-1]):
+        hh = HINGE_STEP
+        tl = np.array([hh, y(x) - y(x - hh), zm(x) - zm(x - hh)])
+        tr = np.array([hh, y(x + hh) - y(x), zm(x + hh) - zm(x)])
+        m = t.node(pos, tl / np.linalg.norm(tl))
+        right = t.node(pos, tr / np.linalg.norm(tr), shares=m)
+    else:
+        m = right = t.node(pos, geo.tangent(x, zm))
+    t.messenger.append(m)
+    t.messenger_right.append(right)
+    return m
+
+
+def _stitch_node(t: _Nodes, geo: _Geometry, x, rng, m: int) -> int:
+    """A stitch-wire node at x; its ends are pinned to the messenger node ``m``."""
+    a, _, b = rng
+    fz = lambda xx: geo.z_stitch(xx, rng)
+    if abs(x - a) < X_TOL or abs(x - b) < X_TOL:
+        xe = x + (STITCH_END_STEP if abs(x - a) < X_TOL else -STITCH_END_STEP)
+        tv = np.array([xe - x, geo.y(xe) - geo.y(x), fz(xe) - fz(x)])
+        tv *= np.sign(tv[0])
+        return t.node(t.pos[m], tv / np.linalg.norm(tv), shares=m)
+    return t.node([x, geo.y(x), fz(x)], geo.tangent(x, fz))
+
+
+def _structure(d: CatenaryDefinition, t: _Nodes, n_own: int) -> tuple[Structure, np.ndarray]:
+    """The structure with the guessed coordinates (x relative to the station) and the node
+    DOF table; ``n_own`` support nodes (3 position DOFs each) follow the wire nodes."""
+    n_wire = len(t.dofs)
+    S = Structure(t.ndof + 3 * n_own, gravity=d.gravity)
+    nd = -np.ones((n_wire + n_own, 6), dtype=np.int64)
+    for i, dd in enumerate(t.dofs):
+        nd[i, :len(dd)] = dd
+    for i in range(n_own):
+        nd[n_wire + i, :3] = t.ndof + 3 * i + np.arange(3)
     x = S.x_full
-    for i, dd in enumerate(node_dofs):
-        x[dd[0]:dd[0] + 3] = node_pos[i]
-        S.offset[dd[0]] = node_pos[i][0]          # x stored relative to the station
+    for i, dd in enumerate(t.dofs):
+        x[dd[0]:dd[0] + 3] = t.pos[i]
+        S.offset[dd[0]] = t.pos[i][0]          # x stored relative to the station
         x[dd[0]] = 0.0
-        x[dd[3]:dd[3] + 3] = node_slope[i]
+        x[dd[3]:dd[3] + 3] = t.slope[i]
         S.zpos[dd[2]] = True
+    S.zpos[nd[n_wire:, 2]] = True
+    return S, nd
 
-    # ---------------------------------------------------------------- cables and groups
-    cable_dofs, Le, mu, EA, EI, grp = [], [], [], [], [], []
-    group_elems, group_T, group_names, N0 = [], [], [], []
-    contact_elems = []
 
-    def add_chain(nodes, wire, name_of_span, starts=None):
-        # nodes in x order; one group per span (name_of_span(i) -> key); an element starts
-        # at ``starts[i]`` instead of ``nodes[i]`` when given (hinges)
-        groups = {}
-        for a, b in zip(nodes[:-1] if starts is None else starts[:-1], nodes[1:]):
-            key = name_of_span(0.5 * (node_pos[a][0] + node_pos[b][0]))
+# ==================================================================== elements
+class _Chains:
+    """Cable elements chained along the nodes of each wire, one pre-tension group per span
+    (an unknown of the initial configuration)."""
+
+    def __init__(self, nd: np.ndarray, pos: list):
+        self.nd, self.pos = nd, pos
+        self.rows: list[tuple] = []
+        self.tension: list[float] = []
+        self.names: list[str] = []
+        self.elems: list[list[int]] = []
+
+    def chain(self, nodes, wire, name_of, starts=None) -> np.ndarray:
+        """Elements nodes[i] -> nodes[i + 1] (from ``starts[i]`` when given: hinges);
+        ``name_of(x_mid)`` names the group. Returns the new element numbers."""
+        first, groups = len(self.rows), {}
+        for a, b in zip((nodes if starts is None else starts)[:-1], nodes[1:]):
+            key = name_of(0.5 * (self.pos[a][0] + self.pos[b][0]))
             if key not in groups:
-                groups[key] = len(group_T)
-                group_T.append(wire.tension)
-                group_names.append(key)
-                group_elems.append([])
-                N0.append(wire.tension)
-            gi = groups[key]
-            cable_dofs.append(list(nd_arr[a]) + list(nd_arr[b]))
-            Le.append(float(np.linalg.norm(np.subtract(node_pos[b], node_pos[a]))))
-            mu.append(wire.mass_per_length)
-            EA.append(wire.EA)
-            EI.append(wire.EI)
-            grp.append(gi)
-            group_elems[gi].append(len(cable_dofs) - 1)
+                groups[key] = len(self.tension)
+                self.tension.append(wire.tension)
+                self.names.append(key)
+                self.elems.append([])
+            self.elems[groups[key]].append(len(self.rows))
+            Le = float(np.linalg.norm(np.subtract(self.pos[b], self.pos[a])))
+            self.rows.append((list(self.nd[a]) + list(self.nd[b]), Le, wire.mass_per_length,
+                              wire.EA, wire.EI, groups[key]))
+        return np.arange(first, len(self.rows))
 
-    def span_of(xm):
-        return int(np.clip(np.searchsorted(xs, xm) - 1, 0, len(xs) - 2))
+    def cable_set(self) -> CableSet:
+        dofs, Le, mu, EA, EI, grp = zip(*self.rows)
+        return CableSet(np.array(dofs, dtype=np.int64), np.array(Le), np.array(mu),
+                        np.array(EA), np.array(EI), np.array(grp, dtype=np.int64),
+                        np.array(self.tension, dtype=float))
 
-    n0 = len(cable_dofs)
-    add_chain(list(contact_nodes), d.contact, lambda xm: f"contact span {span_of(xm) + 1}")
-    contact_elems = np.arange(n0, len(cable_dofs))
-    add_chain(list(messenger_nodes), d.messenger,
-              lambda xm: f"messenger span {span_of(xm) + 1}", starts=messenger_right)
-    for k, nodes in enumerate(stitch_nodes):
-        add_chain(nodes, d.stitch, lambda xm, k=k: f"stitch wire at support {k + 2}")
-    S.cable_dofs = np.array(cable_dofs, dtype=np.int64)
-    S.cable_Le = np.array(Le)
-    S.cable_mu = np.array(mu)
-    S.cable_EA = np.array(EA)
-    S.cable_EI = np.array(EI)
-    S.cable_group = np.array(grp, dtype=np.int64)
-    S.N0_group = np.array(N0, dtype=float)
 
-    # ---------------------------------------------------------------- supports
-    bars_dofs, bl0, bEA, bmass, btonly = [], [], [], [], []
-    pdofs, pmass = [], []
-    sdofs, sk, sanchor = [], [], []
-    anchors, arms = [], []
-    fixed = S.fixed
-    support_contact_nodes = []
-    for s, xsup in enumerate(xs):
-        i = station_of[round(xsup, 9)]
-        cn, mn = contact_nodes[i], messenger_nodes[i]
-        support_contact_nodes.append(cn)
-        cdof, mdof = nd_arr[cn], nd_arr[mn]
-        end = s == 0 or s == len(xs) - 1
-        if end:
-            fixed[cdof[:3]] = True
-            fixed[mdof[:3]] = True
-            continue
-        if d.messenger_support["type"] == "fixed":
-            fixed[mdof[:3]] = True
-        else:
-            fixed[mdof[:2]] = True
-            sdofs.append(mdof[2])
-            sk.append(d.messenger_support["stiffness"])
-            sanchor.append(h_m)
-            anchors.append(Anchor("spring", len(sdofs) - 1, int(mdof[2]), h_m))
-        if cs["type"] == "fixed":
-            fixed[cdof[1:3]] = True
-        elif cs["type"] == "spring":
-            fixed[cdof[1]] = True
-            sdofs.append(cdof[2])
-            sk.append(cs["stiffness"])
-            w_est = g * d.contact.mass_per_length * 10.0
-            sanchor.append(h_c + w_est / cs["stiffness"])
-            anchors.append(Anchor("spring", len(sdofs) - 1, int(cdof[2]), h_c))
-            if cs["mass"] > 0:
-                pdofs += list(cdof[:3])
-                pmass += [cs["mass"]] * 3
-        else:  # steady arm pinned at the mast
-            pin = len(node_dofs) + (s - 1)
-            pdof = nd_arr[pin, :3]
-            fixed[pdof] = True
-            ys = stag[s]
-            L = cs["length"]
-            dl = xsup - xs[s - 1] - d.dropper_positions[s - 1][-1]
-            dr = d.dropper_positions[s][0]
-            Fv = g * (d.contact.mass_per_length * (dl + dr) / 2 + cs["mass"] / 2)
-            Fy = d.contact.tension * (abs(ys - stag[s - 1]) / (xsup - xs[s - 1])
-                                      + abs(ys - stag[s + 1]) / (xs[s + 1] - xsup))
-            phi = np.arctan2(Fv, Fy)
-            Lt = L * (1.0 + np.hypot(Fv, Fy) / cs["EA"])   # stretched by the estimated pull
-            x[pdof] = [0.0, ys + np.sign(ys) * Lt * np.cos(phi), h_c + Lt * np.sin(phi)]
-            S.offset[pdof[0]] = xsup
-            bars_dofs.append(list(pdof) + list(cdof[:3]))
-            bl0.append(L)
-            bEA.append(cs["EA"])
-            bmass.append(cs["mass"])
-            btonly.append(False)
-            anchors.append(Anchor("pin", int(pdof[2]), int(cdof[2]), h_c,
-                                  bar=len(bars_dofs) - 1, comp=2))
-            anchors.append(Anchor("pin", int(pdof[1]), int(cdof[1]), ys,
-                                  bar=len(bars_dofs) - 1, comp=1))
-            arms.append((len(bars_dofs) - 1, pin, cn, ys))
+def _cables(geo: _Geometry, t: _Nodes, nd: np.ndarray) -> tuple[_Chains, np.ndarray]:
+    """Contact wire, messenger (hinged over the masts) and stitch wires; returns the chains
+    and the contact-wire elements."""
+    d = geo.d
 
-    # ---------------------------------------------------------------- droppers
-    dropper_bars, dropper_x, dropper_cn, dropper_z = [], [], [], []
+    def span(xm):
+        return int(np.clip(np.searchsorted(geo.xs, xm) - 1, 0, len(geo.xs) - 2)) + 1
+
+    c = _Chains(nd, t.pos)
+    contact = c.chain(t.contact, d.contact, lambda xm: f"contact span {span(xm)}")
+    c.chain(t.messenger, d.messenger, lambda xm: f"messenger span {span(xm)}",
+            starts=t.messenger_right)
+    for k, nodes in enumerate(t.stitch):
+        c.chain(nodes, d.stitch, lambda xm, k=k: f"stitch wire at support {k + 2}")
+    return c, contact
+
+
+def _droppers(geo: _Geometry, t: _Nodes, S: Structure, nd: np.ndarray,
+              parts: MeshParts) -> dict:
+    """A tension-only bar from the messenger (or stitch wire) down to the contact wire at
+    every dropper position, with the clamp masses at both ends."""
+    d = geo.d
+    out = {"bars": [], "x": [], "cn": [], "z": []}
     for s, pos in enumerate(d.dropper_positions):
         for p in pos:
-            xd = xs[s] + p
-            i = station_of[round(xd, 9)]
-            cn = contact_nodes[i]
-            up = messenger_nodes[i]
-            for k, (a, c, b) in enumerate(stitch_ranges):
-                if a + 1e-9 < xd < b - 1e-9:
-                    up = [n for n in stitch_nodes[k] if abs(node_pos[n][0] - xd) < 1e-9][0]
-            pu, pc = x[nd_arr[up, :3]], x[nd_arr[cn, :3]]   # same station: x offsets cancel
+            xd = geo.xs[s] + p
+            i = geo.station_of[round(xd, X_DIGITS)]
+            cn, up = t.contact[i], t.messenger[i]
+            for k, (a, _, b) in enumerate(geo.stitch_ranges):
+                if a + X_TOL < xd < b - X_TOL:
+                    up = [n for n in t.stitch[k] if abs(t.pos[n][0] - xd) < X_TOL][0]
+            pu, pc = S.x_full[nd[up, :3]], S.x_full[nd[cn, :3]]   # same station
             l = float(np.linalg.norm(pu - pc))
-            bars_dofs.append(list(nd_arr[up, :3]) + list(nd_arr[cn, :3]))
-            bl0.append(l)
-            bEA.append(d.dropper_EA if d.dropper_EA is not None else d.dropper_stiffness * l)
-            bmass.append(d.dropper_mass_per_length * l)
-            btonly.append(True)
-            dropper_bars.append(len(bars_dofs) - 1)
-            dropper_x.append(xd)
-            dropper_cn.append(cn)
-            dropper_z.append(float(d.design_contact_height(np.array([xd]))[0]))
-            pdofs += list(nd_arr[cn, :3]) + list(nd_arr[up, :3])
-            pmass += [d.clamp_mass_contact] * 3 + [d.clamp_mass_messenger] * 3
-    S.bar_dofs = np.array(bars_dofs, dtype=np.int64).reshape(-1, 6)
-    S.bar_l0 = np.array(bl0)
-    S.bar_EA = np.array(bEA)
-    S.bar_mass = np.array(bmass)
-    S.bar_tension_only = np.array(btonly, dtype=np.bool_)
-    keep = np.array(pmass) > 0
-    S.point_dofs = np.array(pdofs, dtype=np.int64)[keep]
-    S.point_mass = np.array(pmass)[keep]
-    S.zpos[nd_arr[len(node_dofs):, 2]] = True
-    S.spring_dofs = np.array(sdofs, dtype=np.int64)
-    S.spring_k = np.array(sk, dtype=float)
-    S.spring_anchor = np.array(sanchor, dtype=float)
+            EA = d.dropper_EA if d.dropper_EA is not None else d.dropper_stiffness * l
+            out["bars"].append(parts.bar(list(nd[up, :3]) + list(nd[cn, :3]), l, EA,
+                                         d.dropper_mass_per_length * l, True))
+            out["x"].append(xd)
+            out["cn"].append(cn)
+            out["z"].append(geo.z_contact(xd))
+            parts.point_masses(nd[cn, :3], d.clamp_mass_contact)
+            parts.point_masses(nd[up, :3], d.clamp_mass_messenger)
+    return out
+
+
+# ==================================================================== supports
+def _supports(geo: _Geometry, t: _Nodes, S: Structure, nd: np.ndarray,
+              parts: MeshParts) -> list[int]:
+    """Both wires anchored at the line ends; at every intermediate mast the messenger's then
+    the contact wire's support (:mod:`.supports`) attaches itself. Returns the contact-wire
+    node at every mast."""
+    d, n_wire, own = geo.d, len(t.dofs), 0
+    contact_nodes = []
+    for s, xsup in enumerate(geo.xs):
+        i = geo.station_of[round(xsup, X_DIGITS)]
+        cn, mn = t.contact[i], t.messenger[i]
+        contact_nodes.append(cn)
+        if s == 0 or s == len(geo.xs) - 1:
+            S.fixed[nd[cn, :3]] = True
+            S.fixed[nd[mn, :3]] = True
+            continue
+        for wire, node, support in (("messenger", mn, d.messenger_support),
+                                    ("contact", cn, d.contact_support)):
+            mine = list(range(n_wire + own, n_wire + own + support.n_own_nodes))
+            own += support.n_own_nodes
+            support.attach(_site(geo, wire, s, node, nd, mine, S), parts)
+    return contact_nodes
+
+
+def _site(geo: _Geometry, wire: str, s: int, node: int, nd: np.ndarray, own: list,
+          S: Structure) -> Site:
+    d = geo.d
+    contact = wire == "contact"
+    preload = d.gravity * d.contact.mass_per_length * SPRING_PRELOAD_LENGTH if contact else 0.0
+    return Site(wire=wire, number=s, node=node, dofs=nd[node],
+                height=geo.h_c if contact else geo.h_m, slides=contact, preload=preload,
+                own_nodes=own, own_dofs=nd[own, :3], structure=S, definition=d)
+
+
+# ==================================================================== the mesh
+def build_mesh(d: CatenaryDefinition, element_size: float | None = None) -> CatenaryMesh:
+    """Mesh of ``d`` (optionally with another target element size): geometry, topology,
+    cables, supports and droppers, then the structure collects the element sets."""
+    if element_size is not None:
+        d = dataclasses.replace(d, element_size=float(element_size))
+    geo = _Geometry(d)
+    t = _topology(geo)
+    per_mast = d.messenger_support.n_own_nodes + d.contact_support.n_own_nodes
+    S, nd = _structure(d, t, (len(geo.xs) - 2) * per_mast)
+    chains, contact_elems = _cables(geo, t, nd)
+    parts = MeshParts()
+    support_cn = _supports(geo, t, S, nd, parts)
+    dr = _droppers(geo, t, S, nd, parts)
+    S.add("cables", chains.cable_set())
+    parts.add_to(S)
     S.finalize()
     return CatenaryMesh(
-        structure=S, node_dofs=nd_arr, contact_nodes=contact_nodes,
-        contact_elems=contact_elems, support_x=xs,
-        support_contact_nodes=np.array(support_contact_nodes),
-        dropper_bars=np.array(dropper_bars, dtype=np.int64), dropper_x=np.array(dropper_x),
-        dropper_contact_nodes=np.array(dropper_cn, dtype=np.int64),
-        dropper_design_z=np.array(dropper_z),
-        group_elems=[np.array(g_, dtype=np.int64) for g_ in group_elems],
-        group_tension=np.array(group_T), group_names=group_names, anchors=anchors,
-        arms=arms, definition=d, messenger_nodes=messenger_nodes,
-        dropper_k=np.full(len(dropper_bars), np.nan if d.dropper_stiffness is None
+        structure=S, node_dofs=nd, contact_nodes=np.array(t.contact),
+        contact_elems=contact_elems, support_x=geo.xs,
+        support_contact_nodes=np.array(support_cn),
+        dropper_bars=np.array(dr["bars"], dtype=np.int64), dropper_x=np.array(dr["x"]),
+        dropper_contact_nodes=np.array(dr["cn"], dtype=np.int64),
+        dropper_design_z=np.array(dr["z"]),
+        group_elems=[np.array(g, dtype=np.int64) for g in chains.elems],
+        group_tension=np.array(chains.tension), group_names=chains.names,
+        anchors=parts.anchors, arms=parts.arms, definition=d,
+        messenger_nodes=np.array(t.messenger),
+        dropper_k=np.full(len(dr["bars"]), np.nan if d.dropper_stiffness is None
                           else d.dropper_stiffness))
 
 
@@ -397,13 +404,10 @@ def straight_wire(length: float, n_elements: int, mass_per_length: float, EA: fl
         S.zpos[nd[i, 2]] = True
     S.fixed[nd[0, :3]] = True
     S.fixed[nd[-1, :3]] = True
-    S.cable_dofs = np.hstack([nd[:-1], nd[1:]])
-    S.cable_Le = np.full(n, length / n)
-    S.cable_mu = np.full(n, mass_per_length)
-    S.cable_EA = np.full(n, EA)
-    S.cable_EI = np.full(n, EI)
-    S.cable_group = np.zeros(n, dtype=np.int64)
-    S.N0_group = np.array([tension], dtype=float)
+    S.add("cables", CableSet(np.hstack([nd[:-1], nd[1:]]), np.full(n, length / n),
+                             np.full(n, mass_per_length), np.full(n, EA), np.full(n, EI),
+                             np.zeros(n, dtype=np.int64), np.array([tension], dtype=float)))
+    MeshParts().add_to(S)          # no bars, point masses or springs
     S.finalize()
     return CatenaryMesh(
         structure=S, node_dofs=nd, contact_nodes=np.arange(nn), contact_elems=np.arange(n),

@@ -83,10 +83,10 @@ class CatenaryModel(SecondOrderModel):
         self.M = S.mass
         self.weight = S.weight
         self._C_base = self.alpha_r * S.M_data + self.beta_r * K0
-        _, Kb, _ = S.bar_tangent_blocks(self.x_static)
+        _, Kb, _ = S.bars.tangent_blocks(self.x_static)
         db = mesh.dropper_bars
         self._dropper_C = self.beta_r * Kb[db].reshape(len(db), 36)
-        self._dropper_pos = S.pos_bar_blocks[db]
+        self._dropper_pos = S.bars.pos_blocks[db]
         self._slack_committed = np.zeros(len(db), dtype=bool)
         # damping matrix for the committed slack set (see _damping)
         self._C = S.csr(self._C_base.copy())
@@ -144,7 +144,7 @@ class CatenaryModel(SecondOrderModel):
 
     def dropper_forces(self, q: np.ndarray) -> np.ndarray:
         """Axial force of every dropper (N, tension positive, zero when slack)."""
-        return self.structure.bar_axial_forces(self.structure.full(q))[self.mesh.dropper_bars]
+        return self.structure.bars.axial_forces(self.structure.full(q))[self.mesh.dropper_bars]
 
     # ------------------------------------------------------------------ statics
     def static_solution(self, point_loads=(), tol: float = 1e-10):
@@ -258,7 +258,7 @@ class CatenaryModel(SecondOrderModel):
 
     def commit(self, t, q, v, a, inputs) -> None:
         S = self.structure
-        N = S.bar_axial_forces(S.full(q), tension_only=False)[self.mesh.dropper_bars]
+        N = S.bars.axial_forces(S.full(q), tension_only=False)[self.mesh.dropper_bars]
         self._slack_committed = N < 0.0
 
     def get_internal_state(self):

@@ -121,66 +121,63 @@ def _params(mesh) -> np.ndarray:
     S = mesh.structure
     pa = []
     for a in mesh.anchors:
-        pa.append(S.x_full[a.index] if a.kind == "pin" else S.spring_anchor[a.index])
-    return np.concatenate([S.bar_l0[mesh.dropper_bars], S.N0_group, np.array(pa, float)])
+        pa.append(S.x_full[a.index] if a.kind == "pin" else S.springs.anchor[a.index])
+    return np.concatenate([S.bars.l0[mesh.dropper_bars], S.cables.N0_group,
+                           np.array(pa, float)])
 
 
 def _set_params(mesh, p) -> None:
     S = mesh.structure
-    nd, ng = mesh.dropper_bars.size, S.N0_group.size
-    S.bar_l0[mesh.dropper_bars] = p[:nd]
+    nd, ng = mesh.dropper_bars.size, S.cables.N0_group.size
+    S.bars.l0[mesh.dropper_bars] = p[:nd]
     k = mesh.dropper_k
     if k.size and np.all(np.isfinite(k)):
-        S.bar_EA[mesh.dropper_bars] = k * p[:nd]      # N = k (l - l0)
-    S.N0_group[:] = p[nd:nd + ng]
+        S.bars.EA[mesh.dropper_bars] = k * p[:nd]      # N = k (l - l0)
+    S.cables.N0_group[:] = p[nd:nd + ng]
     for k, a in enumerate(mesh.anchors):
         if a.kind == "pin":
             S.x_full[a.index] = p[nd + ng + k]
         else:
-            S.spring_anchor[a.index] = p[nd + ng + k]
+            S.springs.anchor[a.index] = p[nd + ng + k]
 
 
 def group_horizontal_tensions(mesh, x_full) -> np.ndarray:
     """Span-averaged horizontal tension (1/L) int N r'_x dchi of every wire group."""
-    S = mesh.structure
-    h, _, _, _ = _tension_measures(S, x_full)
-    Lsum = np.bincount(S.cable_group, S.cable_Le, minlength=S.N0_group.size)
-    return np.bincount(S.cable_group, h, minlength=S.N0_group.size) / Lsum
+    C = mesh.structure.cables
+    h, _, _, _ = _tension_measures(C, x_full)
+    Lsum = np.bincount(C.group, C.Le, minlength=C.N0_group.size)
+    return np.bincount(C.group, h, minlength=C.N0_group.size) / Lsum
 
 
 def element_tensions(S, x_full) -> np.ndarray:
     """True axial tension N |r'| at the mid-point of every cable element."""
-    E = x_full[S.cable_dofs]
-    L = S.cable_Le
-    d = ancf_cable.shape_dxi(0.5, 1.0)            # [dS1, dS2/L, dS3, dS4/L] / dxi
-    rp = (d[0] * E[:, 0:3] + d[1] * L[:, None] * E[:, 3:6] + d[2] * E[:, 6:9]
-          + d[3] * L[:, None] * E[:, 9:12] + d[2] * S.cable_dX) / L[:, None]
-    lam2 = np.einsum("ij,ij->i", rp, rp)
-    return (S.cable_N0() + S.cable_EA * 0.5 * (lam2 - 1.0)) * np.sqrt(lam2)
+    return S.cables.tensions(x_full)
 
 
-def _tension_measures(S, x_full):
-    E = x_full[S.cable_dofs]
+def _tension_measures(C, x_full):
+    """Horizontal force measures of the cables ``C`` (a CableSet) and their gradients."""
+    E = x_full[C.dofs]
     ne = E.shape[0]
     h = np.empty(ne)
     dh = np.empty((ne, 12))
     dhN = np.empty(ne)
     dfN = np.empty((ne, 12))
-    ancf_cable.cable_tension_measures(E, S.cable_dX, S.cable_Le, S.cable_EA, S.cable_N0(),
+    ancf_cable.cable_tension_measures(E, C.dX, C.Le, C.EA, C.N0(),
                                       ancf_cable.GAUSS_XI, ancf_cable.GAUSS_W, h, dh, dhN, dfN)
     return h, dh, dhN, dfN
 
 
 def _augmented(mesh, q, want_J=True):
     S = mesh.structure
+    C, B = S.cables, S.bars
     n = S.n_free
-    nd, ng, na = mesh.dropper_bars.size, S.N0_group.size, len(mesh.anchors)
+    nd, ng, na = mesh.dropper_bars.size, C.N0_group.size, len(mesh.anchors)
     x = S.full(q)
     f, K, _ = S.internal(x, want_J, tension_only=False)
     R = f[S.free] - S.weight
-    h, dh, dhN, dfN = _tension_measures(S, x)
-    Lsum = np.bincount(S.cable_group, S.cable_Le, minlength=ng)
-    H = np.bincount(S.cable_group, h, minlength=ng) / Lsum
+    h, dh, dhN, dfN = _tension_measures(C, x)
+    Lsum = np.bincount(C.group, C.Le, minlength=ng)
+    H = np.bincount(C.group, h, minlength=ng) / Lsum
     cz = mesh.node_dofs[mesh.dropper_contact_nodes, 2]
     g = np.concatenate([
         x[cz] - mesh.dropper_design_z,
@@ -200,34 +197,33 @@ def _augmented(mesh, q, want_J=True):
         vals.append(v)
 
     # dR/dp
-    bd = S.bar_dofs[mesh.dropper_bars]
+    bd = B.dofs[mesh.dropper_bars]
     X = x[bd]
-    dvec = X[:, 3:] - X[:, :3] + S.bar_dX[mesh.dropper_bars]
+    dvec = X[:, 3:] - X[:, :3] + B.dX[mesh.dropper_bars]
     ln = np.linalg.norm(dvec, axis=1)
     u = dvec / ln[:, None]
-    l0 = S.bar_l0[mesh.dropper_bars]
+    l0 = B.l0[mesh.dropper_bars]
     kd = mesh.dropper_k
     if kd.size and np.all(np.isfinite(kd)):
         dN = -kd * np.ones_like(ln)                      # N = k (l - l0)
     else:
-        dN = -S.bar_EA[mesh.dropper_bars] * ln / l0**2   # N = EA (l - l0) / l0
+        dN = -B.EA[mesh.dropper_bars] * ln / l0**2   # N = EA (l - l0) / l0
     dF = np.hstack([-u, u]) * dN[:, None]
     add(fm[bd], n + np.arange(nd)[:, None], dF)
-    add(fm[S.cable_dofs], n + nd + S.cable_group[:, None], dfN)
+    add(fm[C.dofs], n + nd + C.group[:, None], dfN)
     if na:
-        fb, Kb, _ = S.bar_tangent_blocks(x)
+        fb, Kb, _ = B.tangent_blocks(x)
     for k, a in enumerate(mesh.anchors):
         col = n + nd + ng + k
         if a.kind == "pin":
-            add(fm[S.bar_dofs[a.bar]], col, Kb[a.bar][:, a.comp])
+            add(fm[B.dofs[a.bar]], col, Kb[a.bar][:, a.comp])
         else:
-            add([fm[S.spring_dofs[a.index]]], col, [-S.spring_k[a.index]])
+            add([fm[S.springs.dofs[a.index, 0]]], col, [-S.springs.k[a.index]])
     # dg/dq and dg/dp
     add(n + np.arange(nd), fm[cz], 1.0)
-    add(n + nd + S.cable_group[:, None] + 0 * S.cable_dofs, fm[S.cable_dofs],
-        dh / Lsum[S.cable_group][:, None])
+    add(n + nd + C.group[:, None] + 0 * C.dofs, fm[C.dofs], dh / Lsum[C.group][:, None])
     add(n + nd + np.arange(ng), n + nd + np.arange(ng),
-        np.bincount(S.cable_group, dhN, minlength=ng) / Lsum)
+        np.bincount(C.group, dhN, minlength=ng) / Lsum)
     for k, a in enumerate(mesh.anchors):
         add([n + nd + ng + k], [fm[a.target]], [1.0])
     r = np.concatenate(rows)
@@ -252,7 +248,7 @@ def solve_initial_configuration(mesh, tol: float = 1e-9,
     fscale = float(np.max(np.abs(S.weight)))
     Tscale = float(np.max(mesh.group_tension)) if mesh.group_tension.size else 1.0
     nd = mesh.dropper_bars.size
-    ng = S.N0_group.size
+    ng = S.cables.N0_group.size
     p = _params(mesh)
     for it in range(max_iter + 1):
         R, g, J = _augmented(mesh, q)
@@ -274,7 +270,7 @@ def solve_initial_configuration(mesh, tol: float = 1e-9,
         q = q + s * dy[:S.n_free]
         p = p + s * dy[S.n_free:]
         _set_params(mesh, p)
-    l0 = S.bar_l0[mesh.dropper_bars]
+    l0 = S.bars.l0[mesh.dropper_bars]
     if np.any(l0 <= 0):
         i = int(np.argmin(l0))
         raise ParameterError(f"droppers.positions[{i}]", float(mesh.dropper_x[i]),

@@ -76,10 +76,10 @@ def plot_static(model, report, path) -> None:
     ax[0].plot(cx, cz, "C0-", lw=1, label="contact wire")
     ax[0].plot(mx, mz, "C1-", lw=1, label="messenger wire")
     for b in mesh.dropper_bars:
-        d = S.bar_dofs[b]
+        d = S.bars.dofs[b]
         ax[0].plot([xa[d[0]], xa[d[3]]], [xa[d[2]], xa[d[5]]], "k-", lw=0.5)
     for b, *_ in mesh.arms:
-        d = S.bar_dofs[b]
+        d = S.bars.dofs[b]
         ax[0].plot([xa[d[0]], xa[d[3]]], [xa[d[2]], xa[d[5]]], "C2-", lw=1.5)
     for x in model.support_x:
         ax[0].axvline(x, color="0.7", lw=0.8, zorder=0)
