@@ -55,8 +55,10 @@ class Prepared:
 
 def analysis_window(sc: Scenario, definition) -> tuple[tuple[float, float], str, float]:
     """(window [m], the scenario field that sets it, duration [s]): the analysis window
-    inside the model and the run's duration (by default until the last pantograph leaves the
-    window, plus 0.2 s)."""
+    inside the model and the run's duration (by default
+    :func:`~pantocosim.catenary.operating_height.passage_duration`)."""
+    from pantocosim.catenary.operating_height import passage_duration
+
     support_x = definition.support_x
     length = float(support_x[-1])
     src = sc.source
@@ -74,7 +76,8 @@ def analysis_window(sc: Scenario, definition) -> tuple[tuple[float, float], str,
             raise ParameterError(wfield, list(window),
                                  f"outside the model (0 .. {length:g} m)", src)
     if sc.duration_s is None:
-        duration = max((window[1] - p.position_m) / sc.speed for p in sc.pantographs) + 0.2
+        duration = passage_duration(window[1], [p.position_m for p in sc.pantographs],
+                                    sc.speed)
     else:
         duration = sc.duration_s
     return window, wfield, float(duration)

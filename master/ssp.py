@@ -177,8 +177,9 @@ def _oms_annotation(system: ET.Element, stop_time: float, step_size: float) -> N
 def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
     from fmpy import read_model_description
 
-    types = {v.name: v.type for v in read_model_description(str(fmu)).modelVariables}
-    causality = {v.name: v.causality for v in read_model_description(str(fmu)).modelVariables}
+    variables = read_model_description(str(fmu)).modelVariables
+    types = {v.name: v.type for v in variables}
+    causality = {v.name: v.causality for v in variables}
     missing = [n for n in list(parameters) + ports if n not in types]
     if missing:
         raise ParameterError("fmu", str(fmu), f"has no variable {missing[0]!r}: not a "

@@ -70,6 +70,16 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
     return total / count
 
 
+#: time after the last pantograph leaves the analysis window until a run ends [s]
+RUN_TAIL_S = 0.2
+
+
+def passage_duration(window_end: float, positions, speed: float) -> float:
+    """Duration of a run by default: until the last pantograph leaves the analysis window,
+    plus :data:`RUN_TAIL_S`."""
+    return max((window_end - float(x)) / speed for x in positions) + RUN_TAIL_S
+
+
 #: contact forces [N] between which the start laws below are secants (the range of mean and
 #: static contact forces of the project's pantographs)
 LAW_FORCES = (100.0, 200.0)

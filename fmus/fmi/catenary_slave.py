@@ -223,7 +223,7 @@ class CatenarySlave(IntegratorSlave):
 
     def _laws(self, model):
         """The start laws (operating_height.ContactHeightLaws) of the current parameters."""
-        from pantocosim.catenary.operating_height import contact_height_laws
+        from pantocosim.catenary.operating_height import contact_height_laws, passage_duration
         from pantocosim.core.errors import ParameterError
 
         x = model.support_x
@@ -235,8 +235,8 @@ class CatenarySlave(IntegratorSlave):
         dt = self.finite("averaging_step", self.averaging_step)
         if not dt > 0:
             raise ParameterError("averaging_step", dt, "must be > 0")
-        speed = model.speed if model.speed > 0 else 1.0
-        duration = max(0.0, (window[1] - float(np.min(model.x0))) / speed) + 0.2
+        duration = passage_duration(window[1], model.x0, model.speed if model.speed > 0
+                                    else 1.0)
         alpha = self.finite("hht_alpha", self.hht_alpha)
         key = ("laws", window, dt, alpha, self._contact().stiffness)
         if key not in self._cache:
