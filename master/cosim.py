@@ -181,6 +181,11 @@ def fmu_subsystems(prep: Prepared, instances: list):
               "hht_alpha": sc.alpha, "contact_mode": 0, "newton_rtol": sc.newton_rtol}
     if sc.spans:
         params["spans"] = sc.spans
+    if sc.catenary_model != "nonlinear":
+        from pantocosim.catenary.models import MODEL_NAMES
+
+        params["catenary_model"] = MODEL_NAMES.index(sc.catenary_model)
+        params["modal_cutoff_hz"] = sc.modal_cutoff_hz
     for k, spec in enumerate(sc.pantographs, start=1):
         params[f"position_{k}"] = spec.position_m
         params[f"static_force_{k}"] = float(prep.static_forces[k - 1])

@@ -34,7 +34,7 @@ MAX_WAVE_SPEED_RATIO = 0.7
 class Prepared:
     scenario: Scenario
     definition: object
-    catenary: object            # CatenaryModel
+    catenary: object            # a model of pantocosim.catenary.models (CatenaryModel...)
     pantographs: list           # PantographModel per pantograph
     contact: PenaltyContact
     window_m: tuple[float, float]
@@ -87,7 +87,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
             element_size: float | None = None) -> Prepared:
     """Validate ``scenario`` and build the models and the static start."""
     from pantocosim.catenary.definition import load_catenary
-    from pantocosim.catenary.model import CatenaryModel
+    from pantocosim.catenary.models import law_model, make_catenary
     from pantocosim.pantograph.base import Ramp
     from pantocosim.pantograph.presets import load_pantograph
 
@@ -138,7 +138,8 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
         except ParameterError as exc:
             raise ParameterError(f"pantographs[{k}].model", p.model, str(exc), src) from None
     x0 = [p.position_m for p in sc.pantographs]
-    catenary = CatenaryModel(definition, x0=x0, speed=sc.speed, element_size=element_size)
+    catenary = make_catenary(sc.catenary_model, definition, x0=x0, speed=sc.speed,
+                             element_size=element_size, modal_cutoff_hz=sc.modal_cutoff_hz)
     # The actuation of every pantograph is set so that it delivers its mean uplift at the mean
     # height of the contact wire under the moving mean force over the analysis window
     # (operating_height.py); the static start then solves catenary + pantographs + contacts
@@ -148,7 +149,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     F0 = np.array([pan.options.mean_uplift for pan in pantographs])
     from pantocosim.catenary.operating_height import mean_dynamic_wire_height
 
-    z_mean = mean_dynamic_wire_height(catenary, F0, window, sc.dt, duration, sc.alpha)
+    z_mean = mean_dynamic_wire_height(law_model(catenary), F0, window, sc.dt, duration, sc.alpha)
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []

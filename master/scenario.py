@@ -26,6 +26,8 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
                                    # relative to the pantographs' mean contact force
     duration_s = 5.0               # optional; default: until the last pantograph leaves the
                                    # analysis window
+    catenary_model = "nonlinear"   # "nonlinear" (reference), "linear" or "modal"
+    modal_cutoff_hz = 20.0         # modal model: modes below this frequency
 
     [contact]
     stiffness = 50000.0            # k_H [N/m]
@@ -39,6 +41,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ, MODEL_NAMES
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
@@ -84,6 +87,9 @@ class Scenario:
     contact_damping: float = 0.0
     spans: int | None = None
     description: str = ""
+    #: catenary model (pantocosim.catenary.models.CATENARY_MODELS)
+    catenary_model: str = "nonlinear"
+    modal_cutoff_hz: float = DEFAULT_MODAL_CUTOFF_HZ
 
     @property
     def speed(self) -> float:
@@ -155,7 +161,8 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         raise ParameterError("analysis.window_supports", None,
                              "missing field (or give analysis.window_m)", source)
     sim = root.sub("simulation", required=False)
-    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol", "coupling_rtol"})
+    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol", "coupling_rtol",
+                      "catenary_model", "modal_cutoff_hz"})
     contact = root.sub("contact", required=False)
     contact.unknown_keys({"stiffness", "damping"})
     sc = Scenario(
@@ -172,6 +179,8 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True,
                                  maximum=RUN_RTOL_MAX),
         duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
+        catenary_model=sim.string("catenary_model", "nonlinear", choices=MODEL_NAMES),
+        modal_cutoff_hz=sim.number("modal_cutoff_hz", DEFAULT_MODAL_CUTOFF_HZ, positive=True),
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))
     return sc

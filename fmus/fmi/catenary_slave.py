@@ -11,7 +11,9 @@ parameters
   ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
   contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``,
   ``factorization`` (HHT Newton matrix policy: 0 full Newton, 1 once per step, 2 reuse
-  across steps, the default), ``newton_rtol`` (Newton residual tolerance).
+  across steps, the default), ``newton_rtol`` (Newton residual tolerance),
+  ``catenary_model`` (Integer: 0 nonlinear, the default; 1 linear; 2 modal) and
+  ``modal_cutoff_hz`` [Hz] (modal model: modes below it; 0 = the default cutoff).
 inputs
   ``contact_force_k`` [N] (mode 0), ``pantograph_height_k`` [m] and
   ``pantograph_velocity_k`` [m/s] (mode 1).
@@ -78,6 +80,12 @@ class CatenarySlave(IntegratorSlave):
                     "(en50318, ave64, benchmark55) or TOML file (relative paths are also looked "
                     "up in the FMU resources)")
         self.integer("spans", 0, "number of spans (span data cycled); 0 = as defined")
+        self.integer("catenary_model", 0, "catenary model: 0 = nonlinear (finite elements, "
+                     "the reference), 1 = linear (about the static equilibrium, droppers "
+                     "slacken), 2 = modal (the linear model on its modes below "
+                     "modal_cutoff_hz, static correction at the contact points)")
+        self.real("modal_cutoff_hz", 0.0, "parameter", "Hz", "catenary_model 2: modes below "
+                  "this frequency; 0 = the default cutoff")
         self.real("element_size", 0.0, "parameter", "m",
                   "target finite-element length; 0 = as defined")
         self.real("speed_kmh", 0.0, "parameter", "km/h", "train speed")
@@ -180,7 +188,7 @@ class CatenarySlave(IntegratorSlave):
     def _build_model(self):
         """The catenary model of the current parameters (checked; cached)."""
         from pantocosim.catenary.definition import with_spans
-        from pantocosim.catenary.model import CatenaryModel
+        from pantocosim.catenary.models import make_catenary, model_name
         from pantocosim.core.errors import ParameterError
 
         n = int(self.n_pantographs)
@@ -195,7 +203,12 @@ class CatenarySlave(IntegratorSlave):
             raise ParameterError("spans", spans, "must be >= 0 (0 = as defined)")
         x0 = [self.finite(f"position_{k}", getattr(self, f"position_{k}"))
               for k in range(1, n + 1)]
-        key = ("model", str(self.catenary_definition), spans, esize, speed, tuple(x0))
+        kind = model_name(int(self.catenary_model))
+        cutoff = self.finite("modal_cutoff_hz", self.modal_cutoff_hz)
+        if cutoff < 0:
+            raise ParameterError("modal_cutoff_hz", cutoff, "must be >= 0 (0 = default)")
+        key = ("model", str(self.catenary_definition), spans, esize, speed, tuple(x0), kind,
+               cutoff)
         if key not in self._cache:
             definition = self._catenary_source()
             if spans:
@@ -205,8 +218,9 @@ class CatenarySlave(IntegratorSlave):
                 if not 0.0 < x < length:
                     raise ParameterError(f"position_{k}", x, f"must lie on the line (0 .. "
                                          f"{length:g} m of catenary '{definition.name}')")
-            self._cache = {key: CatenaryModel(definition, x0=x0, speed=speed,
-                                              element_size=esize if esize > 0 else None)}
+            self._cache = {key: make_catenary(
+                kind, definition, x0=x0, speed=speed, element_size=esize if esize > 0 else None,
+                modal_cutoff_hz=cutoff if cutoff > 0 else None)}
         return self._cache[key]
 
     def _contact(self):
@@ -240,8 +254,10 @@ class CatenarySlave(IntegratorSlave):
         alpha = self.finite("hht_alpha", self.hht_alpha)
         key = ("laws", window, dt, alpha, self._contact().stiffness)
         if key not in self._cache:
-            self._cache[key] = contact_height_laws(model, self._contact().stiffness, window,
-                                                   dt, duration, alpha)
+            from pantocosim.catenary.models import law_model
+
+            self._cache[key] = contact_height_laws(law_model(model), self._contact().stiffness,
+                                                   window, dt, duration, alpha)
         return self._cache[key]
 
     def update_initial_outputs(self):

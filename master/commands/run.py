@@ -18,6 +18,12 @@ def add_parser(sub):
                    "(= jacobi), gauss-seidel, implicit (iterative with rollback)")
     p.add_argument("--accelerator", default="iqn-imvj", choices=["iqn-imvj", "iqn-ils", "aitken"],
                    help="interface acceleration of the implicit coupling")
+    p.add_argument("--catenary-model", default=None, choices=["nonlinear", "linear", "modal"],
+                   help="catenary model (default: the scenario's [simulation] catenary_model, "
+                   "else nonlinear, the reference)")
+    p.add_argument("--modal-cutoff-hz", type=float, default=None,
+                   help="modal catenary: modes below this frequency (default: the scenario's "
+                   "modal_cutoff_hz)")
     p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING)")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
     p.add_argument("--force", action="store_true",
@@ -51,12 +57,29 @@ def print_statistics(summary: dict) -> None:
         print(f"  results in {Path(summary['files']['summary']).parent}")
 
 
+def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
+    """The scenario with the command line's catenary model and cutoff (None: as given)."""
+    import dataclasses
+
+    from pantocosim.core.errors import ParameterError
+
+    changes = {}
+    if catenary_model is not None:
+        changes["catenary_model"] = catenary_model
+    if modal_cutoff_hz is not None:
+        if not modal_cutoff_hz > 0:
+            raise ParameterError("--modal-cutoff-hz", modal_cutoff_hz, "must be > 0")
+        changes["modal_cutoff_hz"] = float(modal_cutoff_hz)
+    return dataclasses.replace(scenario, **changes) if changes else scenario
+
+
 def run(args) -> int:
     from pantocosim.core.errors import PantocosimError
     from pantocosim.master.run import finish, prepare, run_monolithic
     from pantocosim.master.scenario import load_scenario
 
-    scenario = load_scenario(args.scenario)
+    scenario = with_model(load_scenario(args.scenario), args.catenary_model,
+                          args.modal_cutoff_hz)
     coupling = "jacobi" if args.coupling == "explicit" else args.coupling
     out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
     prep = prepare(scenario, force=args.force)

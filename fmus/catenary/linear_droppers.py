@@ -1,0 +1,68 @@
+"""The droppers of a catenary linearised about its static configuration, as unilateral
+elements (thesis 3.1.2, the tension-only bar of (3.4) linearised).
+
+About the static configuration (dropper direction u0, axial force N0 > 0, axial stiffness
+k_a = EA / l0) the dropper's axial force is, to first order,
+
+    N(q) = N0 + k_a b . (q - q_static),     b = [-u0 on end i, +u0 on end j],
+
+and its force on the free DOFs is N b plus the pre-tension (geometric) stiffness
+N0 / l (I - u0 u0^T) across the dropper, both inside K0. A dropper is slack when N < 0; its
+axial force N b (and the axial share beta k_a b b^T of the Rayleigh damping) is then taken
+out, so it carries no axial force at all; its stiffness leaves the Newton matrix as the
+rank-one k_a b b^T (:mod:`pantocosim.core.lowrank`). The force is continuous through the
+switch (N = 0 there), so the active set settles in a Newton step or two. The geometric term
+(a lateral stiffness N0 / l of some 100 N/m, first order in the ends' relative lateral
+motion) stays: it belongs to the linearisation of the direction, not to the axial law.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.lowrank import SparseVectors
+
+
+class LinearDroppers:
+    """Droppers ``bars`` (indices into ``structure.bars``) linearised at ``x_static``."""
+
+    def __init__(self, structure, bars: np.ndarray, x_static: np.ndarray, beta: float):
+        B = structure.bars
+        self.bars = np.asarray(bars, dtype=np.int64)
+        dofs = B.dofs[self.bars]
+        X = x_static[dofs]
+        d = X[:, 3:] - X[:, :3] + B.dX[self.bars]
+        length = np.linalg.norm(d, axis=1)
+        u = d / length[:, None]
+        self.N0 = B.axial_forces(x_static, tension_only=False)[self.bars]
+        self.ka = B.EA[self.bars] / B.l0[self.bars]
+        self.tension_only = B.tension_only[self.bars].copy()
+        self.beta = float(beta)
+        self.vectors = SparseVectors(structure.fmap[dofs], np.hstack([-u, u]),
+                                     structure.n_free)
+
+    def __len__(self) -> int:
+        return self.bars.size
+
+    def axial(self, dq: np.ndarray) -> np.ndarray:
+        """Linearised axial force N of every dropper at q = q_static + dq (tension > 0)."""
+        return self.N0 + self.ka * self.vectors.dots(dq)
+
+    def slack(self, N: np.ndarray) -> np.ndarray:
+        """The droppers that carry no force at axial force N."""
+        return self.tension_only & (N < 0.0)
+
+    def force(self, coef: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """sum over the ``mask`` droppers of coef_d b_d (free DOFs)."""
+        rows = np.flatnonzero(mask)
+        if not rows.size:
+            return np.zeros(self.vectors.n)
+        return self.vectors.combine(coef[rows], rows)
+
+    def removed_stiffness(self, slack: np.ndarray, damped_slack: np.ndarray, c_v: float,
+                          c_f: float) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, s): the rank-one scales s_d of c_f (k_a [d slack] + c_v beta k_a [d in the
+        damping's slack set]) b b^T that leave the Newton matrix c_a M + c_f (c_v C + K)."""
+        s = c_f * self.ka * (slack + c_v * self.beta * damped_slack)
+        rows = np.flatnonzero(s != 0.0)
+        return rows, s[rows]

@@ -1,0 +1,74 @@
+"""The catenary models a run can choose, by name (scenario ``[simulation] catenary_model``,
+``pantocosim run --catenary-model``, the catenary FMU's Integer ``catenary_model``).
+
+- ``nonlinear``: :class:`~.model.CatenaryModel`, the ANCF finite-element model (the
+  reference);
+- ``linear``: :class:`~.linear.LinearCatenary`, linearised about the static equilibrium,
+  constant matrices, exact dropper slackening;
+- ``modal``: :class:`~.modal.ModalCatenary`, the linear model on its modes below a cutoff
+  with a static correction at the contact points.
+
+Every factory takes the catenary (preset, path, definition or mesh), the start positions, the
+speed and the options; the FMU code of a model is its index in :data:`MODEL_NAMES`.
+"""
+
+from __future__ import annotations
+
+from ..core.errors import ParameterError
+
+#: default cutoff of the modal model [Hz] (docs/fast-catenary.md)
+DEFAULT_MODAL_CUTOFF_HZ = 20.0
+
+
+def _nonlinear(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .model import CatenaryModel
+
+    return CatenaryModel(catenary, x0, speed, element_size=element_size)
+
+
+def _linear(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .linear import LinearCatenary
+
+    return LinearCatenary(catenary, x0, speed, element_size=element_size)
+
+
+def _modal(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .modal import ModalCatenary
+
+    cutoff = DEFAULT_MODAL_CUTOFF_HZ if modal_cutoff_hz is None else modal_cutoff_hz
+    return ModalCatenary(catenary, x0, speed, element_size=element_size, cutoff_hz=cutoff)
+
+
+#: name -> factory(catenary, x0, speed, element_size=None, modal_cutoff_hz=None)
+CATENARY_MODELS = {"nonlinear": _nonlinear, "linear": _linear, "modal": _modal}
+#: FMU parameter ``catenary_model``: the index of the name
+MODEL_NAMES = tuple(CATENARY_MODELS)
+
+
+def model_name(code_or_name) -> str:
+    """The model name of an FMU code (0, 1, 2) or a name."""
+    if isinstance(code_or_name, str):
+        if code_or_name not in CATENARY_MODELS:
+            raise ParameterError("catenary_model", code_or_name,
+                                 f"must be one of {', '.join(MODEL_NAMES)}")
+        return code_or_name
+    code = int(code_or_name)
+    if not 0 <= code < len(MODEL_NAMES):
+        raise ParameterError("catenary_model", code, "must be " + ", ".join(
+            f"{i} ({n})" for i, n in enumerate(MODEL_NAMES)))
+    return MODEL_NAMES[code]
+
+
+def make_catenary(model, catenary, x0=(0.0,), speed: float = 0.0, *,
+                  element_size: float | None = None, modal_cutoff_hz: float | None = None):
+    """The catenary model ``model`` (name or FMU code) of ``catenary``."""
+    if modal_cutoff_hz is not None and not modal_cutoff_hz > 0:
+        raise ParameterError("modal_cutoff_hz", modal_cutoff_hz, "must be > 0")
+    return CATENARY_MODELS[model_name(model)](catenary, x0, speed, element_size=element_size,
+                                              modal_cutoff_hz=modal_cutoff_hz)
+
+
+def law_model(catenary):
+    """The model behind the start laws (operating_height.py): one on the full DOFs (the
+    modal model's linear model, else the model itself)."""
+    return getattr(catenary, "linear", catenary)

@@ -1,0 +1,90 @@
+"""A kept factorization with a low-rank stiffness removal, by the Woodbury identity.
+
+    (A - B S B^T)^-1 r = x + U (I - S B^T U)^-1 S B^T x,   x = A^-1 r,  U = A^-1 B,
+
+with S = diag(s) (s > 0: the stiffness of elements that dropped out, e.g. slack droppers)
+and B's columns sparse vectors b_j. The columns U are solved once and kept by the caller for
+the whole run (:class:`ColumnCache`), so a new slack set costs an m x m solve, not a
+factorization.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class SparseVectors:
+    """m sparse vectors of length n: ``idx`` (m, k) indices (-1 = absent), ``val`` (m, k)."""
+
+    def __init__(self, idx: np.ndarray, val: np.ndarray, n: int):
+        self.idx = np.asarray(idx, dtype=np.int64)
+        self.val = np.where(self.idx >= 0, np.asarray(val, dtype=float), 0.0)
+        self.n = int(n)
+        self._pad_idx = np.where(self.idx >= 0, self.idx, self.n)
+
+    def dots(self, x: np.ndarray, rows=None) -> np.ndarray:
+        """b_j . x for every vector (or the ``rows``)."""
+        xp = np.append(x, 0.0)
+        if rows is None:
+            return np.einsum("ij,ij->i", self.val, xp[self._pad_idx])
+        return np.einsum("ij,ij->i", self.val[rows], xp[self._pad_idx[rows]])
+
+    def combine(self, coef: np.ndarray, rows) -> np.ndarray:
+        """sum_j coef_j b_j over ``rows`` as a dense vector."""
+        out = np.zeros(self.n + 1)
+        np.add.at(out, self._pad_idx[rows].ravel(), (self.val[rows] * coef[:, None]).ravel())
+        return out[:self.n]
+
+    def dense(self, j: int) -> np.ndarray:
+        return self.combine(np.ones(1), [j])
+
+
+class ColumnCache:
+    """A^-1 b_j of a kept factorization ``solve``, computed on first use and kept."""
+
+    def __init__(self, solve, vectors: SparseVectors):
+        self.solve = solve
+        self.vectors = vectors
+        self._cols: dict[int, np.ndarray] = {}
+
+    def columns(self, rows) -> np.ndarray:
+        missing = [int(j) for j in rows if int(j) not in self._cols]
+        if missing:
+            B = np.column_stack([self.vectors.dense(j) for j in missing])
+            X = np.asarray(self.solve(B)).reshape(self.vectors.n, len(missing))
+            for i, j in enumerate(missing):
+                self._cols[j] = np.ascontiguousarray(X[:, i])
+        return np.column_stack([self._cols[int(j)] for j in rows])
+
+
+class LowRankSolve:
+    """``solve(r)`` for A - sum_j s_j b_j b_j^T, with ``solve_sparse`` like the base's."""
+
+    def __init__(self, cache: ColumnCache, rows: np.ndarray, scales: np.ndarray):
+        self.base = cache.solve
+        self.vectors = cache.vectors
+        self.rows = np.asarray(rows, dtype=np.int64)
+        self.s = np.asarray(scales, dtype=float)
+        if self.rows.size:
+            self.U = cache.columns(self.rows)
+            BtU = np.column_stack([self.vectors.dots(self.U[:, i], self.rows)
+                                   for i in range(self.rows.size)])
+            self.small = np.eye(self.rows.size) - self.s[:, None] * BtU
+
+    def _correct(self, x: np.ndarray) -> np.ndarray:
+        if not self.rows.size:
+            return x
+        y = self.s * self.vectors.dots(x, self.rows)
+        return x + self.U @ np.linalg.solve(self.small, y)
+
+    def __call__(self, r: np.ndarray) -> np.ndarray:
+        return self._correct(np.asarray(self.base(r), dtype=float))
+
+    def solve_sparse(self, dofs, values) -> np.ndarray:
+        if hasattr(self.base, "solve_sparse"):
+            x = self.base.solve_sparse(dofs, values)
+        else:
+            b = np.zeros(self.vectors.n)
+            np.add.at(b, dofs, values)
+            x = np.asarray(self.base(b), dtype=float)
+        return self._correct(x)
