@@ -66,6 +66,7 @@ def scenario_start_values(scenario) -> dict:
     t0, fmpy's SSP support, starts from it)."""
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.model import CatenaryModel
+    from pantocosim.catenary.models import MODEL_NAMES
     from pantocosim.catenary.operating_height import contact_height_laws
     from pantocosim.master.run import analysis_window
     from pantocosim.master.scenario import load_scenario
@@ -98,6 +99,8 @@ def scenario_start_values(scenario) -> dict:
            "contact_damping": float(sc.contact_damping), "extrapolate_heights": True,
            "newton_rtol": float(sc.newton_rtol), "window_start": float(window[0]),
            "window_end": float(window[1]), "averaging_step": float(sc.dt),
+           "catenary_model": MODEL_NAMES.index(sc.catenary_model),
+           "modal_cutoff_hz": float(sc.modal_cutoff_hz or 0.0),
            "pantograph_height_1": float(pan.contact_height(q0))}
     pantograph = {"speed_kmh": float(sc.speed_kmh), "hht_alpha": float(sc.alpha),
                   "start_mode": 2, "force_extrapolation": True}
