@@ -10,6 +10,10 @@ step, peak memory, and the ratios
 - ``cosim_over_monolithic``: explicit co-simulation wall time / monolithic wall time;
 - ``implicit_over_explicit``: implicit / explicit co-simulation wall time;
 
+the distribution of the time per step (``p50_step_ms``, ``p99_step_ms``, ``max_step_ms``: the
+compute time of each step with its recorded row, as ``pantocosim run`` reports it in
+``step_time``; a real-time loop has to fit the p99 and the max, not the mean),
+
 and the growth of the cost per simulated second per doubling of the number of spans, raw and
 per catenary DOF. Wall times are those of the time stepping; the co-simulation's set-up (FMU
 instantiation, the catenary's initial configuration inside the FMU) is reported apart.
@@ -32,14 +36,50 @@ CASES = {
     "en50318-300": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
     "dsa380-ave-300-40span": ("ave64", 40, "dsa380-rigid", 300.0, 32.0),
 }
+#: extra ``[simulation]`` keys of a case (e.g. a catenary model option): a new variant of a
+#: case is a new CASES entry with its options here
+CASE_OPTIONS: dict[str, dict] = {}
+#: simulated seconds of each case (quick, full); a case not listed runs 0.5 / 2.0 s
+DURATIONS = {"en50318-300": (0.5, 2.0), "dsa380-ave-300-40span": (0.3, 1.0)}
+COUPLINGS = ("monolithic", "explicit", "implicit")
 
 
-def scenario_text(name, catenary, spans, pantograph, speed, x0, duration) -> str:
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    return repr(value)
+
+
+def scenario_text(name, catenary, spans, pantograph, speed, x0, duration,
+                  simulation: dict | None = None) -> str:
+    extra = "".join(f"{k} = {_toml_value(v)}\n" for k, v in (simulation or {}).items())
     return (f'name = "{name}"\ncatenary = "{catenary}"\nspans = {spans}\n'
             f"speed_kmh = {speed}\n\n[[pantographs]]\nmodel = \"{pantograph}\"\n"
             f"position_m = {x0}\nstart = \"static\"\n\n[analysis]\n"
             f"window_m = [{x0 + 1.0}, {x0 + speed / 3.6 * duration - 1.0}]\n\n"
-            f"[simulation]\ndt = 0.001\nalpha = -0.05\nduration_s = {duration}\n")
+            f"[simulation]\ndt = 0.001\nalpha = -0.05\nduration_s = {duration}\n{extra}")
+
+
+def select_cases(names=None) -> list[str]:
+    """The case names asked for (all by default); an unknown one is an error."""
+    if not names:
+        return list(CASES)
+    for name in names:
+        if name not in CASES:
+            from pantocosim.core.errors import ParameterError
+
+            raise ParameterError("--case", name, f"unknown bench case; one of "
+                                 f"{', '.join(CASES)}")
+    return list(dict.fromkeys(names))
+
+
+def step_time_entry(summary: dict) -> dict:
+    """p50 / p99 / max of the time per step from a run summary's ``step_time``."""
+    st = summary.get("step_time") or {}
+    return {"p50_step_ms": st.get("p50_ms"), "p99_step_ms": st.get("p99_ms"),
+            "max_step_ms": st.get("max_ms")}
 
 
 def run_case(path: Path, coupling: str, out: Path, env: dict | None = None) -> dict:
@@ -83,34 +123,41 @@ def floor_per_step(catenary: str, spans: int, repeats: int = 200) -> float:
     return (time.perf_counter() - t0) / repeats
 
 
-def bench(quick: bool = False, printer=print) -> dict:
-    durations = {"en50318-300": 0.5 if quick else 2.0, "dsa380-ave-300-40span": 0.3 if quick
-                 else 1.0}
-    couplings = ["monolithic", "explicit", "implicit"]
+def bench(quick: bool = False, printer=print, cases=None) -> dict:
+    """Run the bench; ``cases`` (names of :data:`CASES`) restricts it to those cases and then
+    skips the cold first run and the span scaling (they belong to the full bench)."""
+    selected = select_cases(cases)
+    full = not cases
     results: dict = {"cases": {}, "machine": _machine()}
     with tempfile.TemporaryDirectory(prefix="pantocosim_bench_") as tmp:
         tmp = Path(tmp)
-        # cold first run: empty numba cache and FMUs extracted afresh (every kernel compiles),
-        # reported apart; then a short run warms the user's caches for the measured runs
-        cat, spans, pan, v, x0 = CASES["en50318-300"]
-        cold = tmp / "cold.toml"
-        cold.write_text(scenario_text("cold", cat, spans, pan, v, x0, durations["en50318-300"]))
-        s = run_case(cold, "explicit", tmp / "cold", env={
-            "NUMBA_CACHE_DIR": str(tmp / "numba-cold"),
-            "PANTOCOSIM_FMU_CACHE": str(tmp / "fmus-cold")})
-        results["cold_first_run"] = {
-            "process_wall_s": s["process_wall_s"], "setup_s": s.get("setup_time_s", 0.0),
-            "real_time_factor": s["wall_time_s"] / s["simulated_time_s"]}
-        results["cold_first_run_s"] = s["process_wall_s"]
+        cat, spans, pan, v, x0 = CASES[selected[0]]
+        if full:
+            # cold first run: empty numba cache and FMUs extracted afresh (every kernel
+            # compiles), reported apart
+            cat, spans, pan, v, x0 = CASES["en50318-300"]
+            cold = tmp / "cold.toml"
+            cold.write_text(scenario_text("cold", cat, spans, pan, v, x0,
+                                          _duration("en50318-300", quick)))
+            s = run_case(cold, "explicit", tmp / "cold", env={
+                "NUMBA_CACHE_DIR": str(tmp / "numba-cold"),
+                "PANTOCOSIM_FMU_CACHE": str(tmp / "fmus-cold")})
+            results["cold_first_run"] = {
+                "process_wall_s": s["process_wall_s"], "setup_s": s.get("setup_time_s", 0.0),
+                "real_time_factor": s["wall_time_s"] / s["simulated_time_s"]}
+            results["cold_first_run_s"] = s["process_wall_s"]
+        # a short run warms the user's caches for the measured runs
         warm = tmp / "warm.toml"
         warm.write_text(scenario_text("warm", cat, spans, pan, v, x0, 0.05))
         run_case(warm, "explicit", tmp / "warm")
-        for name, (cat, spans, pan, v, x0) in CASES.items():
+        for name in selected:
+            cat, spans, pan, v, x0 = CASES[name]
             path = tmp / f"{name}.toml"
-            path.write_text(scenario_text(name, cat, spans, pan, v, x0, durations[name]))
+            path.write_text(scenario_text(name, cat, spans, pan, v, x0, _duration(name, quick),
+                                          CASE_OPTIONS.get(name)))
             floor = floor_per_step(cat, spans)
             case = {"floor_solve_s": floor}
-            for coupling in couplings:
+            for coupling in COUPLINGS:
                 s = run_case(path, coupling, tmp / f"{name}-{coupling}")
                 steps = max(s["steps"], 1)
                 entry = {"wall_s": s["wall_time_s"], "simulated_s": s["simulated_time_s"],
@@ -121,48 +168,66 @@ def bench(quick: bool = False, printer=print) -> dict:
                          "newton_iterations_per_step": s["newton_iterations_mean"],
                          "peak_memory_mb": s.get("peak_memory_mb"),
                          "floor_ratio": s["wall_time_s"] / steps / floor}
+                entry.update(step_time_entry(s))
                 if "coupling_iterations_mean" in s:
                     entry["coupling_iterations_mean"] = s["coupling_iterations_mean"]
                 case[coupling] = entry
-                printer(f"{name:<24} {coupling:<11} RTF {entry['real_time_factor']:7.2f}  "
-                        f"{entry['time_per_step_ms']:7.2f} ms/step  Newton "
-                        f"{entry['newton_iterations_per_step']:5.2f}/step  floor_ratio "
-                        f"{entry['floor_ratio']:6.1f}  peak {entry['peak_memory_mb'] or 0:7.0f} MB"
-                        f"  set-up {entry['setup_s']:5.2f} s")
+                printer(format_entry(name, coupling, entry))
             case["cosim_over_monolithic"] = case["explicit"]["wall_s"] / case["monolithic"]["wall_s"]
             case["implicit_over_explicit"] = case["implicit"]["wall_s"] / case["explicit"]["wall_s"]
             results["cases"][name] = case
-        # scaling: cost per simulated second on 10, 20, 40 spans (monolithic, AVE line)
-        scaling, dofs = {}, {}
-        for n_spans in (10, 20, 40):
-            path = tmp / f"scale{n_spans}.toml"
-            path.write_text(scenario_text(f"scale{n_spans}", "ave64", n_spans, "dsa380-rigid",
-                                          300.0, 32.0, 0.3 if quick else 0.5))
-            s = run_case(path, "monolithic", tmp / f"scale{n_spans}")
-            scaling[n_spans] = s["wall_time_s"] / s["simulated_time_s"]
-            dofs[n_spans] = s["catenary_dofs"]
-        growth = [scaling[20] / scaling[10], scaling[40] / scaling[20]]
-        per_dof = {k: scaling[k] / dofs[k] for k in scaling}
-        growth_per_dof = [per_dof[20] / per_dof[10], per_dof[40] / per_dof[20]]
-        results["scaling_cost_per_simulated_s"] = scaling
-        results["scaling_catenary_dofs"] = dofs
-        results["scaling_growth_per_doubling"] = growth
-        results["scaling_growth_per_doubling_per_dof"] = growth_per_dof
+        if full:
+            # scaling: cost per simulated second on 10, 20, 40 spans (monolithic, AVE line)
+            scaling, dofs = {}, {}
+            for n_spans in (10, 20, 40):
+                path = tmp / f"scale{n_spans}.toml"
+                path.write_text(scenario_text(f"scale{n_spans}", "ave64", n_spans,
+                                              "dsa380-rigid", 300.0, 32.0,
+                                              0.3 if quick else 0.5))
+                s = run_case(path, "monolithic", tmp / f"scale{n_spans}")
+                scaling[n_spans] = s["wall_time_s"] / s["simulated_time_s"]
+                dofs[n_spans] = s["catenary_dofs"]
+            growth = [scaling[20] / scaling[10], scaling[40] / scaling[20]]
+            per_dof = {k: scaling[k] / dofs[k] for k in scaling}
+            growth_per_dof = [per_dof[20] / per_dof[10], per_dof[40] / per_dof[20]]
+            results["scaling_cost_per_simulated_s"] = scaling
+            results["scaling_catenary_dofs"] = dofs
+            results["scaling_growth_per_doubling"] = growth
+            results["scaling_growth_per_doubling_per_dof"] = growth_per_dof
     for name, case in results["cases"].items():
         printer(f"{name}: floor {1e3 * case['floor_solve_s']:.3f} ms/solve, cosim_over_monolithic "
                 f"{case['cosim_over_monolithic']:.2f}, implicit_over_explicit "
                 f"{case['implicit_over_explicit']:.2f}")
-    spans = (10, 20, 40)
-    dof_list = ", ".join(str(dofs[k]) for k in spans)
-    cost_list = ", ".join(f"{scaling[k]:.1f} s" for k in spans)
-    printer(f"cost per simulated second, 10/20/40 spans ({dof_list} DOFs): {cost_list}; "
-            f"growth per doubling {growth[0]:.2f}, {growth[1]:.2f} (per DOF "
-            f"{growth_per_dof[0]:.2f}, {growth_per_dof[1]:.2f})")
-    cold = results["cold_first_run"]
-    printer(f"cold first run (en50318-300 explicit, empty numba and FMU caches): process "
-            f"{cold['process_wall_s']:.1f} s, set-up {cold['setup_s']:.1f} s, RTF "
-            f"{cold['real_time_factor']:.2f}")
+    if full:
+        spans = (10, 20, 40)
+        dof_list = ", ".join(str(dofs[k]) for k in spans)
+        cost_list = ", ".join(f"{scaling[k]:.1f} s" for k in spans)
+        printer(f"cost per simulated second, 10/20/40 spans ({dof_list} DOFs): {cost_list}; "
+                f"growth per doubling {growth[0]:.2f}, {growth[1]:.2f} (per DOF "
+                f"{growth_per_dof[0]:.2f}, {growth_per_dof[1]:.2f})")
+        cold = results["cold_first_run"]
+        printer(f"cold first run (en50318-300 explicit, empty numba and FMU caches): process "
+                f"{cold['process_wall_s']:.1f} s, set-up {cold['setup_s']:.1f} s, RTF "
+                f"{cold['real_time_factor']:.2f}")
     return results
+
+
+def _duration(name: str, quick: bool) -> float:
+    q, f = DURATIONS.get(name, (0.5, 2.0))
+    return q if quick else f
+
+
+def format_entry(name: str, coupling: str, entry: dict) -> str:
+    """One printed line of a case and coupling."""
+    def ms(x):
+        return "    -" if x is None else f"{x:5.2f}"
+
+    return (f"{name:<24} {coupling:<11} RTF {entry['real_time_factor']:7.2f}  "
+            f"{entry['time_per_step_ms']:7.2f} ms/step (p99 {ms(entry.get('p99_step_ms'))}, "
+            f"max {ms(entry.get('max_step_ms'))})  Newton "
+            f"{entry['newton_iterations_per_step']:5.2f}/step  floor_ratio "
+            f"{entry['floor_ratio']:6.1f}  peak {entry['peak_memory_mb'] or 0:7.0f} MB"
+            f"  set-up {entry['setup_s']:5.2f} s")
 
 
 def _machine() -> dict:

@@ -227,10 +227,15 @@ def coupling_tolerance(prep: Prepared) -> float:
 
 def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
               accelerator: str = "iqn-imvj", progress: bool | None = None,
-              in_process: bool = False, tolerance: float | None = None) -> RunResult:
+              in_process: bool = False, tolerance: float | None = None,
+              realtime: bool = False) -> RunResult:
     """Co-simulate the scenario through the FMUs (or in-process subsystems); ``tolerance``
-    [N] of the implicit coupling defaults to :func:`coupling_tolerance`."""
+    [N] of the implicit coupling defaults to :func:`coupling_tolerance`; with ``realtime``
+    each communication step is paced to the wall clock (:mod:`pantocosim.master.pacing`)."""
+    from pantocosim.master.pacing import StepClock
+
     sc = prep.scenario
+    clock = StepClock(sc.dt, realtime=realtime)
     if tolerance is None:
         tolerance = coupling_tolerance(prep)
     settings = CouplingSettings(scheme=scheme, accelerator=accelerator, tolerance=tolerance)
@@ -270,7 +275,7 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
         t = 0.0
         t_loop = _time.perf_counter()
         try:
-            for i in range(prep.n_steps):
+            for i in clock.steps(prep.n_steps):
                 iters = coupler.step(t, sc.dt)
                 t = (i + 1) * sc.dt
                 # explicit schemes record the force the law gives at the new state; implicit
@@ -294,7 +299,8 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     # wall time of the time stepping (what the real-time factor measures); setting up the
     # FMUs (instantiation, the catenary's initial configuration) is reported apart
     result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
-                       wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall)
+                       wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall,
+                       summary=clock.summary())
     result.coupling_iterations = iterations if scheme == "implicit" else None
     result.coupling_tolerance = tolerance if scheme == "implicit" else None
     result.newton_iterations = newton

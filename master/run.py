@@ -198,10 +198,12 @@ def progress_bar(total: int, label: str, enabled: bool | None = None):
                 smoothing=0.1)
 
 
-def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None = None
-                   ) -> "RunResult":
-    """Integrate catenary + pantographs + penalty contacts monolithically (reference)."""
+def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None = None,
+                   realtime: bool = False) -> "RunResult":
+    """Integrate catenary + pantographs + penalty contacts monolithically (reference); with
+    ``realtime`` each step is paced to the wall clock (:mod:`pantocosim.master.pacing`)."""
     from pantocosim.core.coupled import CoupledSystem
+    from pantocosim.master.pacing import StepClock
 
     sc = prep.scenario
     system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
@@ -226,8 +228,9 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     error = None
     record(0)
     bar = progress_bar(prep.n_steps, f"{sc.name} monolithic", progress)
+    clock = StepClock(sc.dt, realtime=realtime)
     try:
-        for _ in range(prep.n_steps):
+        for _ in clock.steps(prep.n_steps):
             info = integ.step(sc.dt)
             record(info.iterations)
             bar.update(1)
@@ -238,7 +241,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
         rec.close()
     wall = _time.perf_counter() - t_wall
     result = RunResult(prep=prep, coupling="monolithic", columns=rec.columns(),
-                       wall_time_s=wall, error=error)
+                       wall_time_s=wall, error=error, summary=clock.summary())
     return result
 
 

@@ -20,3 +20,33 @@ def test_bench_scenarios_are_valid(tmp_path):
 def test_floor_is_one_banded_solve():
     floor = bench.floor_per_step("en50318", 2, repeats=5)
     assert 0.0 < floor < 0.1
+
+
+def test_case_filter_and_scenario_options(tmp_path):
+    import pytest
+
+    from pantocosim.core.errors import ParameterError
+
+    assert bench.select_cases(None) == list(bench.CASES)
+    assert bench.select_cases(["en50318-300", "en50318-300"]) == ["en50318-300"]
+    with pytest.raises(ParameterError, match="--case"):
+        bench.select_cases(["nope"])
+    cat, spans, pan, v, x0 = bench.CASES["en50318-300"]
+    text = bench.scenario_text("x", cat, spans, pan, v, x0, 0.5,
+                               simulation={"newton_rtol": 1e-6, "label": "a"})
+    sim = tomllib.loads(text)["simulation"]
+    assert sim["newton_rtol"] == 1e-6 and sim["label"] == "a" and sim["duration_s"] == 0.5
+
+
+def test_step_time_percentiles_reach_the_table():
+    summary = {"step_time": {"steps": 10, "p50_ms": 1.0, "p99_ms": 2.5, "max_ms": 4.0,
+                             "mean_ms": 1.2}}
+    entry = {"real_time_factor": 1.2, "time_per_step_ms": 1.2, "newton_iterations_per_step": 2.0,
+             "floor_ratio": 4.0, "peak_memory_mb": 100.0, "setup_s": 0.0}
+    entry.update(bench.step_time_entry(summary))
+    assert entry["p99_step_ms"] == 2.5 and entry["max_step_ms"] == 4.0
+    line = bench.format_entry("en50318-300", "monolithic", entry)
+    assert "p99  2.50" in line and "max  4.00" in line
+    # a summary without step times (an older run) still prints
+    assert "p99     -" in bench.format_entry("c", "explicit",
+                                             {**entry, **bench.step_time_entry({})})

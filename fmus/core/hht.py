@@ -56,6 +56,11 @@ class HHTSettings:
     #: a_{n-1}, which follows a load moving along the wire much better); the converged
     #: solution does not depend on it
     predictor: str = "constant"
+    #: models that declare a :class:`~pantocosim.core.model.LinearForm` (constant matrices,
+    #: e.g. the lumped pantographs without friction or one-way damper) are stepped in closed
+    #: form: one precomputed product per step instead of Newton-Raphson (the same solution
+    #: to round-off); False forces the Newton path
+    closed_form_linear: bool = True
 
     @classmethod
     def for_runs(cls, alpha: float, rtol: float | None = None) -> "HHTSettings":
@@ -169,6 +174,50 @@ def _newton_update(q, x, R):
     return out, abs(e), dq_max, q_max
 
 
+@njit(cache=True)
+def _linear_step(q, v, a, a_prev, f_rest, w, S_inv, C, K, B, h, alpha, beta, gamma):
+    """One HHT-alpha step of M a + C v + K q + B w = 0 in closed form, in place:
+
+        S a_{n+1} = -(1 + alpha) (C v_p + K q_p + B w_{n+1}) + alpha f_rest_n,
+        S = M + (1 + alpha) (gamma h C + beta h^2 K),
+
+    with the Newmark predictors q_p, v_p; then q, v from (3.16), f_rest at t_{n+1}. On
+    return a_prev holds a_n and (q, v, a, f_rest) the new step; ``w`` is w_{n+1}."""
+    n = q.shape[0]
+    m = w.shape[0]
+    cq = (0.5 - beta) * h * h
+    cv = (1.0 - gamma) * h
+    c1 = 1.0 + alpha
+    for i in range(n):
+        a_prev[i] = a[i]
+        q[i] = q[i] + h * v[i] + cq * a[i]      # q_p
+        v[i] = v[i] + cv * a[i]                 # v_p
+    for i in range(n):                          # f_rest <- right-hand side (row i only)
+        r = 0.0
+        for j in range(n):
+            r += C[i, j] * v[j] + K[i, j] * q[j]
+        for j in range(m):
+            r += B[i, j] * w[j]
+        f_rest[i] = alpha * f_rest[i] - c1 * r
+    cg = beta * h * h
+    cs = gamma * h
+    for i in range(n):
+        r = 0.0
+        for j in range(n):
+            r += S_inv[i, j] * f_rest[j]
+        a[i] = r
+    for i in range(n):
+        q[i] += cg * a[i]
+        v[i] += cs * a[i]
+    for i in range(n):
+        r = 0.0
+        for j in range(n):
+            r += C[i, j] * v[j] + K[i, j] * q[j]
+        for j in range(m):
+            r += B[i, j] * w[j]
+        f_rest[i] = r
+
+
 def _vector(x, n: int) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64).reshape(n)
 
@@ -208,6 +257,33 @@ class HHTIntegrator:
         self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
         self.total_iterations = 0
         self.total_factorizations = 0
+        self._linear = None     # closed-form step: (LinearForm, w, h, S_inv)
+        self._linear_info = StepInfo(iterations=1, residual=0.0, refactorizations=0)
+        self._bind_linear()
+
+    def _bind_linear(self) -> None:
+        """Use the closed-form step if the model declares itself linear (small dense)."""
+        self._linear = None
+        if not self.settings.closed_form_linear:
+            return
+        form = self.model.linear_form()
+        if form is None:
+            return
+        n = self.model.n_dofs
+        mats = [np.ascontiguousarray(x, dtype=np.float64) for x in (form.M, form.C, form.K)]
+        B = np.ascontiguousarray(np.atleast_2d(form.B), dtype=np.float64).reshape(n, -1)
+        if any(x.shape != (n, n) for x in mats):
+            raise ParameterError("linear_form", [x.shape for x in mats],
+                                 f"M, C, K must be {n} x {n}")
+        s = self.settings
+        # form, C, K, B, load vector w, step size of S_inv, S_inv, alpha, beta, gamma
+        self._linear = [form, mats[1], mats[2], B, np.zeros(B.shape[1]), None, None,
+                        float(s.alpha), float(s.beta), float(s.gamma)]
+
+    @property
+    def closed_form(self) -> bool:
+        """True when steps are taken in closed form (a linear model, no Newton)."""
+        return self._linear is not None
 
     # ------------------------------------------------------------------ setup
     def initialize(self, t0: float, q0, v0=None, inputs0=None, a0=None) -> None:
@@ -230,11 +306,14 @@ class HHTIntegrator:
         self.n_steps = 0
         self._factor = None
         self._stale = False
+        self._bind_linear()
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
 
     # ------------------------------------------------------------------ stepping
     def step(self, h: float, inputs=None) -> StepInfo:
         """Advance from t to t + h with the coupling inputs valid at t + h."""
+        if self._linear is not None:
+            return self._step_linear(h, inputs)
         s = self.settings
         alpha, beta, gamma = s.alpha, s.beta, s.gamma
         c_a, c_v, c_f = s.newton_coefficients(h)
@@ -317,6 +396,36 @@ class HHTIntegrator:
             self._stale = k > s.refresh_after
         model.commit(self.t, self.q, self.v, self.a, self.inputs)
         return StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
+
+    def _step_linear(self, h: float, inputs) -> StepInfo:
+        """The closed-form step of a :class:`LinearForm` model: writes q, v, a, a_prev,
+        f_rest and inputs in place (no allocation once the arrays exist)."""
+        lin = self._linear
+        form, C, K, B, w, h_inv, S_inv, alpha, beta, gamma = lin
+        if h != h_inv:
+            M = form.M
+            S = M + (1.0 + alpha) * (gamma * h * C + beta * h * h * K)
+            S_inv = np.ascontiguousarray(np.linalg.inv(S))
+            lin[5], lin[6] = h, S_inv
+        t1 = self.t + h
+        stored = self.inputs
+        if inputs is None:
+            stored = self.inputs = None
+        elif (stored is None or type(inputs) is not np.ndarray
+              or stored.shape != inputs.shape):
+            stored = self.inputs = np.array(inputs, dtype=float)
+        else:
+            stored[...] = inputs
+        form.fill(t1, stored, w)
+        if self.a_prev is None:
+            self.a_prev = np.empty_like(self.a)
+        _linear_step(self.q, self.v, self.a, self.a_prev, self.f_rest, w, S_inv, C, K, B, h,
+                     alpha, beta, gamma)
+        self.t = t1
+        self.n_steps += 1
+        self.total_iterations += 1
+        self.model.commit(t1, self.q, self.v, self.a, stored)
+        return self._linear_info
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:

@@ -23,7 +23,7 @@ reuse). Models know nothing of integrators or FMI.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -45,10 +45,35 @@ class Evaluation:
     structure_key: Any = None
 
 
+@dataclass
+class LinearForm:
+    """A model that is linear with constant matrices (declared by
+    :meth:`SecondOrderModel.linear_form`):
+
+        f_inertia = M a,    f_rest = C v + K q + B w(t, inputs),
+
+    with dense M, C, K (n x n) and B (n x m). ``fill(t, inputs, w)`` writes the load vector
+    w (length m) at time t in place: time laws and coupling inputs, nothing that depends on
+    q, v or a. The integrator then takes each HHT-alpha step in closed form (one
+    precomputed n x n product, no Newton iteration, no allocation)."""
+
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    B: np.ndarray
+    fill: Callable[[float, Any, np.ndarray], None]
+
+
 class SecondOrderModel:
     """Base class of the models the HHT-alpha integrator (:mod:`pantocosim.core.hht`) drives."""
 
     n_dofs: int = 0
+
+    def linear_form(self) -> LinearForm | None:
+        """The model's :class:`LinearForm` if it is linear with constant matrices (with its
+        current options), else None. It must give the same forces as :meth:`evaluate` (to
+        round-off) at every (t, q, v, a, inputs)."""
+        return None
 
     def evaluate(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                  inputs: np.ndarray | None, tangent: bool = True) -> Evaluation:

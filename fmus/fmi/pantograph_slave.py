@@ -18,6 +18,7 @@ preset's parameter set.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -99,6 +100,7 @@ class PantographSlave(IntegratorSlave):
         self.real("newton_iterations", 0.0, "local", None,
                   "Newton iterations of the last communication step")
         self._model = None
+        self._u = np.zeros(1)   # the step's input (reused: a step allocates nothing)
         self._force_prev = 0.0
         self._input_prev = 0.0
         self._state_attributes = ["_integ_state", "_force_prev", "_input_prev"]
@@ -197,37 +199,40 @@ class PantographSlave(IntegratorSlave):
         self._update_outputs()
 
     def advance(self, current_time, step_size):
-        if self._error or self._integ is None:
+        integ = self._integ
+        if self._error or integ is None:
             self.log(self._error or "not initialised", Fmi2StatusDiscard())
             return False
-        saved = self._integ.get_state()
+        F = float(self.contact_force)
+        if not (math.isfinite(F) and F >= 0.0):
+            self.log(f"contact_force = {F!r}: must be finite and >= 0", Fmi2StatusDiscard())
+            return False
+        n = int(self.n_substeps)
+        # a closed-form step (linear model) cannot fail half-way: no state to save
+        saved = None if (n == 1 and integ.closed_form) else integ.get_state()
         try:
-            F = float(self.contact_force)
-            if not np.isfinite(F) or F < 0.0:
-                self.log(f"contact_force = {F!r}: must be finite and >= 0",
-                         Fmi2StatusDiscard())
-                return False
             u = F
             if self.force_extrapolation:
-                if self._integ.t == 0.0:
+                if integ.t == 0.0:
                     # the force at t0 is the start's: masters disagree on what they pass
                     # at the first step (fmpy's SSP support passes 0)
                     u = self._input_prev
                 F = max(0.0, 2.0 * u - self._input_prev)
-            n = int(self.n_substeps)
             h = step_size / n
             F0 = self._force_prev
             iters = 0
+            buf = self._u
             for i in range(1, n + 1):
-                Fi = F0 + (F - F0) * i / n
-                iters += self._integ.step(h, np.array([Fi])).iterations
+                buf[0] = F0 + (F - F0) * i / n
+                iters += integ.step(h, buf).iterations
             self._force_prev = F
             self._input_prev = u
             self.newton_iterations = float(iters)
             self._update_outputs()
             return True
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            self._integ.set_state(saved)
+            if saved is not None:
+                integ.set_state(saved)
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: {exc}",
                      Fmi2StatusDiscard())
             return False

@@ -49,12 +49,20 @@ STEP_RTOL = 1e-6
 _INT32 = 2 ** 31
 
 
+_FMI_TYPES: dict = {}
+
+
 def fmi_type(var) -> str:
-    """FMI type name of a pythonfmu variable."""
-    for cls in (Real, Integer, Boolean, String):
-        if isinstance(var, cls):
-            return cls.__name__
-    return type(var).__name__
+    """FMI type name of a pythonfmu variable (cached per Python class: every get/set asks)."""
+    kind = _FMI_TYPES.get(type(var))
+    if kind is None:
+        kind = type(var).__name__
+        for cls in (Real, Integer, Boolean, String):
+            if isinstance(var, cls):
+                kind = cls.__name__
+                break
+        _FMI_TYPES[type(var)] = kind
+    return kind
 
 
 #: the Python value of each FMI type, as pythonfmu's own getters return it

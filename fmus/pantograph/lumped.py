@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..core.model import Evaluation
+from ..core.model import Evaluation, LinearForm
 from ..core.params import Table, load_toml
 from .base import PantographModel, PantographOptions, smooth_friction
 
@@ -95,6 +95,9 @@ class LumpedPantograph(PantographModel):
     def contact_height_gradient(self, q):
         return self._gradient
 
+    def contact_velocity(self, q, v):
+        return float(v[0])
+
     # --- loading -------------------------------------------------------------------------
     def reference(self, t: float) -> float:
         """Ground-spring reference height h_ref(t), weighted by the ramp factor (3.3.1)."""
@@ -132,6 +135,26 @@ class LumpedPantograph(PantographModel):
             damping[1, 1] += dforce
         return Evaluation(f_inertia=self._M @ a, f_rest=f_rest, mass=self._M, inertia_q=None,
                           damping=damping, stiffness=self._K)
+
+    def linear_form(self):
+        """Constant M, C, K without collector friction and one-way damper: f_rest = C v + K q
+        + B w with w = (h_ref(t), F_up(t), F) (the forces of :meth:`evaluate`)."""
+        o = self.options
+        if o.one_way_damper or (o.friction_force > 0.0 and self.n_dofs > 1):
+            return None
+        B = np.column_stack([-self.params.stiffness[-1] * self._e_ground, -self._e_uplift,
+                             self._gradient])
+        return LinearForm(M=self._M, C=self._C_two_way, K=self._K, B=B, fill=self._fill_load)
+
+    def _fill_load(self, t, inputs, w):
+        ramp = self.options.ramp
+        if ramp is None:
+            w[0] = self.reference_height
+            w[1] = self.options.mean_uplift
+        else:
+            w[0] = self.reference(t)
+            w[1] = self.uplift_force(t)
+        w[2] = 0.0 if inputs is None else inputs[0]
 
     # --- initial states ------------------------------------------------------------------
     def static_equilibrium(self, contact_force=None, height=None):

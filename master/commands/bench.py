@@ -9,18 +9,22 @@ def add_parser(sub):
     p = sub.add_parser("bench", help="benchmark the solvers and the co-simulation",
                        description="Run fixed cases (en50318-300 with 10 spans, a 40-span AVE "
                        "line) monolithic, explicit and implicit and print wall time, real-time "
-                       "factor, time per step, iterations, peak memory and the ratios "
-                       "floor_ratio, cosim_over_monolithic, implicit_over_explicit.")
+                       "factor, time per step (mean, p99, max), iterations, peak memory and "
+                       "the ratios floor_ratio, cosim_over_monolithic, implicit_over_explicit.")
     p.add_argument("--quick", action="store_true", help="shorter simulated times")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--out", help="also write the results as JSON to this file")
+    p.add_argument("--case", action="append", metavar="NAME",
+                   help="run only this case (repeatable; en50318-300, dsa380-ave-300-40span); "
+                   "skips the cold first run and the span scaling")
     return p
 
 
 def run(args) -> int:
     from pantocosim.master.bench import bench
 
-    res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print)
+    res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print,
+                cases=args.case)
     if args.json:
         print(json.dumps(res, indent=2))
     if args.out:

@@ -30,6 +30,10 @@ def add_parser(sub):
                    help="run even above 0.7 of the wave speed")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--realtime", action="store_true",
+                   help="pace each step to the wall clock as a hardware-in-the-loop loop "
+                   "would (step k ends no earlier than start + (k + 1) dt) and report missed "
+                   "deadlines; the step-time percentiles are reported either way")
     return p
 
 
@@ -53,6 +57,11 @@ def print_statistics(summary: dict) -> None:
     print(f"  simulated {summary['simulated_time_s']:.3f} s in {summary['wall_time_s']:.1f} s "
           f"wall (real-time factor {summary['wall_time_s'] / max(summary['simulated_time_s'], 1e-9):.2f})"
           f"{extra}")
+    from pantocosim.master.pacing import describe
+
+    timing = describe(summary)
+    if timing:
+        print(timing)
     if "files" in summary:
         print(f"  results in {Path(summary['files']['summary']).parent}")
 
@@ -84,12 +93,14 @@ def run(args) -> int:
     out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
     prep = prepare(scenario, force=args.force)
     if coupling == "monolithic":
-        result = run_monolithic(prep, out, progress=None if not args.quiet else False)
+        result = run_monolithic(prep, out, progress=None if not args.quiet else False,
+                                realtime=args.realtime)
     else:
         from pantocosim.master.cosim import run_cosim
 
         result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
-                           progress=None if not args.quiet else False)
+                           progress=None if not args.quiet else False,
+                           realtime=args.realtime)
     result.coupling = args.coupling
     summary = finish(result, out, plots=not args.no_plots)
     if args.json:
