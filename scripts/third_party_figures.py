@@ -52,6 +52,18 @@ def third_party(master: str, ssp: Path, work: Path, extra=()) -> dict:
     return json.loads(lines[-1][len("STATISTICS "):])
 
 
+def cofmupy_swap(folder: Path, model: str, work: Path) -> Path:
+    """The shipped CoFmuPy configuration with the pantograph FMU swapped for ``model``'s (a
+    CoFmuPy configuration names its FMU files: the swap is that path)."""
+    config = json.loads((folder / "cofmupy.json").read_text())
+    for fmu in config["fmus"]:
+        fmu["path"] = str(folder / (f"{model}.fmu" if fmu["id"] == "pantograph"
+                                    else fmu["path"]))
+    dest = work / f"cofmupy-{model}.json"
+    dest.write_text(json.dumps(config, indent=2))
+    return dest
+
+
 def table(rows: list[dict]) -> str:
     out = ["| master | pantograph FMU | mean [N] | ref. mean | Δ mean | σ [N] | ref. σ | Δ σ "
            "| max uplift [mm] | wall [s] |",
@@ -94,7 +106,9 @@ def main(argv=None) -> int:
         ssp = a.work / f"{a.scenario}-{model}.ssp"
         swap_pantograph(shipped, fmus / a.scenario / f"{model}.fmu", ssp)
         for master in a.masters:
-            extra = ["--python", a.cofmupy_python] if master == "cofmupy" else []
+            extra = (["--python", a.cofmupy_python, "--config",
+                      cofmupy_swap(fmus / a.scenario, model, a.work)]
+                     if master == "cofmupy" else [])
             rows.append({"master": master, "model": model, "ref": ref,
                          "stats": third_party(master, ssp, a.work, extra)})
             print(table(rows[-1:]).splitlines()[-1], flush=True)
