@@ -92,6 +92,8 @@ def main(argv=None) -> int:
                     default=["dsa380-rigid", "en50318-2mass", "dsa380-lumped3"])
     ap.add_argument("--scenario", default="dsa380-ave-300")
     ap.add_argument("--docs", type=Path, default=ROOT / "docs" / "third-party.md")
+    ap.add_argument("--keep", type=Path, help="figures.json of an earlier run: its rows of "
+                    "other masters or models stay in the table")
     ap.add_argument("--cofmupy-python", default=str(Path.home() / ".cache" / "pantocosim"
                                                     / "cofmupy-venv" / "bin" / "python"),
                     help="the Python of a venv with CoFmuPy 1.0 and numba")
@@ -112,6 +114,12 @@ def main(argv=None) -> int:
             rows.append({"master": master, "model": model, "ref": ref,
                          "stats": third_party(master, ssp, a.work, extra)})
             print(table(rows[-1:]).splitlines()[-1], flush=True)
+    if a.keep:
+        done = {(r["master"], r["model"]) for r in rows}
+        rows = [r for r in json.loads(a.keep.read_text())
+                if (r["master"], r["model"]) not in done] + rows
+        rows.sort(key=lambda r: (a.models.index(r["model"]) if r["model"] in a.models
+                                 else len(a.models), list(MASTERS).index(r["master"])))
     text = table(rows)
     print(text)
     page = a.docs.read_text()

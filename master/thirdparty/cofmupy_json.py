@@ -92,6 +92,7 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":
     if "--child" in sys.argv:
+        sys.path.pop(0)  # this file's folder: nothing there may shadow CoFmuPy's packages
         args = sys.argv[sys.argv.index("--") + 1:]
         child(args[0], float(args[1]), float(args[2]), args[3], int(args[4]),
               float(args[5]), float(args[6]))
