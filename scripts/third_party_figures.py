@@ -118,8 +118,8 @@ def main(argv=None) -> int:
         done = {(r["master"], r["model"]) for r in rows}
         rows = [r for r in json.loads(a.keep.read_text())
                 if (r["master"], r["model"]) not in done] + rows
-        rows.sort(key=lambda r: (a.models.index(r["model"]) if r["model"] in a.models
-                                 else len(a.models), list(MASTERS).index(r["master"])))
+        models = list(dict.fromkeys([r["model"] for r in rows]))
+        rows.sort(key=lambda r: (models.index(r["model"]), list(MASTERS).index(r["master"])))
     text = table(rows)
     print(text)
     page = a.docs.read_text()
