@@ -23,8 +23,9 @@ def linearize(system, q_eq, t: float = 0.0):
     nq = system.n_q
     zero = np.zeros(system.n_dofs)
     ev = system.evaluate(t, q_eq, zero, zero, tangent=True)
-    K = ev.stiffness[:nq, :nq].toarray()
-    G = ev.stiffness[nq:, :nq].toarray() / system.constraint_scale
+    S = ev.stiffness.toarray() if hasattr(ev.stiffness, "toarray") else ev.stiffness
+    K = S[:nq, :nq]
+    G = S[nq:, :nq] / system.constraint_scale
     Z = sla.null_space(G)
     Mr = Z.T @ (system.M @ Z)
     Kr = Z.T @ K @ Z

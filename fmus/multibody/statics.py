@@ -11,6 +11,8 @@ rotation of seed 002, eq. 4), which keeps every triad orthonormal."""
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.spatial.transform import Rotation
 
@@ -18,11 +20,27 @@ from pantocosim.core.errors import ConvergenceError
 
 
 def solve_static(system, q=None, loads=(), steps: int = 1, t: float = 0.0,
-                 rtol: float = 1e-10, max_iterations: int = 40, rotate: bool = True):
+                 rtol: float = 1e-10, max_iterations: int = 40, rotate: bool = True,
+                 shift: float = 0.0):
     """Equilibrium from ``q`` (default the reference) with every load of ``loads`` scaled
-    k/steps at increment k (their ``scale``). Returns q with the multipliers."""
+    k/steps at increment k (their ``scale``). Returns q with the multipliers.
+
+    ``shift`` > 0 adds shift * 10^-k M to the Newton matrix at iteration k (pseudo-transient
+    continuation: the mass regularises mechanisms whose stiffness only appears under load,
+    e.g. a pendulum released from the unstretched reference, and steers Newton to the stable
+    equilibrium; the converged solution does not depend on it)."""
     q = system.reference() if q is None else np.array(q, dtype=float)
     zero = np.zeros(system.n_dofs)
+    nq = system.n_q
+    if not np.any(q[nq:]):
+        # multipliers balancing the full loads in the least-squares sense, so that the first
+        # tangent already holds the geometric stiffness of the constraint forces (without
+        # it a pendulum's first Newton step is unbounded)
+        for load in loads:
+            load.scale = 1.0
+        f, _, _ = system.forces(t, q, zero, tangent=False)
+        _, G = system.constraint_jacobian(q)
+        q[nq:] = spla.lsqr(G.T, -f, atol=1e-14, btol=1e-14)[0] / system.constraint_scale
     for k in range(1, steps + 1):
         for load in loads:
             load.scale = k / steps
@@ -35,7 +53,11 @@ def solve_static(system, q=None, loads=(), steps: int = 1, t: float = 0.0,
             elif (np.max(np.abs(r)) <= rtol * f_scale_0
                   or dq_max <= 1e-13 * max(1.0, np.max(np.abs(q[:system.n_q])))):
                 break
-            dq = spla.splu(ev.stiffness.tocsc()).solve(r)
+            S = ev.stiffness
+            if shift > 0.0 and shift * 10.0 ** -it > 1e-12:
+                S = S + (shift * 10.0 ** -it) * ev.mass
+            dq = (spla.splu(sp.csc_matrix(S)).solve(r) if sp.issparse(S)
+                  else sla.solve(S, r))
             dq_max = np.max(np.abs(dq[:system.n_q]))
             q = update(system, q, -dq) if rotate else q - dq
         else:

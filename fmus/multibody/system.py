@@ -33,6 +33,10 @@ NODE_DOFS = 12
 
 
 class System(SecondOrderModel):
+    #: systems with at most this many unknowns hand dense matrices to the integrator
+    #: (assembly by np.bincount and LAPACK are cheaper than sparse bookkeeping there)
+    DENSE_LIMIT = 800
+
     def __init__(self, constraint_scale: float = 1.0e6):
         self.X0: list[np.ndarray] = []
         self.R0: list[np.ndarray] = []
@@ -98,6 +102,9 @@ class System(SecondOrderModel):
         self._rows = np.repeat(np.arange(self.n_c), self.constraints.idx.shape[1])
         z = sp.csr_matrix((self.n_c, self.n_c))
         self._mass_full = sp.block_diag([self.M, z], format="csr")
+        self.dense = self.n_dofs <= self.DENSE_LIMIT
+        if self.dense:
+            self._mass_full = self._mass_full.toarray()
         self._bound = True
         return self
 
@@ -143,7 +150,10 @@ class System(SecondOrderModel):
             Gc = G.tocoo()
             K.add_entries(Gc.row + nq, Gc.col, s * Gc.data)
             K.add_entries(Gc.col, Gc.row + nq, s * Gc.data)
-            ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
+            if self.dense:
+                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.toarray(), K.toarray()
+            else:
+                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
         return ev
 
     def consistent_start(self, t, q, v=None):
