@@ -27,7 +27,9 @@ def add_parser(sub):
                        "the paper, energy account.")
     p.add_argument("--out", default="pendulum_out", help="output folder (default pendulum_out)")
     p.add_argument("--duration", type=float, default=1.5, help="simulated time [s]")
-    p.add_argument("--step", type=float, default=5e-4, help="HHT time step [s]")
+    p.add_argument("--step", type=float, default=2.5e-4,
+                   help="HHT time step [s] (default 0.25 ms: 1 ms under-resolves the "
+                   "k = 1e6 N/m contact, energy errors of several per cent)")
     p.add_argument("--alpha", type=float, default=-0.05, help="HHT alpha")
     p.add_argument("--cases", default="rigid,steel,soft", help="comma-separated cases")
     return p
