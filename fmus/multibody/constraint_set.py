@@ -1,0 +1,87 @@
+"""Quadratic holonomic constraints, vectorised.
+
+Every constraint of the multibody core -- director orthonormality, joints, clamps -- is a
+polynomial of degree at most two in the nodal coordinates, because a node's orientation is
+carried by its three directors (no rotation parameters). One constraint j acts on a few local
+coordinates q_l = q[idx_j]:
+
+    g_j(q) = 1/2 q_l^T H_j q_l + b_j . q_l + c_j,
+    grad g_j = H_j q_l + b_j,          Hessian = H_j (constant),
+
+so the constraint Jacobian is exact and the multiplier term sum_j lambda_j H_j of the tangent
+is exact too. The equations of motion are the Lagrange equations with multipliers
+(seed 004, eq. 112): M a + f(q, v) + G^T lambda = 0, g(q) = 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class ConstraintSet:
+    """``m`` constraints on ``nl`` local coordinates each (idx (m, nl) into the global q)."""
+
+    def __init__(self, idx, H, b, c, name: str = ""):
+        self.idx = np.ascontiguousarray(idx, dtype=np.int64)
+        m, nl = self.idx.shape
+        self.H = np.ascontiguousarray(np.broadcast_to(H, (m, nl, nl)), dtype=float)
+        self.b = np.ascontiguousarray(np.broadcast_to(b, (m, nl)), dtype=float)
+        self.c = np.ascontiguousarray(np.broadcast_to(c, (m,)), dtype=float)
+        self.name = name
+
+    @property
+    def size(self) -> int:
+        return self.idx.shape[0]
+
+    def values(self, q):
+        ql = q[self.idx]
+        return 0.5 * np.einsum("mi,mij,mj->m", ql, self.H, ql) + np.einsum("mi,mi->m", self.b,
+                                                                             ql) + self.c
+
+    def gradients(self, q):
+        """(m, nl) local rows of the Jacobian."""
+        ql = q[self.idx]
+        return np.einsum("mij,mj->mi", self.H, ql) + self.b
+
+    def curvature(self, v):
+        """v^T H_j v: the velocity term of the second time derivative of g_j."""
+        vl = v[self.idx]
+        return np.einsum("mi,mij,mj->m", vl, self.H, vl)
+
+    @staticmethod
+    def concatenate(sets: list["ConstraintSet"]) -> "ConstraintSet":
+        """One set of all constraints of ``sets`` (padded to the widest local size)."""
+        sets = [s for s in sets if s.size]
+        nl = max(s.idx.shape[1] for s in sets)
+        idx, H, b, c = [], [], [], []
+        for s in sets:
+            m, k = s.idx.shape
+            pad = nl - k
+            # padding points at coordinate 0 with zero coefficients
+            idx.append(np.hstack([s.idx, np.zeros((m, pad), np.int64)]))
+            Hp = np.zeros((m, nl, nl))
+            Hp[:, :k, :k] = s.H
+            H.append(Hp)
+            b.append(np.hstack([s.b, np.zeros((m, pad))]))
+            c.append(s.c)
+        return ConstraintSet(np.vstack(idx), np.concatenate(H), np.vstack(b), np.concatenate(c))
+
+
+def orthonormality(director_dofs) -> ConstraintSet:
+    """d_i . d_j = delta_ij at each node: 6 constraints on its 9 director coordinates.
+
+    ``director_dofs``: (n, 9) global indices of [d1, d2, d3] of each node."""
+    dd = np.asarray(director_dofs, dtype=np.int64)
+    n = dd.shape[0]
+    pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+    H = np.zeros((6, 9, 9))
+    c = np.zeros(6)
+    eye = np.eye(3)
+    for k, (i, j) in enumerate(pairs):
+        H[k, 3 * i:3 * i + 3, 3 * j:3 * j + 3] += eye
+        H[k, 3 * j:3 * j + 3, 3 * i:3 * i + 3] += eye
+        if i == j:
+            c[k] = -1.0
+    idx = np.repeat(dd, 6, axis=0)
+    return ConstraintSet(idx, np.tile(H, (n, 1, 1)), np.zeros((6 * n, 9)), np.tile(c, n),
+                         name="orthonormality")
