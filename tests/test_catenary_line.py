@@ -43,6 +43,7 @@ def small(tmp_path_factory):
 
 
 # ---------------------------------------------------------------- statics and CLI
+@pytest.mark.slow
 def test_static_cli_json_and_plot(en, tmp_path, capsys):
     png = tmp_path / "side.png"
     assert main(["static", "en50318", "--json", "--plot", str(png)]) == 0

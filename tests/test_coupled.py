@@ -112,6 +112,7 @@ def test_static_start_is_an_equilibrium(short_monolithic):
     assert pant.contact_height(q_mean) == pytest.approx(prep.extra["actuation_height"][0])
 
 
+@pytest.mark.slow
 def test_implicit_coupling_reproduces_monolithic(short_monolithic):
     prep, mono = short_monolithic
     Fm = mono.columns["contact_force_1"]
@@ -157,6 +158,7 @@ def test_iqn_imvj_carries_the_interface_jacobian_across_steps():
     assert min(ils[1:]) >= 3
 
 
+@pytest.mark.slow
 def test_explicit_coupling_is_close_to_monolithic(short_monolithic):
     prep, mono = short_monolithic
     Fm = mono.columns["contact_force_1"]
@@ -167,6 +169,7 @@ def test_explicit_coupling_is_close_to_monolithic(short_monolithic):
         assert abs(F.std() - Fm.std()) < 0.1 * Fm.std()
 
 
+@pytest.mark.slow
 def test_run_cli_writes_outputs_and_json(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["run", SHORT, "--out", str(out), "--json", "--quiet"]) == 0

@@ -220,6 +220,7 @@ def test_linearised_frequencies_match_table_2_2(model):
 
 # ------------------------------------------------------------------------- energy balance
 
+@pytest.mark.slow
 def test_energy_balance_over_10_s():
     """(2.30)-(2.34): [T + V]_t - [T + V]_0 - W_damper - W_F - W_torque = 0 under a constant
     120 N downward on point 10 from a state away from equilibrium (HHT alpha = 0)."""

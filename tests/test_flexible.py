@@ -314,6 +314,7 @@ def test_bad_parameter_files_name_the_field(tmp_path):
 
 # ------------------------------------------------------------------------- FMU
 
+@pytest.mark.slow
 def test_flexible_fmu_builds_validates_and_swaps_for_the_rigid_one(fmus):
     """The flexible FMU has the rigid FMU's ports, validates, runs as the stand-alone model
     and rolls back / deserialises bit for bit."""
@@ -346,6 +347,7 @@ def test_flexible_fmu_builds_validates_and_swaps_for_the_rigid_one(fmus):
     assert res["rollback_equal"] and res["serialized_equal"]
 
 
+@pytest.mark.slow
 def test_flexible_pantograph_swaps_into_a_scenario_by_name(tmp_path):
     """Monolithic pantograph-catenary run with ``model = "dsa380-flexible"``: no code change;
     the contact force statistics stay close to the rigid pantograph's."""

@@ -16,6 +16,9 @@ import numpy as np
 import pytest
 from recipes import read_csv, run_recipe
 
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = Path(__file__).with_name("fmu_catenary_probe.py")
 SHORT = {"catenary_definition": "en50318", "spans": 4, "speed_kmh": 300.0}

@@ -12,6 +12,9 @@ import pytest
 from pantocosim.master.results import read_csv
 from pantocosim.master.run import prepare, run_monolithic
 
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 SHORT = Path(__file__).with_name("data") / "short-en50318.toml"
 
 

@@ -2,7 +2,11 @@
 (issue 14); the FMU runs in a subprocess (tests/fmu_catenary_probe.py)."""
 
 import numpy as np
+import pytest
 from test_fmu_catenary import H, SHORT, probe
+
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
 
 
 def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):

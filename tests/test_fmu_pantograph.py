@@ -8,6 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = Path(__file__).with_name("fmu_probe.py")
 LUMPED = ["dsa380-lumped3", "en50318-2mass"]

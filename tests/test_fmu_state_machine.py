@@ -15,6 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 PROBE = Path(__file__).with_name("fmu_state_probe.py")
 OK, DISCARD, ERROR = 0, 2, 3

@@ -18,6 +18,9 @@ import numpy as np
 import pytest
 from recipes import read_csv, run_recipe
 
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ROOT / "tests" / "data" / "ssp-short.toml"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",

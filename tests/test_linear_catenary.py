@@ -167,6 +167,7 @@ def test_registry_and_scenario_field(tmp_path):
     assert load_scenario(good).catenary_model == "linear"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["linear", "modal"])
 def test_monolithic_run_with_each_model(kind):
     """A short monolithic run of the regression scenario with the linear and modal models:

@@ -2,6 +2,7 @@
 seed 004's Lagrange equations (9.8, Example 1) as the rigid-body oracle."""
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
@@ -12,6 +13,9 @@ from pantocosim.multibody.linearize import natural_frequencies
 from pantocosim.multibody.loads import Gravity
 from pantocosim.multibody.statics import solve_static
 from pantocosim.multibody.system import System
+
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
 
 G = 9.81
 RIGID = Section(E=2.1e15, A=9e-4, I1=8.3e-8, I2=8.3e-8, J=4.15e-8, rho=7800.0)

@@ -3,6 +3,11 @@
 import subprocess
 import sys
 
+import pytest
+
+#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
 
 def test_regression_cases_match_references():
     proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli",
