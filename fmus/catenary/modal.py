@@ -85,7 +85,7 @@ class ModalCatenary(SecondOrderModel):
         if self._geo is not None and self._geo.t == t:
             return self._geo
         cps = self.linear.contact_points(t)
-        n, m, npan = self.linear.n_dofs, self.m, self.n_p
+        m, npan = self.m, self.n_p
         phi = np.array([cp.weights @ self.Phi[cp.dofs] for cp in cps])         # (np, m)
         flex = np.zeros((npan, npan))
         Hb = np.zeros((len(self.droppers), npan))

@@ -160,7 +160,7 @@ class System(SecondOrderModel):
         """Multipliers and accelerations consistent with (q, v): the KKT system
         [M G^T; G 0] [a; s lambda] = [-f; -v^T H v] (second derivative of g = 0).
         Returns (q with lambda, v, a)."""
-        nq, nc, s = self.n_q, self.n_c, self.constraint_scale
+        nq, s = self.n_q, self.constraint_scale
         q = np.array(q, dtype=float)
         v = np.zeros(self.n_dofs) if v is None else np.array(v, dtype=float)
         q[nq:] = 0.0

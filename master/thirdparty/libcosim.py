@@ -19,7 +19,6 @@ from __future__ import annotations
 import os
 import sys
 import time
-from pathlib import Path
 
 from pantocosim.master.thirdparty import common as run_common
 
