@@ -202,26 +202,24 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
                    realtime: bool = False) -> "RunResult":
     """Integrate catenary + pantographs + penalty contacts monolithically (reference); with
     ``realtime`` each step is paced to the wall clock (:mod:`pantocosim.master.pacing`)."""
-    from pantocosim.core.coupled import CoupledSystem
     from pantocosim.master.pacing import StepClock
+    from pantocosim.master.steppers import make_stepper
 
     sc = prep.scenario
-    system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
-    q0 = np.concatenate([prep.q_cat0] + list(prep.q_pan0))
-    integ = HHTIntegrator(system, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
-    integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
+    stepper = make_stepper(prep, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
     n_p = len(prep.pantographs)
     names = column_names(n_p, len(prep.support_x))
     rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
     t_wall = _time.perf_counter()
 
     def record(iterations):
-        st = system.contact_state(integ.t, integ.q, integ.v)
-        row = [integ.t]
+        contacts, uplift = stepper.observe()
+        t = stepper.t
+        x = prep.catenary.positions(t)
+        row = [t]
         for k in range(n_p):
-            F, z_p, z_w = st[k][0], st[k][1], st[k][2]
-            row += [prep.catenary.positions(integ.t)[k], F, z_p, z_w]
-        row += list(prep.catenary.support_uplift(integ.q[:system.n_cat]))
+            row += [x[k], *contacts[k]]
+        row += list(uplift)
         row.append(iterations)
         rec.append(row)
 
@@ -231,8 +229,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     clock = StepClock(sc.dt, realtime=realtime)
     try:
         for _ in clock.steps(prep.n_steps):
-            info = integ.step(sc.dt)
-            record(info.iterations)
+            record(stepper.step(sc.dt))
             bar.update(1)
     except PantocosimError as exc:
         error = exc

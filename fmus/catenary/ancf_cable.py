@@ -34,12 +34,14 @@ GAUSS_XI = 0.5 * (_GX + 1.0)
 GAUSS_W = 0.5 * _GW
 
 
+@njit(cache=True)
 def shape(xi: float, L: float) -> np.ndarray:
     """Hermite functions [S1, S2, S3, S4] at xi = chi/L, (3.12)-(3.13)."""
     return np.array([1 - 3 * xi**2 + 2 * xi**3, L * (xi - 2 * xi**2 + xi**3),
                      3 * xi**2 - 2 * xi**3, L * (xi**3 - xi**2)])
 
 
+@njit(cache=True)
 def shape_dxi(xi: float, L: float) -> np.ndarray:
     """d[S1..S4]/dxi."""
     return np.array([-6 * xi + 6 * xi**2, L * (1 - 4 * xi + 3 * xi**2),

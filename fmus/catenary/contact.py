@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..core.errors import ParameterError
 from .ancf_cable import shape, shape_dxi
@@ -35,6 +36,18 @@ class ContactPoint:
     xi: float
     dweights_dx: np.ndarray
     doffset_dx: float = 0.0
+
+
+@njit(cache=True)
+def _local_coordinate(c, L, x, xi):
+    """xi in [0, 1] with x(xi) = x on the Hermite cubic (3.12) of the element's reference
+    coordinates c = (x_i, x_i', x_j, x_j'): Newton from ``xi``."""
+    for _ in range(30):
+        step = ((shape(xi, L) * c).sum() - x) / (shape_dxi(xi, L) * c).sum()
+        xi -= step
+        if abs(step) < 1e-15:
+            break
+    return min(max(xi, 0.0), 1.0)
 
 
 class ContactLocator:
@@ -66,14 +79,7 @@ class ContactLocator:
         L = self.Le[k]
         c = self.E_x[k]
         xi = (x - self.x_start[k]) / max(self.x_end[k] - self.x_start[k], 1e-300)
-        for _ in range(30):  # Newton on the cubic (3.12)
-            r = shape(xi, L) @ c - x
-            dr = shape_dxi(xi, L) @ c
-            step = r / dr
-            xi -= step
-            if abs(step) < 1e-15:
-                break
-        return k, float(min(max(xi, 0.0), 1.0))
+        return k, _local_coordinate(c, L, x, xi)
 
     def point(self, x: float) -> ContactPoint:
         k, xi = self.locate(x)

@@ -120,6 +120,25 @@ class LinearCatenary(CatenaryModel):
     def commit(self, t, q, v, a, inputs) -> None:
         self._slack_committed = self.droppers.slack(self.droppers.axial(q - self.q_static))
 
+    # ------------------------------------------------------------------ closed-form steps
+    def affine_form(self):
+        """The model as an :class:`~pantocosim.core.affine_hht.AffineForm`: its HHT steps
+        are then taken in closed form (:mod:`pantocosim.core.affine_hht`), the same solution
+        as Newton-Raphson on :meth:`evaluate`."""
+        from ..core.affine_hht import AffineForm
+
+        S = self.structure
+
+        def forces(t, q, v, F):
+            self.commit(t, q, v, None, None)
+            zero = np.zeros(self.n_dofs)
+            return self.evaluate(t, q, v, zero, F, tangent=False).f_rest
+
+        return AffineForm(n=self.n_dofs, M_band=S.lower_band(S.M_data),
+                          K_band=S.lower_band(self.K0_data), alpha_r=self.alpha_r,
+                          beta_r=self.beta_r, q_ref=self.q_static, r0=self.r0,
+                          unilateral=self.droppers, factor=self._factor_cache, forces=forces)
+
     # ------------------------------------------------------------------ statics
     def static_solution(self, point_loads=(), tol: float = 1e-10, max_iter: int = 50):
         """Static equilibrium K0 dq + r0 - sum_slack N_d b_d = P of the linear model, with

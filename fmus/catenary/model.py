@@ -95,6 +95,7 @@ class CatenaryModel(SecondOrderModel):
         self._M_own = S.mass.copy()
         self._M_own.eliminate_zeros()
         self._cp_cache: tuple | None = None
+        self._support_free = None
 
     # ------------------------------------------------------------------ geometry
     def positions(self, t: float) -> np.ndarray:
@@ -139,8 +140,12 @@ class CatenaryModel(SecondOrderModel):
     def support_uplift(self, q: np.ndarray) -> np.ndarray:
         """Uplift of the contact wire at every support (steady arm) relative to the static
         configuration; zero at the two anchored line ends."""
-        dz = self.mesh.node_dofs[self.mesh.support_contact_nodes, 2]
-        return self.structure.full(q)[dz] - self.x_static[dz]
+        if self._support_free is None:
+            dz = self.mesh.node_dofs[self.mesh.support_contact_nodes, 2]
+            free = self.structure.fmap[dz]
+            self._support_free = (free, free >= 0, self.x_static[dz])
+        free, moving, z_static = self._support_free
+        return np.where(moving, q[free] - z_static, 0.0)
 
     def dropper_forces(self, q: np.ndarray) -> np.ndarray:
         """Axial force of every dropper (N, tension positive, zero when slack)."""

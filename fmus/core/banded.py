@@ -11,7 +11,41 @@ from __future__ import annotations
 from collections import OrderedDict
 
 import numpy as np
+from numba import njit
 from scipy.linalg.lapack import dpbtrf, dpbtrs
+
+
+@njit(cache=True, fastmath=True)
+def band_solve(LT, b, x):
+    """x = (L L^T)^-1 b with ``LT[j, 0] = 1 / L[j, j]``, ``LT[j, k] = L[j + k, j]`` (the
+    factor's columns as rows): forward and back substitution in place of x (b may be x).
+    The loops over the full band width are split from the short ones at the end, so they
+    vectorize."""
+    n, w = LT.shape
+    if x is not b:
+        for i in range(n):
+            x[i] = b[i]
+    full = max(n - w + 1, 0)
+    for j in range(full):
+        xj = x[j] * LT[j, 0]
+        x[j] = xj
+        for k in range(1, w):
+            x[j + k] -= LT[j, k] * xj
+    for j in range(full, n):
+        xj = x[j] * LT[j, 0]
+        x[j] = xj
+        for k in range(1, n - j):
+            x[j + k] -= LT[j, k] * xj
+    for j in range(n - 1, full - 1, -1):
+        s = x[j]
+        for k in range(1, n - j):
+            s -= LT[j, k] * x[j + k]
+        x[j] = s * LT[j, 0]
+    for j in range(full - 1, -1, -1):
+        s = x[j]
+        for k in range(1, w):
+            s -= LT[j, k] * x[j + k]
+        x[j] = s * LT[j, 0]
 
 
 class BandedCholesky:
@@ -26,6 +60,8 @@ class BandedCholesky:
     def __init__(self, cb: np.ndarray):
         self.cb = cb
         self.n = cb.shape[1]
+        self.LT = np.array(cb.T, order="C")         # factor columns as rows (band_solve)
+        self.LT[:, 0] = 1.0 / self.LT[:, 0]
         self._columns: OrderedDict[int, np.ndarray] = OrderedDict()
 
     @classmethod
@@ -34,31 +70,42 @@ class BandedCholesky:
         return cls(cb) if info == 0 else None
 
     def __call__(self, rhs: np.ndarray) -> np.ndarray:
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim == 1 and rhs.flags.c_contiguous:
+            x = np.empty(self.n)
+            band_solve(self.LT, rhs, x)
+            return x
         x, _ = dpbtrs(self.cb, rhs, lower=1)
         return x
 
-    def _cached(self, dofs) -> list:
-        """The cached solves A^-1 e_j for j in dofs (computing the missing ones at once)."""
-        cache = self._columns
-        dofs = [int(j) for j in np.asarray(dofs, dtype=np.int64)]
-        missing = [j for j in dofs if j not in cache]
-        if missing:
-            E = np.zeros((self.n, len(missing)))
-            E[missing, np.arange(len(missing))] = 1.0
-            X = self(E)
-            for i, j in enumerate(missing):
-                cache[j] = np.ascontiguousarray(X[:, i])
-        out = []
-        for j in dofs:
-            cache.move_to_end(j)
-            out.append(cache[j])
-        while len(cache) > max(self.cache_size, len(dofs)):
-            cache.popitem(last=False)
+    def solve_into(self, rhs: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out`` = A^-1 rhs without allocating (``out`` may be ``rhs``)."""
+        band_solve(self.LT, rhs, out)
         return out
+
+    def _column(self, j: int) -> np.ndarray:
+        """A^-1 e_j, from the cache or solved (and kept; least recently used dropped)."""
+        cache = self._columns
+        col = cache.get(j)
+        if col is None:
+            col = np.zeros(self.n)
+            col[j] = 1.0
+            band_solve(self.LT, col, col)
+            cache[j] = col
+            if len(cache) > self.cache_size:
+                cache.popitem(last=False)
+        else:
+            cache.move_to_end(j)
+        return col
+
+    def _cached(self, dofs) -> list:
+        """The cached solves A^-1 e_j for j in dofs."""
+        return [self._column(int(j)) for j in np.asarray(dofs, dtype=np.int64)]
 
     def solve_sparse(self, dofs, values) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere)."""
         x = np.zeros(self.n)
-        for col, w in zip(self._cached(dofs), np.asarray(values, dtype=float)):
+        for j, w in zip(np.asarray(dofs).tolist(), np.asarray(values, dtype=float).tolist()):
+            col = self._column(j)
             x += w * col
         return x

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from .params import check_number
 
 
@@ -41,3 +43,44 @@ class PenaltyContact:
         if f <= 0.0:
             return 0.0, 0.0, 0.0
         return f, self.stiffness, self.damping
+
+    def condensed(self, z_p, v_p, z0, v0, G, H):
+        """The law with the wire affine in the forces, z_w = z0 + G F, v_w = v0 + H F (a
+        structure condensed on its contact points, :mod:`.condensed`): (F, dF/dz_p,
+        dF/dv_p). On the active set A, (I + k_H G + c_H H)_AA F_A = k_H (z_p - z0)_A
+        + c_H (v_p - v0)_A; A holds the contacts whose gap and force are positive."""
+        m = len(z_p)
+        if m == 1:
+            return self._condensed_one(z_p[0] - z0[0], v_p[0] - v0[0], G[0, 0], H[0, 0])
+        dz, dv = z_p - z0, v_p - v0
+        active = dz > 0.0
+        F = np.zeros(m)
+        Jz, Jv = np.zeros((m, m)), np.zeros((m, m))
+        for _ in range(2 * m + 2):
+            F[:] = 0.0
+            Jz[:] = 0.0
+            Jv[:] = 0.0
+            A = np.flatnonzero(active)
+            if A.size:
+                Mi = np.linalg.inv(np.eye(A.size) + self.stiffness * G[np.ix_(A, A)]
+                                   + self.damping * H[np.ix_(A, A)])
+                F[A] = Mi @ (self.stiffness * dz[A] + self.damping * dv[A])
+                Jz[np.ix_(A, A)] = self.stiffness * Mi
+                Jv[np.ix_(A, A)] = self.damping * Mi
+            gap = dz - G @ F
+            trial = self.stiffness * gap + self.damping * (dv - H @ F)
+            now = (gap > 0.0) & (trial > 0.0)
+            if np.array_equal(now, active):
+                break
+            active = now
+        return F, Jz, Jv
+
+    def _condensed_one(self, dz, dv, g, h):
+        """:meth:`condensed` of one contact."""
+        k, c = self.stiffness, self.damping
+        F = (k * dz + c * dv) / (1.0 + k * g + c * h)
+        if F > 0.0 and dz - g * F > 0.0:
+            d = 1.0 + k * g + c * h
+            return np.array([F]), np.array([[k / d]]), np.array([[c / d]])
+        z = np.zeros((1, 1))
+        return np.zeros(1), z, z.copy()

@@ -11,6 +11,20 @@ factorization.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _dots(idx, val, x, rows, out):
+    """out[r] = b_rows[r] . x (idx < 0: absent)."""
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        s = 0.0
+        for k in range(idx.shape[1]):
+            j = idx[i, k]
+            if j >= 0:
+                s += val[i, k] * x[j]
+        out[r] = s
 
 
 class SparseVectors:
@@ -21,13 +35,14 @@ class SparseVectors:
         self.val = np.where(self.idx >= 0, np.asarray(val, dtype=float), 0.0)
         self.n = int(n)
         self._pad_idx = np.where(self.idx >= 0, self.idx, self.n)
+        self._all = np.arange(self.idx.shape[0], dtype=np.int64)
 
     def dots(self, x: np.ndarray, rows=None) -> np.ndarray:
         """b_j . x for every vector (or the ``rows``)."""
-        xp = np.append(x, 0.0)
-        if rows is None:
-            return np.einsum("ij,ij->i", self.val, xp[self._pad_idx])
-        return np.einsum("ij,ij->i", self.val[rows], xp[self._pad_idx[rows]])
+        rows = self._all if rows is None else np.asarray(rows, dtype=np.int64)
+        out = np.empty(rows.shape[0])
+        _dots(self.idx, self.val, np.asarray(x, dtype=float), rows, out)
+        return out
 
     def combine(self, coef: np.ndarray, rows) -> np.ndarray:
         """sum_j coef_j b_j over ``rows`` as a dense vector."""

@@ -295,7 +295,7 @@ class CatenarySlave(IntegratorSlave):
 
     def initialise(self):
         from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import RUN_RTOL_MAX, HHTIntegrator, HHTSettings
+        from pantocosim.core.hht import RUN_RTOL_MAX, HHTSettings
 
         self.check_build_stamp()
         if self._error:
@@ -325,7 +325,7 @@ class CatenarySlave(IntegratorSlave):
         self._mode, self._n = mode, n
         if mode == 0:
             q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
-            integ = HHTIntegrator(model, self._settings)
+            integ = _forced_integrator(model, self._settings)
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
             self._system = model
             self._prev_inputs = F0.copy()
@@ -478,3 +478,15 @@ class CatenarySlave(IntegratorSlave):
         up = model.support_uplift(qc)
         for j in range(min(len(up), MAX_SUPPORTS)):
             setattr(self, f"support_uplift_{j}", float(up[j]))
+
+
+def _forced_integrator(model, settings):
+    """The integrator of the catenary under force inputs: closed-form steps for a model with
+    an affine form (constant matrices), else Newton-Raphson."""
+    if hasattr(model, "affine_form"):
+        from pantocosim.core.affine_hht import ForcedAffineIntegrator
+
+        return ForcedAffineIntegrator(model.affine_form(), model.contact_points, settings)
+    from pantocosim.core.hht import HHTIntegrator
+
+    return HHTIntegrator(model, settings)

@@ -1,0 +1,279 @@
+"""HHT-alpha steps of a linear structure with unilateral rank-one elements, in closed form.
+
+The structure (an :class:`AffineForm`, e.g. the linear catenary's
+:meth:`~pantocosim.catenary.linear.LinearCatenary.affine_form`):
+
+    M a + C v + K d + r0 - sum_{s slack at d} (N0_s + k_s b_s . d) b_s
+        - sum_{s in the committed slack set} beta k_s (b_s . v) b_s = sum_k F_k n_k(t),
+
+with C = alpha_r M + beta_r K (Rayleigh, (3.1)), d = q - q_ref and loads F_k on vectors
+n_k(t) (the moving contact points, (3.13)). With q_{n+1} = q_p + Delta (the Newmark
+predictors q_p, v_p of (3.16)-(3.17)), the HHT equation (3.16) is linear in Delta for a given
+slack set:
+
+    A_s Delta = alpha f_n - c_f (C v_p + K d_p + r0)
+                + c_f [sum_slack (N0 + k b . d_p) b + sum_committed beta k (b . v_p) b]
+                + c_f sum_k F_k n_k,
+
+A_s = c_a M + c_f (c_v C + K) less the slack elements' rank-one terms (Woodbury on the kept
+factorization, :mod:`.lowrank`). Hence Delta = Delta_free + sum_k F_k w_k with
+w_k = c_f A_s^-1 n_k: a step is one sparse product, one solve with the factor kept for the
+run, and the response columns from cached unit-vector solves. Whoever supplies F_k (an FMU
+input, or a penalty contact solved on the small interface, :mod:`.condensed`) calls
+:meth:`AffineHHT.finish`; the slack set is checked at q_{n+1} and the step re-solved with the
+new set when it changed, so slackening is exact. The new f_{n+1} = (alpha f_n - M a_{n+1}) / c_f
+follows from (3.16) itself (formed in the next step's pass over the bands).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from numba import njit
+
+from .errors import ConvergenceError
+from .lowrank import LowRankSolve
+
+#: slack-set re-solves of one step before it is declared not converged
+MAX_SLACK_PASSES = 20
+
+
+@dataclass
+class AffineForm:
+    """What :class:`AffineHHT` needs of a linear structure."""
+
+    n: int
+    M_band: np.ndarray          # lower band storage (LAPACK 'L'): X_band[k, j] = X[j + k, j]
+    K_band: np.ndarray
+    alpha_r: float              # C = alpha_r M + beta_r K
+    beta_r: float
+    q_ref: np.ndarray
+    r0: np.ndarray              # f_rest at q_ref, v = 0, no load (round-off of the statics)
+    #: the unilateral elements: axial(d), slack(N), force(coef, mask),
+    #: removed_stiffness(slack, damped, c_v, c_f), beta, ka, N0 (:mod:`..catenary.linear_droppers`)
+    unilateral: Any
+    #: (c_a, c_v, c_f) -> ColumnCache of the kept factorization of c_a M + c_f (c_v C + K)
+    factor: Callable
+    #: (t, q, v, F) -> f_rest, with the committed slack set at q (initial acceleration)
+    forces: Callable
+
+
+@njit(cache=True)
+def _predict(q, v, a, q_ref, h, beta, gamma, q_p, v_p, d_p):
+    """Newmark predictors (3.16)-(3.17) with a_{n+1} = 0, and d_p = q_p - q_ref."""
+    cq = (0.5 - beta) * h * h
+    cv = (1.0 - gamma) * h
+    for i in range(q.shape[0]):
+        q_p[i] = q[i] + h * v[i] + cq * a[i]
+        v_p[i] = v[i] + cv * a[i]
+        d_p[i] = q_p[i] - q_ref[i]
+
+
+@njit(cache=True, fastmath=True)
+def _free_rhs(Mb, Kb, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, out):
+    """One pass over the symmetric bands: y = C v_p + K d_p (C = ar M + br K) and, when
+    ``pending``, f <- (alpha f - M a) / c_f (f_n of the step just taken, from (3.16));
+    then out = alpha f_n - c_f (y + r0). Each band diagonal is two streaming loops (they
+    vectorize)."""
+    w, n = Mb.shape
+    for j in range(n):
+        x1[j] = ar * v_p[j]
+        x2[j] = br * v_p[j] + d_p[j]
+        y[j] = Mb[0, j] * x1[j] + Kb[0, j] * x2[j]
+        z[j] = Mb[0, j] * a[j]
+    for k in range(1, w):
+        m_, k_ = Mb[k], Kb[k]
+        y_, z_ = y[k:], z[k:]
+        for j in range(n - k):                      # below the diagonal
+            y_[j] += m_[j] * x1[j] + k_[j] * x2[j]
+            z_[j] += m_[j] * a[j]
+        x1_, x2_, a_ = x1[k:], x2[k:], a[k:]
+        for j in range(n - k):                      # above it
+            y[j] += m_[j] * x1_[j] + k_[j] * x2_[j]
+            z[j] += m_[j] * a_[j]
+    for j in range(n):
+        if pending:
+            f[j] = (alpha * f[j] - z[j]) / c_f
+        out[j] = alpha * f[j] - c_f * (y[j] + r0[j])
+
+
+@njit(cache=True)
+def _finish(q_p, v_p, delta, c_a, c_v, q, v, a):
+    for i in range(q.shape[0]):
+        d = delta[i]
+        q[i] = q_p[i] + d
+        v[i] = v_p[i] + c_v * d
+        a[i] = c_a * d
+
+
+class AffineHHT:
+    """``AffineHHT(form, settings)``; ``initialize(t0, q0, v0, F0)``; per step
+    ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`,
+    then ``finish(F)`` (False: the slack set changed, the free response and W were
+    re-solved; supply F again)."""
+
+    def __init__(self, form: AffineForm, settings):
+        self.form = form
+        self.settings = settings
+        n = form.n
+        self.t, self.n_steps = 0.0, 0
+        self.q, self.v, self.a, self.f = (np.zeros(n) for _ in range(4))
+        self.q_p, self.v_p, self.d_p = (np.zeros(n) for _ in range(3))
+        self._rhs, self.delta_free, self._delta = (np.zeros(n) for _ in range(3))
+        self._work = np.zeros((4, n))             # x1, x2, y, z of _free_rhs
+        #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
+        #: formed in the next step's pass over the bands
+        self._pending = False
+        self.committed = np.zeros(len(form.unilateral.ka), dtype=bool)
+        self.W = np.zeros((0, n))
+        self._h, self._cache, self._coef = None, None, None
+        self._loads, self._slack = (), None
+        self.passes = 0
+
+    # ------------------------------------------------------------------ set-up
+    def initialize(self, t0: float, q0, v0=None, F0=None) -> None:
+        """State at t0; a0 from M a0 = -f_rest(t0, q0, v0, F0) (droppers slack at q0 also
+        without force in the damping)."""
+        fm = self.form
+        self.t, self.n_steps = float(t0), 0
+        self.q[:] = q0
+        self.v[:] = 0.0 if v0 is None else v0
+        un = fm.unilateral
+        self.committed = un.slack(un.axial(self.q - fm.q_ref))
+        self.f[:] = fm.forces(self.t, self.q, self.v, F0)
+        self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
+        self._h, self._pending = None, False
+
+    def _coefficients(self, h: float):
+        if h != self._h:
+            self._coef = self.settings.newton_coefficients(h)
+            self._cache = self.form.factor(*self._coef)
+            self._h = h
+        return self._coef
+
+    # ------------------------------------------------------------------ one step
+    def begin(self, h: float, loads) -> None:
+        """Predict t + h and solve the free response and the load responses w_k of
+        ``loads`` [(dofs, weights) of n_k(t + h)] for the slack set at the predictor."""
+        fm, s = self.form, self.settings
+        c_a, c_v, c_f = self._coefficients(h)
+        _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
+                 self.d_p)
+        _free_rhs(fm.M_band, fm.K_band, fm.alpha_r, fm.beta_r, self.v_p, self.d_p, self.a,
+                  fm.r0, self.f, s.alpha, c_f, self._pending, *self._work, self._rhs)
+        self._pending = False
+        self._loads = list(loads)
+        self.passes = 0
+        un = fm.unilateral
+        self._solve(un.slack(un.axial(self.d_p)))
+
+    def _solve(self, slack: np.ndarray) -> None:
+        """delta_free and W for the slack set ``slack``."""
+        un = self.form.unilateral
+        c_a, c_v, c_f = self._coef
+        rows = ()
+        if slack.any() or self.committed.any():
+            rows, s = un.removed_stiffness(slack, self.committed, c_v, c_f)
+        if len(rows):
+            rhs = self._rhs.copy()
+            if slack.any():
+                rhs += c_f * un.force(un.axial(self.d_p), slack)
+            if self.committed.any():
+                rhs += c_f * un.force(un.beta * un.ka * un.vectors.dots(self.v_p),
+                                      self.committed)
+            solve = LowRankSolve(self._cache, rows, s)
+            self.delta_free[:] = solve(rhs)
+        else:
+            solve = self._cache.solve
+            solve.solve_into(self._rhs, self.delta_free)
+        self.W = np.array([c_f * solve.solve_sparse(dofs, w) for dofs, w in self._loads]
+                          ).reshape(len(self._loads), self.form.n)
+        self._slack = slack
+        self.passes += 1
+
+    def finish(self, F) -> bool:
+        """Take the step with the loads F (one per load vector), or re-solve for the slack
+        set at the resulting q_{n+1} and return False."""
+        delta = self._delta
+        delta[:] = self.delta_free
+        for k, Fk in enumerate(np.atleast_1d(F)):
+            if Fk != 0.0:
+                delta += Fk * self.W[k]
+        un = self.form.unilateral
+        slack = un.slack(un.axial(self.d_p + delta))
+        if not np.array_equal(slack, self._slack):
+            if self.passes >= MAX_SLACK_PASSES:
+                raise ConvergenceError(
+                    f"linear structure: the slack set does not settle at t = "
+                    f"{self.t + self._h:.6g} s after {self.passes} passes",
+                    time=self.t + self._h, step=self.n_steps + 1)
+            self._solve(slack)
+            return False
+        c_a, c_v, c_f = self._coef
+        _finish(self.q_p, self.v_p, delta, c_a, c_v, self.q, self.v, self.a)
+        self._pending = True
+        self.committed = slack
+        self.t += self._h
+        self.n_steps += 1
+        return True
+
+    # ------------------------------------------------------------------ state
+    def get_state(self) -> dict:
+        return {"t": self.t, "n_steps": self.n_steps, "q": self.q.copy(),
+                "v": self.v.copy(), "a": self.a.copy(), "f": self.f.copy(),
+                "pending": self._pending,
+                "committed": self.committed.copy()}
+
+    def set_state(self, state: dict) -> None:
+        self.t, self.n_steps = float(state["t"]), int(state["n_steps"])
+        for name in ("q", "v", "a", "f"):
+            getattr(self, name)[:] = state[name]
+        self.committed = np.array(state["committed"], dtype=bool)
+        self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
+
+
+class ForcedAffineIntegrator:
+    """The :class:`~.hht.HHTIntegrator` interface (``initialize``, ``step(h, F)``, ``t``,
+    ``q``, ``v``, ``get_state``/``set_state``) for an affine structure under given point
+    loads: ``points(t)`` gives the load vectors (``dofs``, ``weights``) of F at t, e.g. the
+    catenary's contact points under forces read from FMU inputs."""
+
+    closed_form = True
+
+    def __init__(self, form: AffineForm, points, settings):
+        self.structure = AffineHHT(form, settings)
+        self.points = points
+        self.settings = settings
+
+    @property
+    def t(self) -> float:
+        return self.structure.t
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.structure.q
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.structure.v
+
+    def initialize(self, t0, q0, v0=None, inputs0=None) -> None:
+        self.structure.initialize(t0, q0, v0, inputs0)
+
+    def step(self, h: float, inputs):
+        from .hht import StepInfo
+
+        st = self.structure
+        st.begin(h, [(cp.dofs, cp.weights) for cp in self.points(st.t + h)])
+        F = np.asarray(inputs, dtype=float)
+        while not st.finish(F):
+            pass
+        return StepInfo(iterations=st.passes, residual=0.0, refactorizations=0)
+
+    def get_state(self) -> dict:
+        return self.structure.get_state()
+
+    def set_state(self, state: dict) -> None:
+        self.structure.set_state(state)

@@ -1,0 +1,282 @@
+"""The monolithic step of a linear structure and small bodies in penalty contact, condensed
+on the contact points (exact: the structure is affine in the contact forces).
+
+For a structure stepped by :class:`~.affine_hht.AffineHHT`, the contact-wire height and
+velocity at contact k at t_{n+1} are affine in the contact forces F (3.13):
+
+    z_w = z_free + G F,    v_w = v_free + H F,
+    G_kj = n_k . w_j,      H_kj = c_v n_k . w_j + V n'_k . w_j   (V n' the convective term),
+
+so the coupled HHT step of (3.16) reduces to the bodies' coordinates with the penalty law
+(3.9)-(3.10) solved with the structure's compliance (:class:`InterfaceContacts`, a small
+:class:`~.model.SecondOrderModel` stepped by the one HHT integrator); the structure then takes
+the step with the converged forces. The result is the monolithic Newton-Raphson solution of
+the assembled system (:mod:`.coupled`) to the Newton tolerance.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .affine_hht import AffineHHT
+from .hht import HHTIntegrator
+from .model import Evaluation, SecondOrderModel
+
+
+class InterfaceContacts(SecondOrderModel):
+    """Bodies (pantographs) in penalty contact with a structure condensed on the contact
+    points. ``inputs`` of a step: [z_free (m), v_free (m), G (m x m), H (m x m)] flat."""
+
+    def __init__(self, bodies: Sequence, contact):
+        self.bodies = list(bodies)
+        self.contact = contact
+        sizes = [b.n_dofs for b in self.bodies]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+        self.n_dofs = int(self.offsets[-1])
+        self.m = len(self.bodies)
+        self.forces = np.zeros(self.m)
+        self.heights = np.zeros(self.m)
+        self.wire_heights = np.zeros(self.m)
+        self._zero = np.zeros(1)
+
+    def split(self, x):
+        return [x[self.offsets[k]:self.offsets[k + 1]] for k in range(self.m)]
+
+    def unpack(self, inputs):
+        m = self.m
+        z0, v0 = inputs[:m], inputs[m:2 * m]
+        G = inputs[2 * m:2 * m + m * m].reshape(m, m)
+        H = inputs[2 * m + m * m:].reshape(m, m)
+        return z0, v0, G, H
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        qs, vs, as_ = self.split(q), self.split(v), self.split(a)
+        evs = [b.evaluate(t, qs[k], vs[k], as_[k], self._zero, tangent=tangent)
+               for k, b in enumerate(self.bodies)]
+        g = [np.asarray(b.contact_height_gradient(qs[k]), dtype=float)
+             for k, b in enumerate(self.bodies)]
+        z_p = np.array([b.contact_height(qs[k]) for k, b in enumerate(self.bodies)])
+        v_p = np.array([b.contact_velocity(qs[k], vs[k]) for k, b in enumerate(self.bodies)])
+        z0, v0, G, H = self.unpack(inputs)
+        F, Jz, Jv = self.contact.condensed(z_p, v_p, z0, v0, G, H)
+        f_in = np.concatenate([e.f_inertia for e in evs])
+        f_rest = np.concatenate([e.f_rest for e in evs])
+        for k in range(self.m):
+            o = self.offsets[k]
+            f_rest[o:o + g[k].size] += F[k] * g[k]
+        self.forces[:] = F
+        self.heights[:] = z_p
+        self.wire_heights[:] = z0 + G @ F
+        ev = Evaluation(f_inertia=f_in, f_rest=f_rest,
+                        structure_key=(tuple(e.structure_key for e in evs), tuple(F > 0.0)))
+        ev.parts = (evs, g, Jz, Jv)
+        return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """Block-diagonal bodies' Newton matrices plus the condensed contact's
+        c_f (g_k (Jz_kj + c_v Jv_kj) g_j^T)."""
+        evs, g, Jz, Jv = ev.parts
+        S = np.zeros((self.n_dofs, self.n_dofs))
+        o = self.offsets
+        for k, (b, e) in enumerate(zip(self.bodies, evs)):
+            S[o[k]:o[k + 1], o[k]:o[k + 1]] = np.asarray(b.effective_matrix(e, c_a, c_v, c_f))
+        J = c_f * (Jz + c_v * Jv)
+        for k in range(self.m):
+            for j in range(self.m):
+                if J[k, j] != 0.0:
+                    S[o[k]:o[k] + g[k].size, o[j]:o[j] + g[j].size] += J[k, j] * np.outer(
+                        g[k], g[j])
+        return S
+
+    def commit(self, t, q, v, a, inputs):
+        for k, (b, qk, vk, ak) in enumerate(zip(self.bodies, self.split(q), self.split(v),
+                                                self.split(a))):
+            b.commit(t, qk, vk, ak, None)
+
+    def get_internal_state(self):
+        return [b.get_internal_state() for b in self.bodies]
+
+    def set_internal_state(self, state):
+        if state is not None:
+            for b, s in zip(self.bodies, state):
+                b.set_internal_state(s)
+
+
+class NewtonBodies:
+    """Bodies and condensed contacts stepped by Newton-Raphson (:class:`InterfaceContacts`
+    under the one HHT integrator): any body model."""
+
+    def __init__(self, bodies, contact, settings):
+        self.contacts = InterfaceContacts(bodies, contact)
+        self.integ = HHTIntegrator(self.contacts, settings)
+        self._saved = None
+
+    def initialize(self, t0, q_bodies, x0) -> np.ndarray:
+        q = np.concatenate([np.asarray(x, float) for x in q_bodies])
+        self.integ.initialize(t0, q, None, x0.copy())
+        zero = np.zeros_like(q)
+        self.contacts.evaluate(t0, q, zero, zero, x0, tangent=False)
+        return self.contacts.forces.copy()
+
+    def begin(self) -> None:
+        self._saved = None
+
+    def solve(self, h, x) -> int:
+        """Step the bodies against the interface ``x``; the forces, heights and wire heights
+        are then in :attr:`forces`, :attr:`heights`, :attr:`wire_heights`."""
+        if self._saved is None:
+            self._saved = self.integ.get_state()
+        else:
+            self.integ.set_state(self._saved)
+        return self.integ.step(h, x).iterations
+
+    @property
+    def forces(self):
+        return self.contacts.forces
+
+    @property
+    def heights(self):
+        return self.contacts.heights
+
+    @property
+    def wire_heights(self):
+        return self.contacts.wire_heights
+
+
+class LinearBodies:
+    """Bodies with a :class:`~.model.LinearForm` (constant matrices, contact height linear
+    in q), each under the closed-form HHT step: its contact height at t_{n+1} is affine in
+    its contact force, z_p = z_pf + P F, v_p = v_pf + P_v F (two trial steps from the step's
+    start), so the penalty law is solved on the interface in closed form (no Newton)."""
+
+    def __init__(self, bodies, contact, settings):
+        self.bodies, self.contact = list(bodies), contact
+        self.integs = [HHTIntegrator(b, settings) for b in self.bodies]
+        if not all(i.closed_form for i in self.integs):
+            raise ValueError("LinearBodies needs bodies with a linear form")
+        m = len(self.bodies)
+        self.forces, self.heights, self.wire_heights = (np.zeros(m) for _ in range(3))
+        self._free = np.zeros((4, m))       # z_pf, v_pf, P, P_v of the current step
+        self._saved = None
+        self._P_step = None
+        self._u = np.zeros(1)
+
+    @staticmethod
+    def applicable(bodies) -> bool:
+        return all(b.linear_form() is not None for b in bodies)
+
+    def initialize(self, t0, q_bodies, x0) -> np.ndarray:
+        m = len(self.bodies)
+        z0, v0 = x0[:m], x0[m:2 * m]
+        z_p = np.array([b.contact_height(q) for b, q in zip(self.bodies, q_bodies)])
+        F, _, _ = self.contact.condensed(z_p, np.zeros(m), z0, v0, np.zeros((m, m)),
+                                         np.zeros((m, m)))
+        for integ, q, Fk in zip(self.integs, q_bodies, F):
+            integ.initialize(t0, q, None, np.array([Fk]))
+        self.forces[:], self.heights[:], self.wire_heights[:] = F, z_p, z0
+        return F.copy()
+
+    def _trial(self, k, h, F):
+        integ, b = self.integs[k], self.bodies[k]
+        self._u[0] = F
+        integ.step(h, self._u)
+        return b.contact_height(integ.q), b.contact_velocity(integ.q, integ.v)
+
+    def begin(self) -> None:
+        self._saved = None
+
+    def solve(self, h, x) -> int:
+        m = len(self.bodies)
+        zf, vf, P, Pv = self._free
+        if self._saved is None:
+            self._saved = [i.get_state() for i in self.integs]
+            if self._P_step != h:               # the response to F is fixed by h
+                for k in range(m):
+                    z1, v1 = self._trial(k, h, 1.0)
+                    self.integs[k].set_state(self._saved[k])
+                    z0, v0 = self._trial(k, h, 0.0)
+                    self.integs[k].set_state(self._saved[k])
+                    P[k], Pv[k] = z1 - z0, v1 - v0
+                self._P_step = h
+            for k in range(m):
+                zf[k], vf[k] = self._trial(k, h, 0.0)
+                self.integs[k].set_state(self._saved[k])
+        else:
+            for integ, st in zip(self.integs, self._saved):
+                integ.set_state(st)
+        z0, v0 = x[:m], x[m:2 * m]
+        G = x[2 * m:2 * m + m * m].reshape(m, m)
+        H = x[2 * m + m * m:].reshape(m, m)
+        F, _, _ = self.contact.condensed(zf, vf, z0, v0, G - np.diag(P), H - np.diag(Pv))
+        for k in range(m):
+            self.heights[k], _ = self._trial(k, h, F[k])
+        self.forces[:] = F
+        self.wire_heights[:] = z0 + G @ F
+        return 1
+
+
+def bodies_solver(bodies, contact, settings):
+    """:class:`LinearBodies` when every body has a linear form, else :class:`NewtonBodies`."""
+    if settings.closed_form_linear and LinearBodies.applicable(bodies):
+        return LinearBodies(bodies, contact, settings)
+    return NewtonBodies(bodies, contact, settings)
+
+
+class CondensedStepper:
+    """One HHT-alpha step of structure + bodies + contacts: the structure's free response,
+    the bodies' step on the condensed interface, the structure's step with the forces."""
+
+    def __init__(self, structure: AffineHHT, points, bodies, contact, settings,
+                 speed: float = 0.0):
+        #: ``points(t)``: the structure's contact points at t (dofs, weights, offset,
+        #: dweights_dx, doffset_dx), one per body
+        self.structure, self.points, self.speed = structure, points, float(speed)
+        self.bodies = bodies_solver(bodies, contact, settings)
+        m = len(bodies)
+        self.m = m
+        self._inputs = np.zeros(2 * m + 2 * m * m)
+
+    @property
+    def t(self) -> float:
+        return self.structure.t
+
+    def initialize(self, t0: float, q_structure, q_bodies) -> None:
+        """Start at rest in the static configuration q_structure, q_bodies."""
+        q_structure = np.asarray(q_structure, float)
+        self._inputs[:] = 0.0
+        self._inputs[:self.m] = [cp.weights @ q_structure[cp.dofs] + cp.offset
+                                 for cp in self.points(t0)]
+        F0 = self.bodies.initialize(t0, q_bodies, self._inputs)
+        self.structure.initialize(t0, q_structure, None, F0)
+
+    def interface(self, cps) -> np.ndarray:
+        """[z_free, v_free, G, H] of the step begun on the structure."""
+        st, m, V = self.structure, self.m, self.speed
+        c_v = st._coef[1]
+        x = self._inputs
+        G = x[2 * m:2 * m + m * m].reshape(m, m)
+        H = x[2 * m + m * m:].reshape(m, m)
+        for k, cp in enumerate(cps):
+            d = cp.dofs
+            qk = st.q_p[d] + st.delta_free[d]
+            x[k] = cp.weights @ qk + cp.offset
+            x[m + k] = (cp.weights @ (st.v_p[d] + c_v * st.delta_free[d])
+                        + V * (cp.dweights_dx @ qk + cp.doffset_dx))
+            for j in range(m):
+                wj = st.W[j, d]
+                G[k, j] = cp.weights @ wj
+                H[k, j] = c_v * G[k, j] + V * (cp.dweights_dx @ wj)
+        return x
+
+    def step(self, h: float) -> int:
+        """Advance structure and bodies by h; returns the bodies' Newton iterations."""
+        st = self.structure
+        cps = self.points(st.t + h)
+        st.begin(h, [(cp.dofs, cp.weights) for cp in cps])
+        self.bodies.begin()
+        while True:
+            iterations = self.bodies.solve(h, self.interface(cps))
+            if st.finish(self.bodies.forces):
+                return iterations

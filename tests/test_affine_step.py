@@ -1,0 +1,123 @@
+"""Closed-form HHT steps of the linear catenary (issue 14): the same solution as
+Newton-Raphson on the linear model, with exact dropper slackening; the monolithic step
+condensed on the contact points equals the assembled monolithic Newton solution, for a
+linear (closed-form) and a nonlinear (Newton) pantograph; the condensed penalty law."""
+
+import numpy as np
+import pytest
+
+from pantocosim.catenary.definition import load_catenary, with_spans
+from pantocosim.catenary.linear import LinearCatenary
+from pantocosim.core.affine_hht import AffineHHT
+from pantocosim.core.contact import PenaltyContact
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+
+V = 300 / 3.6
+H = 1e-3
+
+
+def _load(t):
+    """A moving force that lifts the wire enough to slacken droppers."""
+    return np.array([150.0 + 120.0 * np.sin(2 * np.pi * 6 * t) + 60.0 * np.sin(2 * np.pi * 13 * t)])
+
+
+@pytest.fixture(scope="module")
+def line4():
+    return with_spans(load_catenary("en50318"), 4)
+
+
+def _pair(line4):
+    newton = LinearCatenary(line4, x0=(60.0,), speed=V)
+    closed = LinearCatenary(line4, x0=(60.0,), speed=V)
+    q0 = newton.static_state([150.0])
+    ref = HHTIntegrator(newton, HHTSettings(alpha=-0.05, rtol=1e-12, etol=0.0))
+    ref.initialize(0.0, q0, None, _load(0.0))
+    aff = AffineHHT(closed.affine_form(), HHTSettings(alpha=-0.05))
+    aff.initialize(0.0, q0, None, _load(0.0))
+    return newton, closed, ref, aff
+
+
+def _affine_step(aff, model, F):
+    aff.begin(H, [(cp.dofs, cp.weights) for cp in model.contact_points(aff.t + H)])
+    while not aff.finish(F):
+        pass
+
+
+def test_closed_form_step_equals_newton_with_exact_slackening(line4):
+    newton, closed, ref, aff = _pair(line4)
+    err, slack_steps, switches = 0.0, 0, 0
+    for n in range(400):
+        t1 = (n + 1) * H
+        ref.step(H, _load(t1))
+        _affine_step(aff, closed, _load(t1))
+        err = max(err, float(np.max(np.abs(aff.q - ref.q))))
+        slack_steps += bool(aff.committed.any())
+        switches += aff.passes > 1
+    assert slack_steps > 20 and switches > 0          # droppers did slacken and re-tension
+    assert err < 1e-9                                 # m, on uplifts of ~0.1 m
+    # a slack dropper of the closed-form state carries no force
+    N = closed.dropper_forces(aff.q)
+    assert np.all(N[aff.committed] == 0.0) and np.all(N >= 0.0)
+
+
+def test_rollback_repeats_a_step_bitwise(line4):
+    _, closed, _, aff = _pair(line4)
+    for n in range(30):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    saved = aff.get_state()
+    _affine_step(aff, closed, np.array([400.0]))
+    first = aff.q.copy()
+    aff.set_state(saved)
+    _affine_step(aff, closed, np.array([400.0]))
+    assert np.array_equal(aff.q, first)
+
+
+@pytest.mark.parametrize("pantograph", ["en50318-2mass", "dsa380-rigid"])
+def test_condensed_monolithic_equals_the_assembled_newton_solution(pantograph):
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+    from pantocosim.master.steppers import (AssembledStepper, CondensedRunStepper,
+                                            make_stepper)
+    import dataclasses
+
+    sc = load_scenario("tests/data/short-en50318.toml")
+    pans = [dataclasses.replace(sc.pantographs[0], model=pantograph)]
+    sc = dataclasses.replace(sc, catenary_model="linear", pantographs=pans)
+    prep = prepare(sc)
+    settings = HHTSettings.for_runs(sc.alpha, 1e-10)
+    fast = make_stepper(prep, settings)
+    assert isinstance(fast, CondensedRunStepper)
+    ref = AssembledStepper(prep, HHTSettings.for_runs(sc.alpha, 1e-10))
+    dF = du = 0.0
+    for _ in range(250):
+        fast.step(sc.dt)
+        ref.step(sc.dt)
+        (c1, u1), (c2, u2) = fast.observe(), ref.observe()
+        dF = max(dF, abs(c1[0][0] - c2[0][0]), abs(c1[0][1] - c2[0][1]) * 5e4)
+        du = max(du, float(np.max(np.abs(u1 - u2))))
+    assert c2[0][0] > 50.0
+    assert dF < 1e-5            # N (contact force; height error times k_H)
+    assert du < 1e-9            # m (support uplift)
+
+
+def test_condensed_penalty_law_solves_the_law_with_the_structure_compliance():
+    contact = PenaltyContact(50_000.0, 20.0)
+    G = np.array([[4e-5, 1e-6], [1e-6, 5e-5]])
+    Hm = np.array([[2e-2, 1e-4], [1e-4, 3e-2]])
+    z0, v0 = np.array([5.3, 5.3]), np.array([0.01, -0.02])
+    for z_p, lost in ((np.array([5.303, 5.302]), None), (np.array([5.303, 5.2999]), 1)):
+        v_p = np.array([0.0, 0.05])
+        F, Jz, Jv = contact.condensed(z_p, v_p, z0, v0, G, Hm)
+        z_w, v_w = z0 + G @ F, v0 + Hm @ F
+        law = [contact.force(z_p[k], z_w[k], v_p[k], v_w[k]) for k in range(2)]
+        assert np.allclose(F, law, rtol=1e-12, atol=1e-9)
+        if lost is not None:
+            assert F[lost] == 0.0 and F[1 - lost] > 0.0
+        # the Jacobian against central differences
+        e = 1e-7
+        for j in range(2):
+            dz = np.zeros(2)
+            dz[j] = e
+            Fp = contact.condensed(z_p + dz, v_p, z0, v0, G, Hm)[0]
+            Fm = contact.condensed(z_p - dz, v_p, z0, v0, G, Hm)[0]
+            assert np.allclose((Fp - Fm) / (2 * e), Jz[:, j], rtol=1e-6, atol=1e-3)
