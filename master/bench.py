@@ -34,13 +34,19 @@ import numpy as np
 CASES = {
     # name: (catenary, spans, pantograph, speed km/h, position m)
     "en50318-300": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
+    "en50318-300-linear": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
+    "en50318-300-modal": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
     "dsa380-ave-300-40span": ("ave64", 40, "dsa380-rigid", 300.0, 32.0),
 }
 #: extra ``[simulation]`` keys of a case (e.g. a catenary model option): a new variant of a
 #: case is a new CASES entry with its options here
-CASE_OPTIONS: dict[str, dict] = {}
+CASE_OPTIONS: dict[str, dict] = {"en50318-300-linear": {"catenary_model": "linear"},
+                                 "en50318-300-modal": {"catenary_model": "modal"}}
 #: simulated seconds of each case (quick, full); a case not listed runs 0.5 / 2.0 s
 DURATIONS = {"en50318-300": (0.5, 2.0), "dsa380-ave-300-40span": (0.3, 1.0)}
+#: catenary models of the span scaling (cost per simulated second on 10, 20, 40 spans)
+SCALING_MODELS = ("nonlinear", "linear", "modal")
+SCALING_SPANS = (10, 20, 40)
 COUPLINGS = ("monolithic", "explicit", "implicit")
 
 
@@ -177,39 +183,51 @@ def bench(quick: bool = False, printer=print, cases=None) -> dict:
             case["implicit_over_explicit"] = case["implicit"]["wall_s"] / case["explicit"]["wall_s"]
             results["cases"][name] = case
         if full:
-            # scaling: cost per simulated second on 10, 20, 40 spans (monolithic, AVE line)
-            scaling, dofs = {}, {}
-            for n_spans in (10, 20, 40):
-                path = tmp / f"scale{n_spans}.toml"
-                path.write_text(scenario_text(f"scale{n_spans}", "ave64", n_spans,
-                                              "dsa380-rigid", 300.0, 32.0,
-                                              0.3 if quick else 0.5))
-                s = run_case(path, "monolithic", tmp / f"scale{n_spans}")
-                scaling[n_spans] = s["wall_time_s"] / s["simulated_time_s"]
-                dofs[n_spans] = s["catenary_dofs"]
-            growth = [scaling[20] / scaling[10], scaling[40] / scaling[20]]
-            per_dof = {k: scaling[k] / dofs[k] for k in scaling}
-            growth_per_dof = [per_dof[20] / per_dof[10], per_dof[40] / per_dof[20]]
-            results["scaling_cost_per_simulated_s"] = scaling
-            results["scaling_catenary_dofs"] = dofs
-            results["scaling_growth_per_doubling"] = growth
-            results["scaling_growth_per_doubling_per_dof"] = growth_per_dof
+            results["scaling"] = {m: span_scaling(m, quick, tmp) for m in SCALING_MODELS}
     for name, case in results["cases"].items():
         printer(f"{name}: floor {1e3 * case['floor_solve_s']:.3f} ms/solve, cosim_over_monolithic "
                 f"{case['cosim_over_monolithic']:.2f}, implicit_over_explicit "
                 f"{case['implicit_over_explicit']:.2f}")
     if full:
-        spans = (10, 20, 40)
-        dof_list = ", ".join(str(dofs[k]) for k in spans)
-        cost_list = ", ".join(f"{scaling[k]:.1f} s" for k in spans)
-        printer(f"cost per simulated second, 10/20/40 spans ({dof_list} DOFs): {cost_list}; "
-                f"growth per doubling {growth[0]:.2f}, {growth[1]:.2f} (per DOF "
-                f"{growth_per_dof[0]:.2f}, {growth_per_dof[1]:.2f})")
+        for model, sc in results["scaling"].items():
+            printer(scaling_line(model, sc))
         cold = results["cold_first_run"]
         printer(f"cold first run (en50318-300 explicit, empty numba and FMU caches): process "
                 f"{cold['process_wall_s']:.1f} s, set-up {cold['setup_s']:.1f} s, RTF "
                 f"{cold['real_time_factor']:.2f}")
     return results
+
+
+def span_scaling(model: str, quick: bool, tmp: Path) -> dict:
+    """Cost per simulated second on 10, 20, 40 spans of the AVE line (rigid DSA-380,
+    monolithic) with the catenary ``model``, and its growth per doubling."""
+    cost, dofs, modes = {}, {}, {}
+    for n_spans in SCALING_SPANS:
+        path = tmp / f"scale-{model}-{n_spans}.toml"
+        path.write_text(scenario_text(f"scale{n_spans}", "ave64", n_spans, "dsa380-rigid",
+                                      300.0, 32.0, 0.3 if quick else 0.5,
+                                      {"catenary_model": model}))
+        s = run_case(path, "monolithic", tmp / f"scale-{model}-{n_spans}")
+        cost[n_spans] = s["wall_time_s"] / s["simulated_time_s"]
+        dofs[n_spans] = s["catenary_dofs"]
+        modes[n_spans] = s.get("catenary_modes")
+    a, b, c = SCALING_SPANS
+    return {"cost_per_simulated_s": cost, "catenary_dofs": dofs, "modes": modes,
+            "growth_per_doubling": [cost[b] / cost[a], cost[c] / cost[b]],
+            "growth_10_to_40": cost[c] / cost[a]}
+
+
+def scaling_line(model: str, sc: dict) -> str:
+    spans = SCALING_SPANS
+    dofs = ", ".join(str(sc["catenary_dofs"][k]) for k in spans)
+    cost = ", ".join(f"{sc['cost_per_simulated_s'][k]:.2f} s" for k in spans)
+    modes = ""
+    if any(sc["modes"].get(k) for k in spans):
+        modes = " (" + ", ".join(str(sc["modes"][k]) for k in spans) + " modes)"
+    g = sc["growth_per_doubling"]
+    return (f"{model}: cost per simulated second, {'/'.join(map(str, spans))} spans ({dofs} "
+            f"DOFs{modes}): {cost}; growth per doubling {g[0]:.2f}, {g[1]:.2f}; "
+            f"{spans[0]} -> {spans[-1]} spans {sc['growth_10_to_40']:.2f}x")
 
 
 def _duration(name: str, quick: bool) -> float:

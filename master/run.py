@@ -285,6 +285,8 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
         "simulated_time_s": float(c["time"][-1]) if len(c["time"]) else 0.0,
         "steps": int(len(c["time"]) - 1),
         "catenary_dofs": int(prep.catenary.n_dofs),
+        "catenary_model": sc.catenary_model,
+        "catenary_modes": getattr(prep.catenary, "n_modes", None),
         "analysis_window_m": list(prep.window_m),
         "target_mean_n": [float(p.options.mean_uplift) for p in prep.pantographs],
         "statistics": stats[0].as_dict() if stats else None,

@@ -10,10 +10,12 @@ from pantocosim.master.scenario import load_scenario
 def test_bench_scenarios_are_valid(tmp_path):
     for name, (cat, spans, pan, v, x0) in bench.CASES.items():
         path = tmp_path / f"{name}.toml"
-        path.write_text(bench.scenario_text(name, cat, spans, pan, v, x0, 0.5))
+        options = bench.CASE_OPTIONS.get(name, {})
+        path.write_text(bench.scenario_text(name, cat, spans, pan, v, x0, 0.5, options))
         tomllib.loads(path.read_text())
         sc = load_scenario(str(path))
         assert sc.spans == spans and sc.duration_s == 0.5 and sc.dt == 1e-3
+        assert sc.catenary_model == options.get("catenary_model", "nonlinear")
         assert sc.window_m[0] > x0 and sc.window_m[1] < x0 + v / 3.6 * 0.5
 
 
@@ -50,3 +52,11 @@ def test_step_time_percentiles_reach_the_table():
     # a summary without step times (an older run) still prints
     assert "p99     -" in bench.format_entry("c", "explicit",
                                              {**entry, **bench.step_time_entry({})})
+
+
+def test_scaling_line_reports_growth_and_modes():
+    sc = {"cost_per_simulated_s": {10: 0.4, 20: 0.8, 40: 1.7},
+          "catenary_dofs": {10: 9216, 20: 18576, 40: 37296}, "modes": {10: 80, 20: 160, 40: 320},
+          "growth_per_doubling": [2.0, 2.125], "growth_10_to_40": 4.25}
+    line = bench.scaling_line("modal", sc)
+    assert "80, 160, 320 modes" in line and "4.25x" in line and "2.00, 2.12" in line

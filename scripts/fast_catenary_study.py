@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""The accuracy study of the constant-matrix catenary models (docs/fast-catenary.md): every
+preset scenario run monolithically with the nonlinear (reference), linear and modal catenary
+at the same time step; per model the EN 50317 statistics of each pantograph against the
+nonlinear run, max |dF| over the analysis window, the maximum uplift at the supports, and
+the wall time per step.
+
+    python scripts/fast_catenary_study.py [--scenarios en50318-250 ...] [--models linear modal]
+        [--cache out/fast-catenary-study.json] [--docs docs/fast-catenary.md] [--reuse]
+
+Each run's figures go to the JSON cache as they finish (``--reuse`` keeps the runs already
+there), and the table is written between ``<!-- study:start -->`` and ``<!-- study:end -->``
+of the docs page.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+START, END = "<!-- study:start -->", "<!-- study:end -->"
+SCENARIOS = ("en50318-250", "en50318-300", "dsa380-ave-300", "benchmark-320",
+             "dsa380-ave-300-double")
+#: the issue's accuracy targets [%]: mean, sigma, actual max/min, max uplift at supports
+TARGETS = {"linear": (0.2, 1.0, 2.0, 3.0), "modal": (0.5, 2.0, 3.0, 5.0)}
+QUANTITIES = ("mean_n", "std_n", "max_n", "min_n", "max_uplift_at_support_m")
+
+
+def run(scenario: str, model: str) -> dict:
+    """One monolithic run: statistics and contact-force history of every pantograph."""
+    from pantocosim.master.run import prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    sc = dataclasses.replace(load_scenario(scenario), catenary_model=model)
+    t0 = time.perf_counter()
+    prep = prepare(sc)
+    setup = time.perf_counter() - t0
+    res = run_monolithic(prep, None, progress=False)
+    if res.error is not None:
+        return {"error": str(res.error)}
+    c = res.columns
+    n_p = len(prep.pantographs)
+    return {"statistics": [s.as_dict() for s in res.statistics()],
+            "forces": [np.asarray(c[f"contact_force_{k}"]).tolist() for k in range(1, n_p + 1)],
+            "positions": [np.asarray(c[f"x_{k}"]).tolist() for k in range(1, n_p + 1)],
+            "window_m": list(prep.window_m), "setup_s": setup,
+            "ms_per_step": 1e3 * res.wall_time_s / max(len(c["time"]) - 1, 1),
+            "dofs": int(prep.catenary.n_dofs), "modes": getattr(prep.catenary, "m", None)}
+
+
+def compare(ref: dict, other: dict, model: str) -> list[dict]:
+    """Rows (one per pantograph) of ``other`` against the reference run."""
+    rows = []
+    for k, (s_ref, s) in enumerate(zip(ref["statistics"], other["statistics"])):
+        lo, hi = ref["window_m"]
+        x = np.asarray(ref["positions"][k])
+        inside = (x >= lo) & (x <= hi)
+        dF = np.abs(np.asarray(other["forces"][k]) - np.asarray(ref["forces"][k]))[inside]
+        err = {q: 100.0 * (s[q] - s_ref[q]) / abs(s_ref[q]) for q in QUANTITIES}
+        limits = TARGETS.get(model)
+        ok = None
+        if limits:
+            worst = (abs(err["mean_n"]), abs(err["std_n"]),
+                     max(abs(err["max_n"]), abs(err["min_n"])),
+                     abs(err["max_uplift_at_support_m"]))
+            ok = all(w <= t for w, t in zip(worst, limits))
+        rows.append({"pantograph": k + 1, **{q: s[q] for q in QUANTITIES},
+                     **{f"err_{q}": err[q] for q in QUANTITIES},
+                     "max_dF": float(dF.max()), "ms_per_step": other["ms_per_step"],
+                     "modes": other.get("modes"), "within_targets": ok})
+    return rows
+
+
+def table(cache: dict, scenarios, models) -> str:
+    head = ("| scenario | model | pant. | mean [N] (Δ) | σ [N] (Δ) | max [N] (Δ) | min [N] (Δ) "
+            "| max uplift [mm] (Δ) | max abs dF [N] | ms/step | targets |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    lines = []
+    for sc in scenarios:
+        ref = cache.get(f"{sc}/nonlinear")
+        if not ref or "error" in ref:
+            continue
+        for model in ("nonlinear",) + tuple(models):
+            r = cache.get(f"{sc}/{model}")
+            if not r:
+                continue
+            if "error" in r:
+                lines.append(f"| {sc} | {model} | - | failed: {r['error']} |||||||||")
+                continue
+            for row in compare(ref, r, model):
+                def cell(q, scale=1.0, fmt=".1f"):
+                    v = format(row[q] * scale, fmt)
+                    return v if model == "nonlinear" else f"{v} ({row['err_' + q]:+.2f} %)"
+                ok = {None: "ref.", True: "yes", False: "**no**"}[row["within_targets"]]
+                name = model if row["modes"] is None else f"{model} ({row['modes']} modes)"
+                lines.append(
+                    f"| {sc} | {name} | {row['pantograph']} | {cell('mean_n', fmt='.2f')} | "
+                    f"{cell('std_n', fmt='.2f')} | {cell('max_n')} | {cell('min_n')} | "
+                    f"{cell('max_uplift_at_support_m', 1e3)} | "
+                    f"{'-' if model == 'nonlinear' else format(row['max_dF'], '.2f')} | "
+                    f"{row['ms_per_step']:.2f} | {ok} |")
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--scenarios", nargs="+", default=list(SCENARIOS))
+    p.add_argument("--models", nargs="+", default=["linear", "modal"])
+    p.add_argument("--cache", type=Path, default=ROOT / "out" / "fast-catenary-study.json")
+    p.add_argument("--docs", type=Path, default=ROOT / "docs" / "fast-catenary.md")
+    p.add_argument("--reuse", action="store_true", help="keep the runs already in the cache")
+    a = p.parse_args(argv)
+    cache = json.loads(a.cache.read_text()) if a.cache.exists() else {}
+    for sc in a.scenarios:
+        for model in ["nonlinear"] + a.models:
+            key = f"{sc}/{model}"
+            if a.reuse and key in cache and "error" not in cache[key]:
+                continue
+            print(f"running {key} ...", flush=True)
+            cache[key] = run(sc, model)
+            a.cache.write_text(json.dumps(cache))
+    text = table(cache, a.scenarios, a.models)
+    print(text)
+    doc = a.docs.read_text() if a.docs.exists() else f"{START}\n{END}\n"
+    i, j = doc.index(START) + len(START), doc.index(END)
+    a.docs.write_text(doc[:i] + "\n" + text + doc[j:])
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
