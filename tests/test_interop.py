@@ -212,6 +212,27 @@ def test_pantograph_swap_in_libcosim_is_a_file_swap(short_package, fmus, model, 
     assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("master", ["libcosim", "ecos"])
+def test_linear_catenary_scenario_runs_in_third_party_masters(master, tmp_path):
+    """The scenario package of a linear-catenary scenario (catenary_model baked into the
+    catenary FMU) in libcosim and ecos: the statistics of the monolithic linear run."""
+    from pantocosim.master.ssp import write_scenario_package
+
+    if master == "ecos":
+        pytest.importorskip("ecospy")
+    scenario = ROOT / "tests" / "data" / "ssp-short-linear.toml"
+    write_scenario_package(tmp_path, scenarios=[scenario], quiet=True)
+    out = tmp_path / f"{master}.csv"
+    stats, _ = run_recipe(master, "--ssp", tmp_path / "ssp-short-linear.ssp", "--out", out)
+    _, mono = monolithic(scenario)
+    ref = mono.statistics()[0]
+    assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=2e-3)
+    assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
+    assert stats["max_uplift_at_support_m"] == pytest.approx(ref.max_uplift_at_support_m,
+                                                             rel=0.01)
+
+
 # ------------------------------------------------------------------------- installed package
 @pytest.mark.slow
 def test_non_editable_install_builds_and_runs_from_any_folder(tmp_path):

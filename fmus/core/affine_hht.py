@@ -27,6 +27,8 @@ follows from (3.16) itself (formed in the next step's pass over the bands).
 
 from __future__ import annotations
 
+import itertools
+import secrets
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -38,6 +40,14 @@ from .lowrank import LowRankSolve
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
+#: labels of the states a step starts from (a rolled-back step reuses its free response);
+#: the random token keeps a label restored from another process's saved state unique
+_TOKEN = secrets.randbits(64)
+_COUNTER = itertools.count()
+
+
+def _new_id() -> tuple[int, int]:
+    return _TOKEN, next(_COUNTER)
 
 
 @dataclass
@@ -131,6 +141,10 @@ class AffineHHT:
         self._h, self._cache, self._coef = None, None, None
         self._loads, self._slack = (), None
         self.passes = 0
+        self._id = _new_id()
+        #: (state id, h, copies of the free response): a step redone from the same state
+        #: (co-simulation rollback) skips the pass and the solve
+        self._memo = None
 
     # ------------------------------------------------------------------ set-up
     def initialize(self, t0: float, q0, v0=None, F0=None) -> None:
@@ -145,6 +159,7 @@ class AffineHHT:
         self.f[:] = fm.forces(self.t, self.q, self.v, F0)
         self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
         self._h, self._pending = None, False
+        self._id, self._memo = _new_id(), None
 
     def _coefficients(self, h: float):
         if h != self._h:
@@ -159,15 +174,28 @@ class AffineHHT:
         ``loads`` [(dofs, weights) of n_k(t + h)] for the slack set at the predictor."""
         fm, s = self.form, self.settings
         c_a, c_v, c_f = self._coefficients(h)
+        self._loads = list(loads)
+        self.passes = 0
+        memo = self._memo
+        if memo is not None and memo[0] == (self._id, h):
+            for dst, src in zip(self._free_state(), memo[1]):
+                dst[...] = src
+            self._pending, self.W, self._slack = False, memo[2], memo[3]
+            self.passes = 1
+            return
         _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
                  self.d_p)
         _free_rhs(fm.M_band, fm.K_band, fm.alpha_r, fm.beta_r, self.v_p, self.d_p, self.a,
                   fm.r0, self.f, s.alpha, c_f, self._pending, *self._work, self._rhs)
         self._pending = False
-        self._loads = list(loads)
-        self.passes = 0
         un = fm.unilateral
         self._solve(un.slack(un.axial(self.d_p)))
+        self._memo = ((self._id, h), [x.copy() for x in self._free_state()], self.W,
+                      self._slack)
+
+    def _free_state(self):
+        """The arrays :meth:`begin` computes (kept for a step redone from its state)."""
+        return self.q_p, self.v_p, self.d_p, self._rhs, self.delta_free, self.f
 
     def _solve(self, slack: np.ndarray) -> None:
         """delta_free and W for the slack set ``slack``."""
@@ -217,13 +245,14 @@ class AffineHHT:
         self.committed = slack
         self.t += self._h
         self.n_steps += 1
+        self._id = _new_id()
         return True
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
         return {"t": self.t, "n_steps": self.n_steps, "q": self.q.copy(),
                 "v": self.v.copy(), "a": self.a.copy(), "f": self.f.copy(),
-                "pending": self._pending,
+                "pending": self._pending, "id": self._id,
                 "committed": self.committed.copy()}
 
     def set_state(self, state: dict) -> None:
@@ -232,6 +261,7 @@ class AffineHHT:
             getattr(self, name)[:] = state[name]
         self.committed = np.array(state["committed"], dtype=bool)
         self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
+        self._id = state["id"]
 
 
 class ForcedAffineIntegrator:
