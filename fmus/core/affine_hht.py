@@ -161,6 +161,11 @@ class AffineHHT:
         self._h, self._pending = None, False
         self._id, self._memo = _new_id(), None
 
+    @property
+    def c_v(self) -> float:
+        """dv/dq of the step begun, (3.18)."""
+        return self._coef[1]
+
     def _coefficients(self, h: float):
         if h != self._h:
             self._coef = self.settings.newton_coefficients(h)

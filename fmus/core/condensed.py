@@ -254,7 +254,7 @@ class CondensedStepper:
     def interface(self, cps) -> np.ndarray:
         """[z_free, v_free, G, H] of the step begun on the structure."""
         st, m, V = self.structure, self.m, self.speed
-        c_v = st._coef[1]
+        c_v = st.c_v
         x = self._inputs
         G = x[2 * m:2 * m + m * m].reshape(m, m)
         H = x[2 * m + m * m:].reshape(m, m)
