@@ -25,6 +25,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- study:start -->", "<!-- study:end -->"
+STATICS = "<!-- statics:start -->", "<!-- statics:end -->"
 SCENARIOS = ("en50318-250", "en50318-300", "dsa380-ave-300", "benchmark-320",
              "dsa380-ave-300-double")
 #: the issue's accuracy targets [%]: mean, sigma, actual max/min, max uplift at supports
@@ -108,6 +109,34 @@ def table(cache: dict, scenarios, models) -> str:
     return head + "\n".join(lines) + "\n"
 
 
+def static_uplift_table(catenary: str = "en50318", spans: int = 4,
+                        forces=(20.0, 80.0, 150.0)) -> str:
+    """Static uplift of the contact wire under an upward point force at midspan and at a
+    support, nonlinear against linear: the linearisation's own error (second order)."""
+    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.catenary.linear import LinearCatenary
+    from pantocosim.catenary.model import CatenaryModel
+
+    line = with_spans(load_catenary(catenary), spans)
+    models = (CatenaryModel(line), LinearCatenary(line))
+    span = float(np.diff(line.support_x)[1])
+    places = {"support 2": float(line.support_x[2]),
+              "midspan 2-3": float(line.support_x[2]) + 0.5 * span}
+    rows = ["| force [N] | place | nonlinear [mm] | linear [mm] | Δ |", "|---|---|---|---|---|"]
+    for F in forces:
+        for name, x in places.items():
+            up = [m.contact_wire_height(m.static_solution([(x, F)]).q, [x])[0]
+                  - m.contact_wire_height(m.q_static, [x])[0] for m in models]
+            rows.append(f"| {F:.0f} | {name} | {1e3 * up[0]:.2f} | {1e3 * up[1]:.2f} | "
+                        f"{100 * (up[1] - up[0]) / up[0]:+.2f} % |")
+    return "\n".join(rows) + "\n"
+
+
+def put(doc: str, markers, text: str) -> str:
+    i, j = doc.index(markers[0]) + len(markers[0]), doc.index(markers[1])
+    return doc[:i] + "\n" + text + doc[j:]
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenarios", nargs="+", default=list(SCENARIOS))
@@ -126,10 +155,10 @@ def main(argv=None) -> int:
             cache[key] = run(sc, model)
             a.cache.write_text(json.dumps(cache))
     text = table(cache, a.scenarios, a.models)
-    print(text)
-    doc = a.docs.read_text() if a.docs.exists() else f"{START}\n{END}\n"
-    i, j = doc.index(START) + len(START), doc.index(END)
-    a.docs.write_text(doc[:i] + "\n" + text + doc[j:])
+    statics = static_uplift_table()
+    print(text + "\n" + statics)
+    doc = a.docs.read_text()
+    a.docs.write_text(put(put(doc, (START, END), text), STATICS, statics))
     return 0
 
 

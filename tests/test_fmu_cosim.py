@@ -31,22 +31,32 @@ def scenario_with(tmp_path, model):
     return p
 
 
-@pytest.fixture(scope="module")
-def monolithic_short():
-    prep = prepare(str(SHORT))
-    return run_monolithic(prep, None, progress=False)
+def short_with_catenary(tmp_path, catenary_model):
+    """The short scenario with ``catenary_model`` (nonlinear: the file itself)."""
+    if catenary_model == "nonlinear":
+        return SHORT
+    p = tmp_path / f"short-{catenary_model}.toml"
+    p.write_text(SHORT.read_text().replace('name = "short-en50318"',
+                                           f'name = "short-{catenary_model}"')
+                 + f'catenary_model = "{catenary_model}"\n')
+    return p
 
 
-def test_implicit_fmu_coupling_equals_monolithic(tmp_path, monolithic_short):
+@pytest.mark.parametrize("catenary_model", ["nonlinear", "linear"])
+def test_implicit_fmu_coupling_equals_monolithic(tmp_path, catenary_model):
+    """Tight tolerances: the iterative coupling through the FMUs reproduces the monolithic
+    solution of the same catenary model (the linear one: closed-form steps on both sides)."""
+    scenario = short_with_catenary(tmp_path, catenary_model)
+    mono = run_monolithic(prepare(str(scenario)), None, progress=False)
     out = tmp_path / "implicit"
-    proc = cli("run", SHORT, "--coupling", "implicit", "--out", out, "--quiet", "--no-plots",
-               "--json")
+    proc = cli("run", scenario, "--coupling", "implicit", "--out", out, "--quiet",
+               "--no-plots", "--json")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     summary = json.loads(proc.stdout)
     assert summary["coupling"] == "implicit"
     assert summary["coupling_iterations_max"] <= 6
     F = read_csv(out / "timeseries.csv")["contact_force_1"]
-    Fm = monolithic_short.columns["contact_force_1"]
+    Fm = mono.columns["contact_force_1"]
     # CSV keeps 10 significant digits
     assert np.max(np.abs(F - Fm)) < 1e-6 * Fm.mean()
 
