@@ -32,7 +32,7 @@ def _pair(line4):
     q0 = newton.static_state([150.0])
     ref = HHTIntegrator(newton, HHTSettings(alpha=-0.05, rtol=1e-12, etol=0.0))
     ref.initialize(0.0, q0, None, _load(0.0))
-    aff = AffineHHT(closed.affine_form(), HHTSettings(alpha=-0.05))
+    aff = AffineHHT(closed.affine_form(), HHTSettings(alpha=-0.05), keep_free_response=True)
     aff.initialize(0.0, q0, None, _load(0.0))
     return newton, closed, ref, aff
 

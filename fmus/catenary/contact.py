@@ -65,6 +65,7 @@ class ContactLocator:
         zd = S.cables.dofs[self.elems][:, [2, 5, 8, 11]]
         self.z_full_dofs = zd
         self.z_free = S.fmap[zd]                 # -1 for fixed
+        self._all_free = np.all(self.z_free >= 0, axis=1)
         self.x_full_ref = x_full_ref
         self.x_min, self.x_max = float(self.x_start[0]), float(self.x_end[-1])
 
@@ -88,6 +89,9 @@ class ContactLocator:
         dxdxi = shape_dxi(xi, L) @ self.E_x[k]
         dw = shape_dxi(xi, L) / dxdxi
         free = self.z_free[k]
+        if self._all_free[k]:
+            return ContactPoint(dofs=free, weights=w, offset=0.0, element=int(self.elems[k]),
+                                xi=xi, dweights_dx=dw)
         m = free >= 0
         zfix = self.x_full_ref[self.z_full_dofs[k][~m]]
         return ContactPoint(dofs=free[m], weights=w[m], offset=float(w[~m] @ zfix),

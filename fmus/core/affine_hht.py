@@ -124,8 +124,11 @@ class AffineHHT:
     then ``finish(F)`` (False: the slack set changed, the free response and W were
     re-solved; supply F again)."""
 
-    def __init__(self, form: AffineForm, settings):
+    def __init__(self, form: AffineForm, settings, keep_free_response: bool = False):
         self.form = form
+        #: keep the free response of each step for a redo from the same state (the FMU's
+        #: rollback); a monolithic run never redoes a step
+        self.keep_free_response = keep_free_response
         self.settings = settings
         n = form.n
         self.t, self.n_steps = 0.0, 0
@@ -139,6 +142,7 @@ class AffineHHT:
         self.committed = np.zeros(len(form.unilateral.ka), dtype=bool)
         self.W = np.zeros((0, n))
         self._h, self._cache, self._coef = None, None, None
+        self._woodbury = None
         self._loads, self._slack = (), None
         self.passes = 0
         self._id = _new_id()
@@ -185,7 +189,8 @@ class AffineHHT:
         if memo is not None and memo[0] == (self._id, h):
             for dst, src in zip(self._free_state(), memo[1]):
                 dst[...] = src
-            self._pending, self.W, self._slack = False, memo[2], memo[3]
+            self._pending, self._slack = False, memo[3]
+            self.W[...] = memo[2]
             self.passes = 1
             return
         _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
@@ -195,12 +200,21 @@ class AffineHHT:
         self._pending = False
         un = fm.unilateral
         self._solve(un.slack(un.axial(self.d_p)))
-        self._memo = ((self._id, h), [x.copy() for x in self._free_state()], self.W,
-                      self._slack)
+        if self.keep_free_response:
+            self._memo = ((self._id, h), [x.copy() for x in self._free_state()], self.W.copy(),
+                          self._slack)
 
     def _free_state(self):
         """The arrays :meth:`begin` computes (kept for a step redone from its state)."""
         return self.q_p, self.v_p, self.d_p, self._rhs, self.delta_free, self.f
+
+    def _lowrank(self, rows, s) -> LowRankSolve:
+        """The Woodbury solve of a slack set (kept while the set and the step size last: a
+        dropper stays slack for several steps)."""
+        key = (self._h, rows.tobytes(), s.tobytes())
+        if self._woodbury is None or self._woodbury[0] != key:
+            self._woodbury = (key, LowRankSolve(self._cache, rows, s))
+        return self._woodbury[1]
 
     def _solve(self, slack: np.ndarray) -> None:
         """delta_free and W for the slack set ``slack``."""
@@ -216,13 +230,16 @@ class AffineHHT:
             if self.committed.any():
                 rhs += c_f * un.force(un.beta * un.ka * un.vectors.dots(self.v_p),
                                       self.committed)
-            solve = LowRankSolve(self._cache, rows, s)
+            solve = self._lowrank(rows, s)
             self.delta_free[:] = solve(rhs)
         else:
             solve = self._cache.solve
             solve.solve_into(self._rhs, self.delta_free)
-        self.W = np.array([c_f * solve.solve_sparse(dofs, w) for dofs, w in self._loads]
-                          ).reshape(len(self._loads), self.form.n)
+        m = len(self._loads)
+        if self.W.shape[0] != m:
+            self.W = np.zeros((m, self.form.n))
+        for k, (dofs, w) in enumerate(self._loads):
+            solve.solve_sparse(dofs, c_f * np.asarray(w, dtype=float), out=self.W[k])
         self._slack = slack
         self.passes += 1
 
@@ -278,7 +295,7 @@ class ForcedAffineIntegrator:
     closed_form = True
 
     def __init__(self, form: AffineForm, points, settings):
-        self.structure = AffineHHT(form, settings)
+        self.structure = AffineHHT(form, settings, keep_free_response=True)
         self.points = points
         self.settings = settings
 

@@ -12,6 +12,7 @@ from collections import OrderedDict
 
 import numpy as np
 from numba import njit
+from scipy.linalg.blas import daxpy
 from scipy.linalg.lapack import dpbtrf, dpbtrs
 
 
@@ -102,10 +103,10 @@ class BandedCholesky:
         """The cached solves A^-1 e_j for j in dofs."""
         return [self._column(int(j)) for j in np.asarray(dofs, dtype=np.int64)]
 
-    def solve_sparse(self, dofs, values) -> np.ndarray:
-        """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere)."""
-        x = np.zeros(self.n)
+    def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
+        """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere), into ``out`` if given."""
+        x = np.zeros(self.n) if out is None else out
+        x[:] = 0.0
         for j, w in zip(np.asarray(dofs).tolist(), np.asarray(values, dtype=float).tolist()):
-            col = self._column(j)
-            x += w * col
+            daxpy(self._column(j), x, a=w)
         return x

@@ -147,9 +147,11 @@ class NewtonBodies:
 
 class LinearBodies:
     """Bodies with a :class:`~.model.LinearForm` (constant matrices, contact height linear
-    in q), each under the closed-form HHT step: its contact height at t_{n+1} is affine in
-    its contact force, z_p = z_pf + P F, v_p = v_pf + P_v F (two trial steps from the step's
-    start), so the penalty law is solved on the interface in closed form (no Newton)."""
+    in q), each under the closed-form HHT step. A step is affine in the body's contact force,
+    so each body takes its step once with a guess (its last force), the penalty law is solved
+    on the interface in closed form with the body's compliance z_p = z_pf + P F,
+    v_p = v_pf + P_v F, and the step is shifted to the solved force
+    (:meth:`~.hht.HHTIntegrator.shift_last_step`): no Newton, no second step."""
 
     def __init__(self, bodies, contact, settings):
         self.bodies, self.contact = list(bodies), contact
@@ -159,8 +161,9 @@ class LinearBodies:
         m = len(self.bodies)
         self.forces, self.heights, self.wire_heights = (np.zeros(m) for _ in range(3))
         self._free = np.zeros((4, m))       # z_pf, v_pf, P, P_v of the current step
-        self._saved = None
-        self._P_step = None
+        self._applied = np.zeros(m)         # the force each body's step was taken with
+        self._stepped = False
+        self._units, self._units_h = None, None
         self._u = np.zeros(1)
 
     @staticmethod
@@ -178,40 +181,45 @@ class LinearBodies:
         self.forces[:], self.heights[:], self.wire_heights[:] = F, z_p, z0
         return F.copy()
 
-    def _trial(self, k, h, F):
+    def _contact(self, k):
         integ, b = self.integs[k], self.bodies[k]
-        self._u[0] = F
-        integ.step(h, self._u)
         return b.contact_height(integ.q), b.contact_velocity(integ.q, integ.v)
 
     def begin(self) -> None:
-        self._saved = None
+        self._stepped = False
+
+    def _take_steps(self, h) -> None:
+        """Each body's step with its last force; its free contact height and compliance."""
+        zf, vf, P, Pv = self._free
+        if self._units_h != h:               # the response to F is fixed by h
+            self._units = [i.input_response(h, np.zeros(1), np.ones(1)) for i in self.integs]
+            self._units_h = h
+            for k, b in enumerate(self.bodies):
+                dq, dv = self._units[k][:2]
+                P[k] = b.contact_height(dq) - b.contact_height(np.zeros_like(dq))
+                Pv[k] = b.contact_velocity(dq, dv)
+        for k, integ in enumerate(self.integs):
+            self._u[0] = self._applied[k] = self.forces[k]
+            integ.step(h, self._u)
+            z, v = self._contact(k)
+            zf[k], vf[k] = z - P[k] * self._applied[k], v - Pv[k] * self._applied[k]
+        self._stepped = True
 
     def solve(self, h, x) -> int:
         m = len(self.bodies)
+        if not self._stepped:
+            self._take_steps(h)
         zf, vf, P, Pv = self._free
-        if self._saved is None:
-            self._saved = [i.get_state() for i in self.integs]
-            if self._P_step != h:               # the response to F is fixed by h
-                for k in range(m):
-                    z1, v1 = self._trial(k, h, 1.0)
-                    self.integs[k].set_state(self._saved[k])
-                    z0, v0 = self._trial(k, h, 0.0)
-                    self.integs[k].set_state(self._saved[k])
-                    P[k], Pv[k] = z1 - z0, v1 - v0
-                self._P_step = h
-            for k in range(m):
-                zf[k], vf[k] = self._trial(k, h, 0.0)
-                self.integs[k].set_state(self._saved[k])
-        else:
-            for integ, st in zip(self.integs, self._saved):
-                integ.set_state(st)
         z0, v0 = x[:m], x[m:2 * m]
         G = x[2 * m:2 * m + m * m].reshape(m, m)
         H = x[2 * m + m * m:].reshape(m, m)
         F, _, _ = self.contact.condensed(zf, vf, z0, v0, G - np.diag(P), H - np.diag(Pv))
-        for k in range(m):
-            self.heights[k], _ = self._trial(k, h, F[k])
+        for k, integ in enumerate(self.integs):
+            if F[k] != self._applied[k]:
+                self._u[0] = F[k]
+                integ.shift_last_step(self._units[k], F[k] - self._applied[k], self._u)
+                self._applied[k] = F[k]
+        self.heights[:] = zf + P * F
         self.forces[:] = F
         self.wire_heights[:] = z0 + G @ F
         return 1

@@ -427,6 +427,27 @@ class HHTIntegrator:
         self.model.commit(t1, self.q, self.v, self.a, stored)
         return self._linear_info
 
+    def input_response(self, h: float, inputs0, inputs1) -> tuple:
+        """(dq, dv, da, df): how a closed-form step of size h from the current state changes
+        when its inputs go from ``inputs0`` to ``inputs1`` (the step is affine in its inputs;
+        the state is left as it was)."""
+        saved = self.get_state()
+        self.step(h, inputs0)
+        base = [x.copy() for x in (self.q, self.v, self.a, self.f_rest)]
+        self.set_state(saved)
+        self.step(h, inputs1)
+        out = tuple(x - b for x, b in zip((self.q, self.v, self.a, self.f_rest), base))
+        self.set_state(saved)
+        return out
+
+    def shift_last_step(self, response: tuple, scale: float, inputs) -> None:
+        """The last closed-form step as if taken with ``inputs``: the state moves by
+        ``scale`` times an :meth:`input_response` (exact: the step is affine in its
+        inputs)."""
+        for x, d in zip((self.q, self.v, self.a, self.f_rest), response):
+            x += scale * d
+        self.inputs[...] = inputs
+
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
         """Everything the next step depends on (copies), for rollback."""

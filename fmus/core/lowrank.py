@@ -27,6 +27,17 @@ def _dots(idx, val, x, rows, out):
         out[r] = s
 
 
+@njit(cache=True)
+def _combine(idx, val, coef, rows, out):
+    """out += sum_r coef[r] b_rows[r]."""
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        for k in range(idx.shape[1]):
+            j = idx[i, k]
+            if j >= 0:
+                out[j] += coef[r] * val[i, k]
+
+
 class SparseVectors:
     """m sparse vectors of length n: ``idx`` (m, k) indices (-1 = absent), ``val`` (m, k)."""
 
@@ -46,9 +57,10 @@ class SparseVectors:
 
     def combine(self, coef: np.ndarray, rows) -> np.ndarray:
         """sum_j coef_j b_j over ``rows`` as a dense vector."""
-        out = np.zeros(self.n + 1)
-        np.add.at(out, self._pad_idx[rows].ravel(), (self.val[rows] * coef[:, None]).ravel())
-        return out[:self.n]
+        out = np.zeros(self.n)
+        _combine(self.idx, self.val, np.asarray(coef, dtype=float),
+                 np.asarray(rows, dtype=np.int64), out)
+        return out
 
     def dense(self, j: int) -> np.ndarray:
         return self.combine(np.ones(1), [j])
@@ -95,11 +107,15 @@ class LowRankSolve:
     def __call__(self, r: np.ndarray) -> np.ndarray:
         return self._correct(np.asarray(self.base(r), dtype=float))
 
-    def solve_sparse(self, dofs, values) -> np.ndarray:
+    def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
         if hasattr(self.base, "solve_sparse"):
             x = self.base.solve_sparse(dofs, values)
         else:
             b = np.zeros(self.vectors.n)
             np.add.at(b, dofs, values)
             x = np.asarray(self.base(b), dtype=float)
-        return self._correct(x)
+        x = self._correct(x)
+        if out is not None:
+            out[:] = x
+            return out
+        return x
