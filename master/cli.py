@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
 def console_main() -> None:
     """Console entry point. After runs that loaded pythonfmu FMUs into this process, exit with
     ``os._exit`` once everything is written: pythonfmu 0.7.0 can abort at interpreter shutdown
-    (design/fmi-toolchain.md, defect B5) and would turn a finished run into a crash."""
+    (docs/pythonfmu-notes.md, B5) and would turn a finished run into a crash."""
     code = main()
     if "fmpy.fmi2" in sys.modules:
         import os

@@ -10,7 +10,7 @@ interface unknowns are the contact forces; the fixed-point map is
 
     H(F) = law(z_p(t+h; F), z_w(t+h; F), v_p, v_w),   residual r = H(F) - F,
 
-and a converged implicit step reproduces the monolithic HHT step (design README section 3).
+and a converged implicit step reproduces the monolithic HHT step (thesis (3.16)).
 Runs stop the iteration at ``coupling_rtol`` (scenario) times the mean contact force.
 """
 

@@ -1,7 +1,7 @@
 """Loading and driving FMI 2.0 co-simulation FMUs through fmpy (``FMU2Slave``).
 
 - FMUs are extracted once per content hash into a fixed cache folder, so numba's on-disk cache
-  inside the bundled package stays warm across runs (design/fmi-toolchain.md section 7);
+  inside the bundled package stays warm across runs (docs/pythonfmu-notes.md);
 - every log message of an instance is captured (for error reports) and FMI call failures
   become :class:`FmuError` with the status and the instance's last messages;
 - interface variables are exchanged with one vector ``getReal``/``setReal`` call per FMU.
@@ -16,7 +16,7 @@ from ctypes import byref
 from pathlib import Path
 
 # numpy, scipy.sparse.linalg and numba are imported before any pythonfmu FMU is loaded: this
-# avoids the intermittent abort at exit measured in design/fmi-toolchain.md (B5).
+# avoids the intermittent abort at exit of docs/pythonfmu-notes.md (B5).
 import numpy as np
 import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import HHTSettings
 from pantocosim.master.contact import PenaltyContact
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.results import write_json

@@ -65,7 +65,7 @@ def frequencies(rigid, flex, stiff, fine):
         print(f" {100 * (fn[r] / ff[r] - 1):+.4f} % |", end="")
         print(f" {th[1]} |" if th[1] else " - |", end="")
         print(f" {th[0]} ({th[2]}) | {labels[r]} |")
-    print(f"\nfurther flexible modes: " + ", ".join(f"{f:.2f} Hz ({l})"
+    print("\nfurther flexible modes: " + ", ".join(f"{f:.2f} Hz ({l})"
                                                    for f, l in zip(ff[6:], labels[6:])))
     print(f"dofs: flexible {flex.n_dofs} ({flex.n_elements} elements), mesh x2 {fine.n_dofs}")
     return ff, phi, labels

@@ -1,6 +1,6 @@
 """Runs catenary-FMU checks in a separate process and prints one JSON line (test_fmu_catenary).
 
-Separate processes keep pythonfmu's process-exit defects (design/fmi-toolchain.md B5) and any
+Separate processes keep pythonfmu's process-exit defects (docs/pythonfmu-notes.md, B5) and any
 fatal FMU status away from the pytest process; the probe ends with ``os._exit``. It imports
 only numpy, scipy and fmpy (never pantocosim), so it also runs in a bare venv::
 

@@ -1,6 +1,6 @@
 """Runs FMU checks in a separate process and prints one JSON line (used by test_fmu_*.py).
 
-Separate processes keep pythonfmu's process-exit defects (design/fmi-toolchain.md B5) and any
+Separate processes keep pythonfmu's process-exit defects (docs/pythonfmu-notes.md, B5) and any
 fatal FMU status away from the pytest process; the probe ends with ``os._exit``.
 
     python fmu_probe.py CHECK FMU [JSON-ARGS]

@@ -8,13 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pantocosim.catenary.definition import DATA_DIR, load_catenary, parse_definition
+from pantocosim.catenary.definition import DATA_DIR, load_catenary
 from pantocosim.catenary.model import CatenaryModel
 from pantocosim.catenary.statics import (element_tensions, group_horizontal_tensions,
                                          solve_static)
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
-from pantocosim.core.params import load_toml
 from pantocosim.master.cli import main
 
 EN_TEXT = (DATA_DIR / "en50318.toml").read_text()
@@ -81,13 +80,13 @@ def test_equilibrium_and_tensions(en):
     H = group_horizontal_tensions(en.mesh, x)
     assert np.max(np.abs(H / en.mesh.group_tension - 1)) < 1e-9
     Te = element_tensions(S, x)
-    design = en.mesh.group_tension[S.cable_group]
+    design = en.mesh.group_tension[S.cables.group]
     assert np.max(np.abs(Te / design - 1)) < 0.005           # true tension, every element
     assert np.all(Te >= design * (1 - 1e-6))                 # >= horizontal component
     assert np.all(en.dropper_forces(en.q_static) > 0)
     # droppers keep the defined axial stiffness k = EA / l0 = 1e5 N/m at their final length
     db = en.mesh.dropper_bars
-    assert np.allclose(S.bar_EA[db] / S.bar_l0[db], 1.0e5, rtol=1e-12)
+    assert np.allclose(S.bars.EA[db] / S.bars.l0[db], 1.0e5, rtol=1e-12)
     # an independent static solve from the *initial guess* geometry with the found
     # dropper lengths and pre-tensions (droppers tension-only) lands on the same state
     res = solve_static(S, S.x_full[S.free])

@@ -3,7 +3,6 @@
 (design reference-data section 5), the last one on the shared HHT-alpha integrator."""
 
 import numpy as np
-import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 

@@ -2,14 +2,11 @@
 bad input, built-in penalty vs monolithic, SSP, third-party masters, bare venv (issue 5).
 
 Every FMU is loaded in a subprocess (tests/fmu_catenary_probe.py, the run_* scripts), never in
-the pytest process (pythonfmu defects B4/B5 in design/fmi-toolchain.md)."""
+the pytest process (pythonfmu B4/B5, docs/pythonfmu-notes.md)."""
 
-import csv
 import json
-import os
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 
 import numpy as np

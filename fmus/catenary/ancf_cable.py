@@ -58,16 +58,6 @@ def mass_matrix(mu: float, L: float) -> np.ndarray:
     return np.kron(m4, np.eye(3))
 
 
-def bending_matrix(EI: float, L: float) -> np.ndarray:
-    """Constant bending stiffness EI int S''^T S'' dchi = kron(k4, I3)."""
-    k4 = EI / L**3 * np.array([
-        [12.0, 6 * L, -12.0, 6 * L],
-        [6 * L, 4 * L * L, -6 * L, 2 * L * L],
-        [-12.0, -6 * L, 12.0, -6 * L],
-        [6 * L, 2 * L * L, -6 * L, 4 * L * L]])
-    return np.kron(k4, np.eye(3))
-
-
 def gravity_vector(mu: float, L: float, g: float) -> np.ndarray:
     """External weight -mu g int S^T e_z dchi (12 entries)."""
     f = np.zeros(12)

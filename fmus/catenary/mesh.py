@@ -71,9 +71,6 @@ class CatenaryMesh:
     definition: CatenaryDefinition | None = None
     messenger_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
-    def dof(self, node: int, k: int) -> int:
-        return int(self.node_dofs[node, k])
-
 
 def _stations(d: CatenaryDefinition) -> np.ndarray:
     xs = d.support_x

@@ -167,11 +167,6 @@ class Structure:
         """External weight on the free DOFs (the gravity vector, negative z)."""
         return self.f_weight_full[self.free]
 
-    # legacy names of the part arrays (tests and scripts read them)
-    bar_l0 = property(lambda self: self.bars.l0)
-    bar_EA = property(lambda self: self.bars.EA)
-    cable_group = property(lambda self: self.cables.group)
-
     # ------------------------------------------------------------------ forces
     def internal(self, x_full: np.ndarray, want_K: bool = True, tension_only: bool = True):
         """Elastic forces (full vector), tangent data on the pattern (or None) and the

@@ -3,7 +3,7 @@
 The one integrator of the project: it drives every pantograph model, the catenary, and the
 assembled monolithic system through :class:`pantocosim.core.model.SecondOrderModel`.
 
-Standard form (design README section 3; the thesis writes it with eta = -alpha in
+Standard form (the thesis writes it with eta = -alpha in
 (3.16)-(3.24) with inconsistent signs):
 
     f_inertia(q_{n+1}, a_{n+1}) + (1 + alpha) f_rest_{n+1} - alpha f_rest_n = 0,
@@ -343,6 +343,7 @@ class HHTIntegrator:
         refactorizations = 0
         e0 = None
         e_prev = None
+        dq_size = q_size = 0.0       # set by the first Newton update
         res_norm = np.inf
         for k in range(s.max_iterations + 1):
             a, v = _iterate_kinematics(q, q_p, v_p, c_a, c_v)

@@ -1,4 +1,4 @@
-"""The interface every dynamic subsystem offers to the integrator (design README section 3).
+"""The interface every dynamic subsystem offers to the integrator (docs/architecture.md).
 
 A model is a second-order system
 

@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation adapter for the catenary finite-element model.
 
-Port contract (design README section 4; public interface):
+Port contract (README.md, "The FMUs and their ports"; docs/third-party.md):
 
 parameters
   ``catenary`` (String, preset name or TOML path; relative paths are also looked up in the

@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation adapter for every pantograph model (one port contract).
 
-Ports (identical for all variants, design README section 4):
+Ports (identical for all variants; README.md, "The FMUs and their ports"):
   input  ``contact_force`` [N] >= 0: pushes the collector down;
   output ``contact_height`` [m] above the rail, ``contact_velocity`` [m/s].
 

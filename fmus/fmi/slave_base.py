@@ -1,6 +1,6 @@
 """Shared machinery of the project's pythonfmu slaves (thin adapters over model objects).
 
-Works around the pythonfmu 0.7.0 behaviour measured in design/fmi-toolchain.md:
+Works around the pythonfmu 0.7.0 behaviours of docs/pythonfmu-notes.md:
 - no exception may escape a callback (the wrapper turns it into fmi2Fatal and may crash): every
   callback is guarded; bad input is logged and reported as fmi2Discard from ``do_step``
   (pythonfmu offers no other non-fatal error status);

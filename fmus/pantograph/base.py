@@ -1,6 +1,7 @@
 """What every pantograph model shares: the port contract, uplift, ramp raising, friction law.
 
-Port contract (design README section 4), identical for every variant:
+Port contract (README.md, "The FMUs and their ports"; docs/third-party.md), identical for
+every variant:
   input  ``contact_force`` F [N] >= 0, pushes the collector down (and the wire up);
   output ``contact_height`` [m] above the rail and ``contact_velocity`` [m/s].
 
@@ -118,11 +119,6 @@ def smooth_friction(v_rel: float, f_r: float, k_t: float) -> tuple[float, float]
     force = f_r * (2.0 / math.pi) * math.atan(v_rel / k_t)
     dforce = f_r * (2.0 / math.pi) / (k_t + v_rel * v_rel / k_t)
     return force, dforce
-
-
-def one_way_factor(v_down_positive: float) -> float:
-    """1 while the mechanism moves down (damper active), 0 while it moves up."""
-    return 1.0 if v_down_positive >= 0.0 else 0.0
 
 
 class PantographModel(SecondOrderModel):

@@ -34,7 +34,6 @@ welded joints, none for grounded points).
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from numba import njit
@@ -222,8 +221,3 @@ def scatter_add(pg, pR, Fe, Ke, f, K, with_K):
                     for m in range(2):
                         K[gp + j, gr + m] += tmp[j, m]
     return 0
-
-
-def slope_angle(a: float, b: float) -> float:
-    """Angle of a slope vector (a, b) from the horizontal."""
-    return math.atan2(b, a)
