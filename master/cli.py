@@ -16,7 +16,7 @@ from pantocosim.core.errors import PantocosimError
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
 COMMANDS = ["run", "modal", "pantograph", "static", "modes", "pendulum", "build-fmus", "regress",
-            "bench"]
+            "bench", "validate"]
 
 
 def build_parser() -> argparse.ArgumentParser:

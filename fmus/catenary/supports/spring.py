@@ -1,6 +1,7 @@
 """``type = "spring"``: a vertical ground spring of ``stiffness`` [N/m] under the wire (y
-held; x too for the messenger), with a point ``mass`` [kg] on the contact wire. The spring's
-ground end is an unknown of the initial configuration: the wire sits at its design height."""
+held; x too for the messenger), with a point ``mass`` [kg] on the wire (a steady arm's or a
+cantilever's mass moving with it). The spring's ground end is an unknown of the initial
+configuration: the wire sits at its design height."""
 
 from __future__ import annotations
 
@@ -18,9 +19,6 @@ class SpringSupport(Support):
 
     @classmethod
     def from_table(cls, table, wire):
-        if wire == "messenger":
-            table.unknown_keys(["type", "stiffness"])
-            return cls(stiffness=table.number("stiffness", positive=True))
         table.unknown_keys(["type", "stiffness", "mass"])
         return cls(stiffness=table.number("stiffness", positive=True),
                    mass=table.number("mass", 0.0, nonnegative=True))
