@@ -48,6 +48,9 @@ from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 DEFAULT_SCENARIO = "dsa380-ave-300"
+#: closest two pantographs may be along the track [m]: a pantograph head is about 2 m long
+#: (two collector strips), so two heads closer than that would overlap
+MIN_SPACING_M = 2.0
 
 
 @dataclass
@@ -113,6 +116,19 @@ def scenario_path(name_or_path: str | Path | None) -> Path:
                          f"{', '.join(scenario_names())}) and not a file")
 
 
+def check_spacing(specs: list[PantographSpec], source: str) -> None:
+    """Pantographs must be at least :data:`MIN_SPACING_M` apart (two on one spot would press
+    the same point of the wire)."""
+    order = sorted(range(len(specs)), key=lambda i: specs[i].position_m)
+    for a, b in zip(order, order[1:]):
+        gap = specs[b].position_m - specs[a].position_m
+        if gap < MIN_SPACING_M:
+            raise ParameterError(f"pantographs[{b}].position_m", specs[b].position_m,
+                                 f"{gap:g} m from pantographs[{a}] (position_m = "
+                                 f"{specs[a].position_m:g}); pantographs must be at least "
+                                 f"{MIN_SPACING_M:g} m apart", source)
+
+
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     path = scenario_path(name_or_path)
     source = str(path)
@@ -128,23 +144,33 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         t.unknown_keys({"model", "fmu", "position_m", "start", "ramp", "options"})
         start = t.string("start", "static", choices=("static", "ramp"))
         ramp = None
+        position = t.number("position_m")
         if start == "ramp":
             r = t.sub("ramp")
             r.unknown_keys({"start_m", "length_m", "lowered_height"})
-            ramp = RampSpec(r.number("start_m"), r.number("length_m", nonnegative=True),
+            ramp = RampSpec(r.number("start_m"), r.number("length_m", positive=True),
                             r.number("lowered_height", positive=True))
+            if ramp.start_m < position:
+                raise ParameterError(f"pantographs[{i}].ramp.start_m", ramp.start_m,
+                                     f"behind the pantograph's start (position_m = "
+                                     f"{position:g}); the raising starts where the "
+                                     "pantograph is or further on", source)
         elif t.has("ramp"):
             raise ParameterError(f"pantographs[{i}].ramp", raw["ramp"],
                                  'only allowed with start = "ramp"', source)
         opts = raw.get("options", {})
         if not isinstance(opts, dict):
             raise ParameterError(f"pantographs[{i}].options", opts, "must be a table", source)
-        specs.append(PantographSpec(model=t.string("model"), position_m=t.number("position_m"),
+        specs.append(PantographSpec(model=t.string("model"), position_m=position,
                                     start=start, ramp=ramp,
                                     fmu=t.string("fmu") if t.has("fmu") else None,
                                     options=dict(opts)))
+    check_spacing(specs, source)
     analysis = root.sub("analysis")
     analysis.unknown_keys({"window_supports", "window_m"})
+    if analysis.has("window_supports") and analysis.has("window_m"):
+        raise ParameterError("analysis.window_m", analysis.data["window_m"], "give either "
+                             "analysis.window_supports or analysis.window_m, not both", source)
     window_supports = window_m = None
     if analysis.has("window_supports"):
         ws = analysis._get("window_supports", None, True)

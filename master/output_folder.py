@@ -1,0 +1,85 @@
+"""Output folders that never lose earlier results.
+
+A command writes into a fresh folder beside its ``--out`` (``.NAME.XXXX.partial``) and moves
+the files into ``--out`` when it is done, or when it stops after computing something (an
+interrupt, a solver failure: the summary then says where it stopped). A run that fails before
+computing anything, or cannot write its files (a full disk), leaves ``--out`` as it was. Only
+the files a command writes are replaced; other files in ``--out`` are never touched, so
+``--out .`` is safe.
+
+The folder is checked when the command starts, before any long set-up: ``--out`` naming a
+file, or a place that cannot be created or written, is an error naming ``--out``.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+from pantocosim.core.errors import OutputError
+
+
+def reason(exc: OSError) -> str:
+    """The system's reason of an OSError, without the path (the message names it)."""
+    return exc.strerror or str(exc) or type(exc).__name__
+
+
+@contextmanager
+def writing(field: str, path):
+    """Turn an OSError while writing ``path`` into an :class:`OutputError` naming it."""
+    try:
+        yield
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(field, path, f"cannot be written: {reason(exc)}") from None
+
+
+class OutputFolder:
+    """``--out`` of a command, written through a fresh staging folder beside it.
+
+    ``known`` are the file names the command owns in ``--out``: at :meth:`commit` those the
+    staging folder does not hold are removed (a plot of an earlier run would not match the new
+    summary); other files are left alone.
+    """
+
+    def __init__(self, out, known=(), field: str = "--out"):
+        self.out = Path(out)
+        self.field = field
+        self.known = tuple(known)
+        if str(out) == "":
+            raise OutputError(field, out, "empty folder name")
+        if self.out.exists() and not self.out.is_dir():
+            raise OutputError(field, out, "is a file, not a folder; give a folder name")
+        parent = self.out.absolute().parent
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name or 'out'}.",
+                                              suffix=".partial", dir=parent))
+        except OSError as exc:
+            raise OutputError(field, out, f"cannot create the folder: {reason(exc)}") from None
+
+    def commit(self) -> Path:
+        """Move the staged files into ``--out`` (each replaced whole) and remove the staging
+        folder; earlier files of ours that this run did not write are removed."""
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+            staged = {p.name for p in self.path.iterdir()}
+            for name in self.known:
+                old = self.out / name
+                if name not in staged and old.is_file():
+                    old.unlink()
+            for name in sorted(staged, key=lambda n: n == "summary.json"):  # summary last
+                os.replace(self.path / name, self.out / name)
+            self.path.rmdir()
+        except OSError as exc:
+            raise OutputError(self.field, self.out, f"cannot move the results into place: "
+                              f"{reason(exc)} (they are in {self.path})") from None
+        return self.out
+
+    def discard(self) -> None:
+        """Remove the staging folder; ``--out`` stays as it was."""
+        shutil.rmtree(self.path, ignore_errors=True)
