@@ -83,3 +83,36 @@ class OutputFolder:
     def discard(self) -> None:
         """Remove the staging folder; ``--out`` stays as it was."""
         shutil.rmtree(self.path, ignore_errors=True)
+
+
+def check_file_target(field: str, path) -> Path:
+    """A file a command will write (``--plot FILE.png``): refused at once if it is a folder,
+    has a suffix matplotlib cannot write, or its folder cannot take a new file."""
+    from matplotlib.figure import Figure
+
+    p = Path(path)
+    kinds = Figure().canvas.get_supported_filetypes()
+    if str(path) == "" or p.is_dir():
+        raise OutputError(field, path, "is a folder; give a file name such as plot.png")
+    if p.suffix[1:].lower() not in kinds:
+        raise OutputError(field, path, f"unknown picture format {p.suffix or '(none)'!r}; "
+                          f"give a file name ending in .png, .pdf or .svg")
+    try:
+        with tempfile.NamedTemporaryFile(dir=p.absolute().parent, prefix=f".{p.name}."):
+            pass
+    except OSError as exc:
+        raise OutputError(field, path, f"cannot be written there: {reason(exc)}") from None
+    return p
+
+
+def save_figure(fig, field: str, path) -> None:
+    """``fig.savefig(path)`` through a temporary file beside it (an earlier file is replaced
+    whole or not at all); errors name ``field``."""
+    p = Path(path)
+    tmp = p.with_name(f".{p.name}.partial")
+    try:
+        with writing(field, path):
+            fig.savefig(tmp, dpi=120, format=p.suffix[1:].lower())
+            os.replace(tmp, p)
+    finally:
+        tmp.unlink(missing_ok=True)

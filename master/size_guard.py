@@ -96,3 +96,21 @@ def check_limit_option(name: str, value) -> None:
     if value is not None and (isinstance(value, bool) or not isinstance(value, int)
                               or value < 1):
         raise ParameterError(name, value, "must be a positive integer")
+
+
+def check_cli_catenary(catenary: str, element_size: float | None,
+                       max_dofs: int | None) -> int:
+    """Size guard of a command that builds ``catenary`` (``static``, ``modes``), with its
+    ``--element-size`` and ``--max-dofs``."""
+    import dataclasses
+
+    from pantocosim.catenary.definition import load_catenary
+
+    check_limit_option("--max-dofs", max_dofs)
+    definition = load_catenary(catenary)
+    if element_size is not None:
+        definition = dataclasses.replace(definition, element_size=element_size)
+        return check_catenary_size(definition, "--element-size", element_size, None,
+                                   max_dofs)
+    (field, value), source = culprit(definition), definition.source
+    return check_catenary_size(definition, field, value, source, max_dofs)

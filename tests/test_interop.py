@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from recipes import read_csv, run_recipe
+from recipes import read_csv, require_ecospy, run_recipe
 
 #: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
 pytestmark = pytest.mark.slow
@@ -208,6 +208,21 @@ def test_pantograph_swap_in_libcosim_is_a_file_swap(short_package, fmus, model, 
     # start laws are secants: a dropper that slackens under the static force leaves the
     # settled catenary within a few newtons of the monolithic start)
     assert c["contact_force_1"][0] == pytest.approx(prep.static_forces[0], rel=0.03)
+    assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=2e-3)
+    assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
+
+
+@pytest.mark.slow
+def test_ecos_runs_the_short_ssp(short_package, tmp_path):
+    """ecos (ecospy) runs the short scenario's SSP as shipped: the monolithic statistics.
+    Skipped where ecospy or its libtbb.so.12 is missing."""
+    require_ecospy()
+    out = tmp_path / "ecos.csv"
+    stats, _ = run_recipe("ecos", "--ssp", short_package / "ssp-short.ssp", "--out", out)
+    c = read_csv(out)
+    assert stats["master"] == "ecos" and np.all(np.isfinite(c["contact_force_1"]))
+    prep, mono = monolithic(SHORT)
+    ref = mono.statistics()[0]
     assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=2e-3)
     assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
 

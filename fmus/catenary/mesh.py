@@ -114,10 +114,12 @@ def station_count(d: CatenaryDefinition) -> tuple[int, int]:
 
 def estimate_dofs(d: CatenaryDefinition) -> int:
     """DOFs of the model of ``d`` without building it: 6 per node, a contact-wire and a
-    messenger node at every station, a stitch-wire node where there is one (within 1 % of
-    the built model's count; the supports add a few)."""
+    messenger node at every station, a stitch-wire node where there is one (its two ends
+    share the messenger's position: 3 each), less the anchored positions of both wires at
+    the line ends (within 1 % of the built model's count; the masts' supports add a few)."""
     stations, stitch = station_count(d)
-    return 12 * stations + 6 * stitch
+    ends = 2 * (d.n_spans - 1) if d.stitch is not None else 0
+    return 12 * stations + 6 * stitch - 3 * ends - 12
 
 
 # ==================================================================== geometry

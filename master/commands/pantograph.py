@@ -26,18 +26,19 @@ def add_parser(sub):
     return p
 
 
-def check_times(duration: float, dt: float, alpha: float, max_steps: int | None) -> int:
+def check_times(duration: float, dt: float, alpha: float, max_steps: int | None,
+                dt_name: str = "--dt") -> int:
     """The number of steps of ``--duration`` in steps of ``--dt`` (checked)."""
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
     from pantocosim.master.size_guard import check_limit_option, check_steps
 
     check_number("--duration", duration, positive=True)
-    check_number("--dt", dt, positive=True)
+    check_number(dt_name, dt, positive=True)
     check_number("--alpha", alpha, minimum=-1.0 / 3.0, maximum=0.0)
     check_limit_option("--max-steps", max_steps)
     if dt > duration:
-        raise ParameterError("--dt", dt, f"longer than --duration = {duration:g} s: the run "
+        raise ParameterError(dt_name, dt, f"longer than --duration = {duration:g} s: the run "
                              "would have no step")
     n_steps = int(round(duration / dt))
     check_steps(n_steps, "--duration", duration, None, max_steps)
