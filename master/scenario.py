@@ -9,14 +9,21 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
 
     [[pantographs]]
     model = "dsa380-rigid"         # pantograph preset or parameter file
-    fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings
-    position_m = 32.0              # x of the contact point at t = 0
+    fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings: a
+                                   # pantocosim FMU of this model (checked); a model given by
+                                   # a parameter file runs in any pantograph FMU (default
+                                   # dist/fmus/dsa380-rigid.fmu), which gets the file
+    position_m = 32.0              # x of the contact point at t = 0 (pantographs at least
+                                   # MIN_SPACING_M apart, before the analysis window)
     start = "static"               # "static" (in contact, in equilibrium) or "ramp"
-    ramp = { start_m = 10.0, length_m = 20.0, lowered_height = 5.0 }   # start = "ramp"
+    ramp = { start_m = 32.0, length_m = 20.0, lowered_height = 5.0 }   # start = "ramp":
+                                   # from position_m on, ending before the analysis window,
+                                   # lowered below the contact wire
 
     [analysis]
-    window_supports = [5, 6]       # analyse between these supports (0 = first), or
-    # window_m = [320.0, 384.0]    # an explicit x range, applied to each pantograph's track
+    window_supports = [5, 6]       # analyse between these supports (0 = first), or (not
+    # window_m = [320.0, 384.0]    # both) an explicit x range, applied to each pantograph's
+                                   # track
 
     [simulation]
     dt = 0.001                     # time step [s]

@@ -36,6 +36,8 @@ class StandaloneResult:
     contact_velocity: np.ndarray
     q: np.ndarray
     iterations: np.ndarray
+    #: an :class:`~pantocosim.core.errors.Interrupted` naming where a stopped run stopped
+    stopped: Exception | None = None
 
     def columns(self, dof_names) -> dict:
         cols = {"time": self.time, "contact_force": self.contact_force,
@@ -47,11 +49,13 @@ class StandaloneResult:
 
 def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
                         duration: float, dt: float = 1e-3, alpha: float = -0.05,
-                        q0=None, linear: bool = False) -> StandaloneResult:
+                        q0=None, linear: bool = False, stop=None) -> StandaloneResult:
     """Integrate the pantograph from static equilibrium under F(0) at its working height.
 
     With ``linear=True`` the linearised model (M, C, K about that equilibrium, thesis 2.1.2)
-    is integrated instead, driven by F(t) - F(0).
+    is integrated instead, driven by F(t) - F(0). A ``stop`` request
+    (:class:`~pantocosim.master.interrupt.StopRequest`) ends the run after the step in flight
+    (the result's ``stopped`` says where).
     """
     if not (duration > 0 and dt > 0):
         raise ParameterError("duration", duration, "duration and time step must be > 0")
@@ -87,4 +91,10 @@ def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
         else:
             heights[i] = model.contact_height(integ.q)
             vels[i] = model.contact_velocity(integ.q, integ.v)
+        if stop is not None and stop.requested and i < n - 1:   # Ctrl-C: keep steps 0..i
+            from pantocosim.master.interrupt import interrupted_at
+
+            k = i + 1
+            return StandaloneResult(time[:k], forces[:k], heights[:k], vels[:k], qs[:k],
+                                    iters[:k], stopped=interrupted_at(time[i], i, n_steps))
     return StandaloneResult(time, forces, heights, vels, qs, iters)

@@ -599,6 +599,20 @@ def test_ctrl_c_in_other_commands_is_one_line(tmp_path):
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, out + err
     assert error_lines(err) == ["pantocosim static: interrupted (Ctrl-C)"]
+    # a stand-alone pantograph run keeps the steps it made
+    proc = _child(PAN + ["--duration", "100", "--out", "p"], tmp_path)
+    t0 = time.perf_counter()
+    while not list(tmp_path.glob(".p.*.partial")) and time.perf_counter() - t0 < 60:
+        time.sleep(0.05)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, out + err
+    (line,) = error_lines(err)
+    assert "interrupted (Ctrl-C) at t = " in line and "en50318-2mass.csv" in line
+    rows = (tmp_path / "p" / "en50318-2mass.csv").read_text().splitlines()
+    step = int(line.split("after step ")[1].split()[0])
+    assert len(rows) == step + 2 and 0 < step < 100_000
 
 
 # ----------------------------------------------------------------------------- silent results

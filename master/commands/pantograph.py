@@ -46,6 +46,8 @@ def check_times(duration: float, dt: float, alpha: float, max_steps: int | None,
 
 
 def run(args) -> int:
+    from pantocosim.core.errors import Interrupted
+    from pantocosim.master.interrupt import stop_on_interrupt
     from pantocosim.master.output_folder import OutputFolder
     from pantocosim.master.standalone import force_expression, simulate_pantograph
     from pantocosim.pantograph.presets import load_pantograph
@@ -64,8 +66,11 @@ def run(args) -> int:
     stem = f"{model.name}{'-linear' if args.linear else ''}"
     folder = OutputFolder(args.out, known=[f"{stem}.csv", f"{stem}.png"])
     try:
-        res = simulate_pantograph(model, force, args.duration, args.dt, args.alpha,
-                                  linear=args.linear)
+        with stop_on_interrupt() as stop:
+            res = simulate_pantograph(model, force, args.duration, args.dt, args.alpha,
+                                      linear=args.linear, stop=stop)
+        if res.stopped is not None and len(res.time) < 2:
+            raise Interrupted(f"{res.stopped}: nothing written")
         csv, png = write_outputs(folder.path, stem, model, res, args.force)
         folder.commit()
     except BaseException:
@@ -77,6 +82,8 @@ def run(args) -> int:
     print(f"contact height: start {h[0]:.5f} m, min {h.min():.5f} m, max {h.max():.5f} m")
     out = Path(args.out)
     print(f"wrote {out / csv.name} and {out / png.name}")
+    if res.stopped is not None:
+        raise Interrupted(f"{res.stopped}; the results so far are in {out / csv.name}")
     return 0
 
 
