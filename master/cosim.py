@@ -144,10 +144,9 @@ def in_process_subsystems(prep: Prepared):
 
 def line_supports(scenario) -> int:
     """Number of supports of the scenario's line (its catenary, its ``spans``)."""
-    from pantocosim.catenary.definition import load_catenary
+    from pantocosim.master.scenario import scenario_catenary
 
-    definition = load_catenary(scenario.catenary)
-    return (scenario.spans or definition.n_spans) + 1
+    return (scenario.spans or scenario_catenary(scenario).n_spans) + 1
 
 
 def fmu_paths(prep, build: bool = True):

@@ -179,12 +179,12 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     """Validate ``scenario`` and build the models and the static start; the size guard
     (:mod:`~pantocosim.master.size_guard`, limits ``max_dofs`` and ``max_steps``) runs before
     anything is built."""
-    from pantocosim.catenary.definition import load_catenary
     from pantocosim.catenary.models import law_model, make_catenary
+    from pantocosim.master.scenario import scenario_catenary
 
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     src = sc.source
-    base = load_catenary(sc.catenary)
+    base = scenario_catenary(sc)
     definition = base
     if sc.spans:
         from pantocosim.catenary.definition import with_spans

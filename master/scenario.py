@@ -168,10 +168,12 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         opts = raw.get("options", {})
         if not isinstance(opts, dict):
             raise ParameterError(f"pantographs[{i}].options", opts, "must be a table", source)
+        fmu = t.string("fmu") if t.has("fmu") else None
+        if fmu is not None and not fmu.strip():
+            raise ParameterError(f"pantographs[{i}].fmu", fmu, "empty; give an .fmu file or "
+                                 "leave the field out (default: the model's FMU)", source)
         specs.append(PantographSpec(model=t.string("model"), position_m=position,
-                                    start=start, ramp=ramp,
-                                    fmu=t.string("fmu") if t.has("fmu") else None,
-                                    options=dict(opts)))
+                                    start=start, ramp=ramp, fmu=fmu, options=dict(opts)))
     check_spacing(specs, source)
     analysis = root.sub("analysis")
     analysis.unknown_keys({"window_supports", "window_m"})
@@ -217,3 +219,16 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))
     return sc
+
+
+def scenario_catenary(sc: Scenario):
+    """The catenary definition of ``sc`` (without its ``spans``); an unknown name is an error
+    of the scenario's field ``catenary``."""
+    from pantocosim.catenary.definition import load_catenary
+
+    try:
+        return load_catenary(sc.catenary)
+    except ParameterError as exc:
+        if exc.field != "catenary" or exc.source:
+            raise
+        raise ParameterError("catenary", exc.value, exc.reason, sc.source) from None

@@ -71,8 +71,9 @@ def run(args) -> int:
                                       linear=args.linear, stop=stop)
         if res.stopped is not None and len(res.time) < 2:
             raise Interrupted(f"{res.stopped}: nothing written")
-        csv, png = write_outputs(folder.path, stem, model, res, args.force)
-        folder.commit()
+        with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
+            csv, png = write_outputs(folder.path, stem, model, res, args.force)
+            folder.commit()
     except BaseException:
         folder.discard()
         raise
@@ -84,6 +85,9 @@ def run(args) -> int:
     print(f"wrote {out / csv.name} and {out / png.name}")
     if res.stopped is not None:
         raise Interrupted(f"{res.stopped}; the results so far are in {out / csv.name}")
+    if late.requested:
+        raise Interrupted(f"interrupted (Ctrl-C) while the results were written: they are "
+                          f"complete in {out}")
     return 0
 
 

@@ -99,6 +99,7 @@ def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
 
 def run(args) -> int:
     from pantocosim.core.errors import Interrupted, OutputError, PantocosimError
+    from pantocosim.master.interrupt import stop_on_interrupt
     from pantocosim.master.output_folder import OutputFolder
     from pantocosim.master.run import RESULT_FILES, finish
     from pantocosim.master.scenario import load_scenario
@@ -115,18 +116,23 @@ def run(args) -> int:
         result = simulate(args, scenario, coupling, folder.path)
         if len(result.columns["time"]) < 2 or isinstance(result.error, OutputError):
             raise result.error   # nothing computed (the set-up failed), or a full disk
-        summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
-        folder.commit()
+        with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
+            summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
+            folder.commit()
     except OutputError as exc:
         folder.discard()
         if exc.field == "--out":
             raise
         raise OutputError("--out", out, f"{Path(exc.path).name} {exc.reason}; nothing was "
                           f"moved into {out}: the results there are as they were") from None
-    except Interrupted as exc:
+    except Interrupted:
         folder.discard()
-        raise Interrupted(f"{exc} (during the set-up): nothing written, {out} is as it "
-                          "was") from None
+        raise Interrupted(f"interrupted (Ctrl-C) during the set-up: nothing written, {out} is "
+                          "as it was") from None
+    except KeyboardInterrupt:   # a Ctrl-C before the time loop (loading, static start)
+        folder.discard()
+        raise Interrupted(f"interrupted (Ctrl-C) during the set-up: nothing written, {out} is "
+                          "as it was") from None
     except BaseException:
         folder.discard()
         raise
@@ -139,6 +145,9 @@ def run(args) -> int:
                           "says where the run stopped)")
     if result.error is not None:
         raise PantocosimError(f"run stopped: {result.error} (results so far kept in {out})")
+    if late.requested:
+        raise Interrupted(f"interrupted (Ctrl-C) while the results were written: they are "
+                          f"complete in {out}")
     return 0
 
 
