@@ -76,13 +76,16 @@ class OutputFolder:
                 os.replace(self.path / name, self.out / name)
             self.path.rmdir()
         except OSError as exc:
+            self._kept = True
             raise OutputError(self.field, self.out, f"cannot move the results into place: "
                               f"{reason(exc)} (they are in {self.path})") from None
         return self.out
 
     def discard(self) -> None:
-        """Remove the staging folder; ``--out`` stays as it was."""
-        shutil.rmtree(self.path, ignore_errors=True)
+        """Remove the staging folder; ``--out`` stays as it was. After a failed
+        :meth:`commit` the staging folder is kept (the error names it)."""
+        if not getattr(self, "_kept", False):
+            shutil.rmtree(self.path, ignore_errors=True)
 
 
 def check_file_target(field: str, path) -> Path:

@@ -505,6 +505,40 @@ def test_second_good_run_replaces_the_files_it_owns(tmp_path, capsys, good_run):
     assert not leftovers(tmp_path)
 
 
+def test_output_folder_commit_and_discard(tmp_path, monkeypatch):
+    """Staged files replace ours whole; a failed move keeps the staging folder (named in the
+    error); a discard leaves --out as it was."""
+    from pantocosim.core.errors import OutputError
+    from pantocosim.master.output_folder import OutputFolder
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "a.csv").write_text("old a\n")
+    (out / "b.png").write_text("old b\n")
+    (out / "mine.txt").write_text("mine\n")
+    f = OutputFolder(out, known=["a.csv", "b.png"])
+    (f.path / "a.csv").write_text("new a\n")
+    f.discard()
+    assert not f.path.exists() and (out / "a.csv").read_text() == "old a\n"
+    f = OutputFolder(out, known=["a.csv", "b.png"])
+    (f.path / "a.csv").write_text("new a\n")
+    f.commit()
+    assert sorted(p.name for p in out.iterdir()) == ["a.csv", "mine.txt"]
+    assert (out / "a.csv").read_text() == "new a\n" and not f.path.exists()
+    f = OutputFolder(out, known=["a.csv"])
+    (f.path / "a.csv").write_text("newer a\n")
+
+    def refuse(src, dst):
+        raise OSError(errno.EXDEV, os.strerror(errno.EXDEV))
+
+    monkeypatch.setattr(os, "replace", refuse)
+    with pytest.raises(OutputError, match=str(f.path)):
+        f.commit()
+    f.discard()
+    assert (f.path / "a.csv").read_text() == "newer a\n"
+    assert (out / "a.csv").read_text() == "new a\n"
+
+
 # ----------------------------------------------------------------------------- interrupts
 def _child(argv, cwd):
     """The command in a child process that takes SIGINT as a terminal's Ctrl-C does."""
@@ -531,8 +565,8 @@ def _interrupt_when_stepping(proc, folder: Path, limit: float = 300):
 
 def _long_scenario(tmp_path) -> Path:
     sc = tmp_path / "long.toml"
-    sc.write_text(edited(SCENARIO, ("spans = 4", "spans = 10"),
-                         ("window_m = [35.0, 60.0]", "window_m = [240.0, 360.0]")))
+    sc.write_text(edited(SCENARIO, ("spans = 4", "spans = 6"),
+                         ("window_m = [35.0, 60.0]", "window_m = [150.0, 250.0]")))
     return sc
 
 
@@ -583,6 +617,7 @@ def test_ctrl_c_during_the_set_up_keeps_earlier_results(tmp_path, good_run):
     t0 = time.perf_counter()
     while not list(tmp_path.glob(".out.*.partial")) and time.perf_counter() - t0 < 60:
         time.sleep(0.05)
+    time.sleep(0.5)
     proc.send_signal(signal.SIGINT)          # during the set-up (the static start)
     stdout, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, stdout + err

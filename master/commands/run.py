@@ -111,8 +111,9 @@ def run(args) -> int:
                           args.modal_cutoff_hz)
     coupling = "jacobi" if args.coupling == "explicit" else args.coupling
     out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
-    folder = OutputFolder(out, known=RESULT_FILES)
+    folder = None
     try:
+        folder = OutputFolder(out, known=RESULT_FILES)
         result = simulate(args, scenario, coupling, folder.path)
         if len(result.columns["time"]) < 2 or isinstance(result.error, OutputError):
             raise result.error   # nothing computed (the set-up failed), or a full disk
@@ -120,21 +121,21 @@ def run(args) -> int:
             summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
             folder.commit()
     except OutputError as exc:
-        folder.discard()
-        if exc.field == "--out":
+        if folder is None or exc.field == "--out":   # --out itself, or moving into place
+            if folder is not None:
+                folder.discard()
             raise
+        folder.discard()
         raise OutputError("--out", out, f"{Path(exc.path).name} {exc.reason}; nothing was "
                           f"moved into {out}: the results there are as they were") from None
-    except Interrupted:
-        folder.discard()
-        raise Interrupted(f"interrupted (Ctrl-C) during the set-up: nothing written, {out} is "
-                          "as it was") from None
-    except KeyboardInterrupt:   # a Ctrl-C before the time loop (loading, static start)
-        folder.discard()
+    except (Interrupted, KeyboardInterrupt):   # before the time loop (loading, static start)
+        if folder is not None:
+            folder.discard()
         raise Interrupted(f"interrupted (Ctrl-C) during the set-up: nothing written, {out} is "
                           "as it was") from None
     except BaseException:
-        folder.discard()
+        if folder is not None:
+            folder.discard()
         raise
     if args.json:
         print(json.dumps(summary, indent=2))
