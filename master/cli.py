@@ -1,8 +1,10 @@
 """The ``pantocosim`` command line.
 
 Each subcommand lives in ``pantocosim.master.commands.<name>`` and exposes
-``add_parser(subparsers)`` and ``run(args) -> int``. Errors the user can fix (bad parameter,
-unknown preset, non-convergence) are printed as one clear line and exit with status 2.
+``add_parser(subparsers)`` and ``run(args) -> int``. Errors the user can fix (bad parameter or
+flag, unknown preset, non-convergence, an output place that cannot be written) are printed as
+one clear line and exit with status 2; Ctrl-C prints one line and exits with status 130 (a
+run keeps what it computed, :mod:`pantocosim.master.interrupt`).
 """
 
 from __future__ import annotations
@@ -12,7 +14,20 @@ import importlib
 import sys
 
 from pantocosim import __version__
-from pantocosim.core.errors import PantocosimError
+from pantocosim.core.errors import Interrupted, PantocosimError
+
+#: exit status of an interrupted command (128 + SIGINT, as shells report it)
+EXIT_INTERRUPTED = 130
+EXIT_USER_ERROR = 2
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``pantocosim run: error: argument --coupling: invalid
+    choice: 'x' (choose from ...)``, exit status 2 (the usage is in ``--help``)."""
+
+    def error(self, message):
+        self.exit(EXIT_USER_ERROR, f"{self.prog}: error: {message} (see {self.prog} "
+                  "--help)\n")
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
 COMMANDS = ["run", "modal", "pantograph", "static", "modes", "pendulum", "build-fmus", "regress",
@@ -20,7 +35,7 @@ COMMANDS = ["run", "modal", "pantograph", "static", "modes", "pendulum", "build-
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="pantocosim",
         description="Pantograph-catenary dynamic interaction with FMI 2.0 co-simulation.")
     parser.add_argument("--version", action="version", version=f"pantocosim {__version__}")
@@ -43,18 +58,50 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "_run", None):
         parser.print_help()
         return 1
+    prefix = f"pantocosim {args.command}"
     try:
         return int(args._run(args) or 0)
+    except Interrupted as exc:
+        print(f"{prefix}: {one_line(exc)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except KeyboardInterrupt:
+        print(f"{prefix}: interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except PantocosimError as exc:
-        print(f"pantocosim {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"{prefix}: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except MemoryError:
+        print(f"{prefix}: error: out of memory (the size guard's estimate was too low: "
+              "use a smaller model or a shorter run)", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except BrokenPipeError:
+        raise
+    except OSError as exc:   # a file the user named cannot be read or written
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"{prefix}: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_USER_ERROR
+
+
+def one_line(exc: Exception) -> str:
+    """The message of ``exc`` on one line."""
+    return " ".join(str(exc).split())
 
 
 def console_main() -> None:
     """Console entry point. After runs that loaded pythonfmu FMUs into this process, exit with
     ``os._exit`` once everything is written: pythonfmu 0.7.0 can abort at interpreter shutdown
     (docs/pythonfmu-notes.md, B5) and would turn a finished run into a crash."""
-    code = main()
+    try:
+        code = main()
+    except BrokenPipeError:
+        # the reader of our output went away (``pantocosim static x | head``): stop quietly
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 141   # 128 + SIGPIPE, as shells report it
+    except KeyboardInterrupt:   # before a command started (loading the modules)
+        print("pantocosim: interrupted (Ctrl-C)", file=sys.stderr)
+        code = EXIT_INTERRUPTED
     if "fmpy.fmi2" in sys.modules:
         import os
 

@@ -13,13 +13,17 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.errors import ParameterError, PantocosimError
+from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.master.coupling import Coupler, CouplingSettings
+from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run import Prepared, RunResult, column_names, progress_bar
 
-MAX_SUPPORTS = 64
+#: pantograph options a pantocosim pantograph FMU takes as parameters: the master sets them
+#: from the scenario's model, so the FMU runs the same pantograph
+PANTOGRAPH_OPTIONS = ("static_force", "aero_c1", "aero_c2", "friction_force",
+                      "friction_smoothing", "one_way_damper")
 
 
 # ---------------------------------------------------------------------- subsystems
@@ -138,13 +142,26 @@ def in_process_subsystems(prep: Prepared):
     return csub, psubs
 
 
-def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
-    """FMU files of the scenario: a pantograph's ``fmu`` (relative to the working folder, else
-    to the scenario file), by default ``dist/fmus/<model>.fmu`` of the working folder; the
-    default ones are built if missing or stale."""
-    from pantocosim.master.fmu_build import default_out, ensure_fmus
+def line_supports(scenario) -> int:
+    """Number of supports of the scenario's line (its catenary, its ``spans``)."""
+    from pantocosim.master.scenario import scenario_catenary
 
-    sc = prep.scenario
+    return (scenario.spans or scenario_catenary(scenario).n_spans) + 1
+
+
+def fmu_paths(prep, build: bool = True):
+    """The checked FMU files of the scenario (:class:`~pantocosim.master.fmu_check.FmuPlan`)
+    of ``prep`` (a :class:`Prepared` or a scenario):
+    a pantograph's ``fmu`` (relative to the working folder, else to the scenario file), by
+    default ``dist/fmus/<model>.fmu`` of the working folder (a model given by a parameter
+    file: ``dist/fmus/<PARAMETER_FILE_FMU>.fmu``, which gets the file); the default ones are
+    built if missing or stale."""
+    from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus
+    from pantocosim.master.fmu_check import check_fmus
+    from pantocosim.pantograph.presets import PRESETS
+
+    sc = prep.scenario if isinstance(prep, Prepared) else prep
+    n_supports = len(prep.support_x) if isinstance(prep, Prepared) else line_supports(sc)
     base = Path(sc.source).resolve().parent
     dist = default_out()
     pans = []
@@ -154,28 +171,23 @@ def fmu_paths(prep: Prepared, build: bool = True) -> tuple[Path, list[Path]]:
             if not p.is_absolute() and not p.exists() and (base / p).exists():
                 p = base / p
         else:
-            p = dist / f"{spec.model}.fmu"
+            p = dist / f"{spec.model if spec.model in PRESETS else PARAMETER_FILE_FMU}.fmu"
         pans.append(p)
     cat = dist / "catenary.fmu"
     if build:
         ensure_fmus(pans + [cat], dist)
-    missing = [p for p in pans + [cat] if not p.exists()]
-    if missing:
-        raise ParameterError("fmu", str(missing[0]), "FMU file not found (run "
-                             "`pantocosim build-fmus`)", sc.source)
-    return cat, pans
+    return check_fmus(sc, n_supports, cat, pans)
 
 
-def fmu_subsystems(prep: Prepared, instances: list):
-    """Instantiate and initialise the FMUs of the scenario in the static start."""
+def fmu_subsystems(prep: Prepared, instances: list, plan=None):
+    """Instantiate and initialise the FMUs of the scenario (``plan``: checked FMU files,
+    default :func:`fmu_paths`) in the static start."""
     from pantocosim.master.fmu_runtime import FmuInstance
 
     sc = prep.scenario
-    cat_path, pan_paths = fmu_paths(prep)
+    plan = plan or fmu_paths(prep)
     n_p = len(prep.pantographs)
-    if n_p > 4:
-        raise ParameterError("pantographs", n_p, "the catenary FMU takes at most 4", sc.source)
-    cat_fmu = FmuInstance(cat_path, "catenary")
+    cat_fmu = FmuInstance(plan.catenary, "catenary")
     instances.append(cat_fmu)
     params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh, "n_pantographs": n_p,
               "hht_alpha": sc.alpha, "contact_mode": 0, "newton_rtol": sc.newton_rtol}
@@ -190,18 +202,18 @@ def fmu_subsystems(prep: Prepared, instances: list):
         params[f"position_{k}"] = spec.position_m
         params[f"static_force_{k}"] = float(prep.static_forces[k - 1])
     cat_fmu.initialize(params)
-    n_sup = min(len(prep.support_x), MAX_SUPPORTS)
-    csub = FmuCatenary(cat_fmu, n_p, n_sup)
+    csub = FmuCatenary(cat_fmu, n_p, len(prep.support_x))
     psubs = []
-    z_w0, _ = csub.outputs()
-    for k, (spec, pan, path) in enumerate(zip(sc.pantographs, prep.pantographs, pan_paths)):
+    for k, (spec, pan, path) in enumerate(zip(sc.pantographs, prep.pantographs,
+                                              plan.pantographs)):
         fmu = FmuInstance(path, f"pantograph_{k + 1}")
         instances.append(fmu)
         F0 = pan.options.mean_uplift
         p = {"speed_kmh": sc.speed_kmh, "hht_alpha": sc.alpha}
-        for key, value in spec.options.items():
-            if fmu.has(key):
-                p[key] = value
+        if plan.parameter_files[k]:
+            p["parameter_file"] = plan.parameter_files[k]
+        # the options of the scenario's model (its file, the scenario's overrides)
+        p.update({key: getattr(pan.options, key) for key in PANTOGRAPH_OPTIONS})
         if spec.start == "static":
             Fs = float(prep.static_forces[k])
             p.update(initial_contact_force=Fs, start_mode=0,
@@ -218,6 +230,11 @@ def fmu_subsystems(prep: Prepared, instances: list):
 
 
 # ---------------------------------------------------------------------- the run
+def _interrupted(rec: Recorder, prep: Prepared) -> Interrupted:
+    t = rec.columns()["time"]
+    return interrupted_at(t[-1] if len(t) else 0.0, max(len(t) - 1, 0), prep.n_steps)
+
+
 def coupling_tolerance(prep: Prepared) -> float:
     """Interface residual tolerance [N] of the implicit coupling: the scenario's
     ``coupling_rtol`` times the largest mean contact force of its pantographs."""
@@ -228,10 +245,11 @@ def coupling_tolerance(prep: Prepared) -> float:
 def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
               accelerator: str = "iqn-imvj", progress: bool | None = None,
               in_process: bool = False, tolerance: float | None = None,
-              realtime: bool = False) -> RunResult:
+              realtime: bool = False, plan=None) -> RunResult:
     """Co-simulate the scenario through the FMUs (or in-process subsystems); ``tolerance``
     [N] of the implicit coupling defaults to :func:`coupling_tolerance`; with ``realtime``
-    each communication step is paced to the wall clock (:mod:`pantocosim.master.pacing`)."""
+    each communication step is paced to the wall clock (:mod:`pantocosim.master.pacing`);
+    ``plan``: the checked FMU files (default :func:`fmu_paths`)."""
     from pantocosim.master.pacing import StepClock
 
     sc = prep.scenario
@@ -240,16 +258,28 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
         tolerance = coupling_tolerance(prep)
     settings = CouplingSettings(scheme=scheme, accelerator=accelerator, tolerance=tolerance)
     instances: list = []
+    # the FMU files are checked before anything is written
+    plan = None if in_process else (plan or fmu_paths(prep))
     names = column_names(len(prep.pantographs), len(prep.support_x))
     rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
+    with stop_on_interrupt() as stop:
+        return _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
+                          stop)
+
+
+def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, stop):
+    """The set-up and time loop of :func:`run_cosim` (a Ctrl-C sets ``stop``: the loop ends
+    after the step in flight)."""
+    sc = prep.scenario
     error = None
+    coupler = None
     t_wall = _time.perf_counter()
     t_loop = None
     try:
-        if in_process:
+        if plan is None:
             csub, psubs = in_process_subsystems(prep)
         else:
-            csub, psubs = fmu_subsystems(prep, instances)
+            csub, psubs = fmu_subsystems(prep, instances, plan)
         coupler = Coupler(csub, psubs, prep.contact, settings)
         coupler.initialise(prep.static_forces)
         n_p = len(psubs)
@@ -275,6 +305,7 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
         t = 0.0
         t_loop = _time.perf_counter()
         try:
+            stop.check(t, 0, prep.n_steps)   # a Ctrl-C during the set-up
             for i in clock.steps(prep.n_steps):
                 iters = coupler.step(t, sc.dt)
                 t = (i + 1) * sc.dt
@@ -283,17 +314,21 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
                 F = coupler.forces if scheme == "implicit" else coupler.contact_forces()
                 record(t, F, iters)
                 bar.update(1)
+                stop.check(t, i + 1, prep.n_steps)
         finally:
             bar.close()
-        iterations = np.array(coupler.iterations)
-        newton = np.array(coupler.catenary_newton_iterations)
     except PantocosimError as exc:
-        error = exc
-        iterations = newton = np.zeros(0)
+        # an FMU that fails because a second Ctrl-C reached its Python code was interrupted
+        error = exc if not stop.requested or isinstance(exc, Interrupted) else \
+            _interrupted(rec, prep)
+    except KeyboardInterrupt:
+        error = _interrupted(rec, prep)
     finally:
         rec.close()
         for inst in instances:
             inst.terminate()
+    iterations = np.array(coupler.iterations if coupler else [])
+    newton = np.array(coupler.catenary_newton_iterations if coupler else [])
     end = _time.perf_counter()
     t_loop = end if t_loop is None else t_loop
     # wall time of the time stepping (what the real-time factor measures); setting up the
@@ -302,6 +337,6 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
                        wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall,
                        summary=clock.summary())
     result.coupling_iterations = iterations if scheme == "implicit" else None
-    result.coupling_tolerance = tolerance if scheme == "implicit" else None
+    result.coupling_tolerance = settings.tolerance if scheme == "implicit" else None
     result.newton_iterations = newton
     return result

@@ -34,7 +34,12 @@ PANTOGRAPH_FMUS = {
     "en50318-2mass": "En50318TwoMass",
 }
 CATENARY_FMU = "catenary"
+#: the catenary FMU's slave class name (its modelName)
+CATENARY_CLASS = "Catenary"
 FMU_NAMES = [*PANTOGRAPH_FMUS, CATENARY_FMU]
+#: the FMU that runs a pantograph given by a parameter file (any pantograph FMU loads any
+#: parameter file given as its ``parameter_file``)
+PARAMETER_FILE_FMU = next(iter(PANTOGRAPH_FMUS))
 
 
 def default_out() -> Path:
@@ -135,7 +140,8 @@ def build_fmus(out: Path | None = None, only=None, quiet: bool = False,
             attrs.update({"start_values": start_values[name]} if start_values else {})
             module = _module_name(name, scenario)
             if name == CATENARY_FMU:
-                src = slave_source(module, "catenary_slave", "CatenarySlave", "Catenary", attrs)
+                src = slave_source(module, "catenary_slave", "CatenarySlave", CATENARY_CLASS,
+                                   attrs)
             else:
                 src = slave_source(module, "pantograph_slave", "PantographSlave",
                                    PANTOGRAPH_FMUS[name], attrs)

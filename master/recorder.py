@@ -2,7 +2,8 @@
 
 Rows are appended to disk in blocks (``flush_every`` steps), so a long run keeps what it has
 computed even if it stops with an error; the columns are also kept in memory (they are small
-next to the model: a few floats per step).
+next to the model: a few floats per step). A write that fails (a full disk) raises
+:class:`~pantocosim.core.errors.OutputError` naming the file; the recorder then stops writing.
 """
 
 from __future__ import annotations
@@ -10,6 +11,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+
+from pantocosim.core.errors import OutputError
+from pantocosim.master.output_folder import writing
 
 
 class Recorder:
@@ -21,9 +25,10 @@ class Recorder:
         self.flush_every = flush_every
         self._fh = None
         if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = open(self.path, "w")
-            self._fh.write(",".join(self.names) + "\n")
+            with writing("file", self.path):
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._fh = open(self.path, "w")
+                self._fh.write(",".join(self.names) + "\n")
 
     def append(self, row) -> None:
         row = np.asarray(row, dtype=float)
@@ -35,16 +40,30 @@ class Recorder:
             self.flush()
 
     def flush(self) -> None:
-        if self._fh is not None and self._pending:
-            np.savetxt(self._fh, np.vstack(self._pending), delimiter=",", fmt="%.10g")
-            self._fh.flush()
-        self._pending = []
+        pending, self._pending = self._pending, []
+        if self._fh is not None and pending:
+            try:
+                with writing("file", self.path):
+                    np.savetxt(self._fh, np.vstack(pending), delimiter=",", fmt="%.10g")
+                    self._fh.flush()
+            except OutputError:
+                self._abandon()
+                raise
+
+    def _abandon(self) -> None:
+        """Stop writing after a failed write (the file is incomplete; the caller says so)."""
+        fh, self._fh = self._fh, None
+        try:
+            fh.close()
+        except OSError:
+            pass
 
     def close(self) -> None:
         self.flush()
         if self._fh is not None:
-            self._fh.close()
-            self._fh = None
+            fh, self._fh = self._fh, None
+            with writing("file", self.path):
+                fh.close()
 
     def columns(self) -> dict[str, np.ndarray]:
         data = np.vstack(self._rows) if self._rows else np.zeros((0, len(self.names)))

@@ -113,6 +113,10 @@ def run_regression(update: bool = False, reason: str | None = None,
                    only: list[str] | None = None, printer=print) -> bool:
     if update and not reason:
         raise ParameterError("--reason", reason, "an update of the references needs a reason")
+    known = list(cases())
+    for name in only or []:
+        if name not in known:
+            raise ParameterError("--only", name, f"unknown case; one of {', '.join(known)}")
     from pantocosim.master.fmu_build import default_out, ensure_fmus
 
     dist = default_out()

@@ -18,12 +18,15 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.errors import ParameterError, PantocosimError
+from pantocosim.core.errors import Interrupted, ParameterError, PantocosimError
 from pantocosim.core.hht import HHTSettings
 from pantocosim.master.contact import PenaltyContact
+from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
+from pantocosim.master.output_folder import writing
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.results import write_json
 from pantocosim.master.scenario import Scenario, load_scenario
+from pantocosim.master.size_guard import check_steps
 from pantocosim.master.statistics import contact_statistics, window_mask
 
 #: EN 50119: operating speed at most 0.7 of the contact-wire wave speed
@@ -83,21 +86,110 @@ def analysis_window(sc: Scenario, definition) -> tuple[tuple[float, float], str,
     return window, wfield, float(duration)
 
 
-def prepare(scenario: Scenario | str | None, force: bool = False,
-            element_size: float | None = None) -> Prepared:
-    """Validate ``scenario`` and build the models and the static start."""
-    from pantocosim.catenary.definition import load_catenary
-    from pantocosim.catenary.models import law_model, make_catenary
+def check_passages(sc: Scenario, definition, window, wfield: str, duration: float) -> None:
+    """Every pantograph starts on the line before the analysis window, is raised (ramp
+    start) before it and stays on the line until the run ends."""
+    src = sc.source
+    length = float(definition.support_x[-1])
+    dfield = "simulation.duration_s" if sc.duration_s is not None else wfield
+    dvalue = sc.duration_s if sc.duration_s is not None else list(window)
+    for k, p in enumerate(sc.pantographs):
+        if not (0.0 < p.position_m < length):
+            raise ParameterError(f"pantographs[{k}].position_m", p.position_m,
+                                 f"must lie on the line (0 .. {length:g} m)", src)
+        if p.position_m > window[0]:
+            raise ParameterError(f"pantographs[{k}].position_m", p.position_m,
+                                 f"past the start of the analysis window ({wfield} starts "
+                                 f"at {window[0]:g} m); a pantograph starts before it", src)
+        if p.ramp is not None and p.ramp.start_m + p.ramp.length_m > window[0]:
+            raise ParameterError(f"pantographs[{k}].ramp.length_m", p.ramp.length_m,
+                                 f"the raising ends at x = "
+                                 f"{p.ramp.start_m + p.ramp.length_m:g} m, inside the analysis "
+                                 f"window ({window[0]:g} .. {window[1]:g} m); it must end "
+                                 "before the window", src)
+        if p.ramp is not None:
+            z = float(definition.design_contact_height(p.position_m)[0])
+            if p.ramp.lowered_height >= z:
+                raise lowered_above_wire(sc, k, z)
+        end = p.position_m + sc.speed * duration
+        if end >= length:
+            raise ParameterError(dfield, dvalue,
+                                 f"pantograph {k + 1} would run past the end of the model "
+                                 f"(x = {end:.0f} m > {length:g} m) before the run ends", src)
+        if end < window[1]:
+            raise ParameterError("simulation.duration_s", duration,
+                                 f"too short: pantograph {k + 1} does not reach the end of "
+                                 f"the analysis window", src)
+
+
+def lowered_above_wire(sc: Scenario, k: int, z_wire: float) -> ParameterError:
+    p = sc.pantographs[k]
+    return ParameterError(f"pantographs[{k}].ramp.lowered_height", p.ramp.lowered_height,
+                          f"not below the contact wire at the start ({z_wire:.3f} m at "
+                          f"x = {p.position_m:g} m); a lowered pantograph is out of "
+                          "contact", sc.source)
+
+
+def check_size(sc: Scenario, base, definition, element_size, max_dofs, n_steps) -> int:
+    """Size guard of the scenario's catenary model (before it is built): names the input
+    that makes it large (``--element-size``, the scenario's ``spans`` or the catenary
+    file's field)."""
+    import dataclasses
+
+    from pantocosim.catenary.mesh import estimate_dofs
+    from pantocosim.master.size_guard import MAX_DOFS, check_catenary_size, culprit
+
+    limit = MAX_DOFS if max_dofs is None else max_dofs
+    if element_size is not None:
+        definition = dataclasses.replace(definition, element_size=element_size)
+        field, value, source = "--element-size", element_size, None
+    elif sc.spans and estimate_dofs(base) <= limit:
+        field, value, source = "spans", sc.spans, sc.source
+    else:
+        (field, value), source = culprit(base), base.source
+    return check_catenary_size(definition, field, value, source, limit, n_steps)
+
+
+def scenario_pantograph(sc: Scenario, k: int):
+    """The model of the scenario's pantograph ``k`` (its options, speed and ramp); errors
+    name the scenario's field."""
     from pantocosim.pantograph.base import Ramp
     from pantocosim.pantograph.presets import load_pantograph
 
+    p = sc.pantographs[k]
+    overrides = dict(p.options)
+    overrides["speed_kmh"] = sc.speed_kmh
+    if p.ramp is not None:
+        overrides["ramp"] = Ramp(start=(p.ramp.start_m - p.position_m) / sc.speed,
+                                 duration=p.ramp.length_m / sc.speed,
+                                 lowered_height=p.ramp.lowered_height)
+    try:
+        return load_pantograph(p.model, **overrides)
+    except ParameterError as exc:
+        option = exc.field.removeprefix("options.")
+        if option in p.options:
+            raise ParameterError(f"pantographs[{k}].options.{option}", exc.value, exc.reason,
+                                 sc.source) from None
+        raise ParameterError(f"pantographs[{k}].model", p.model, str(exc), sc.source) from None
+
+
+def prepare(scenario: Scenario | str | None, force: bool = False,
+            element_size: float | None = None, max_dofs: int | None = None,
+            max_steps: int | None = None) -> Prepared:
+    """Validate ``scenario`` and build the models and the static start; the size guard
+    (:mod:`~pantocosim.master.size_guard`, limits ``max_dofs`` and ``max_steps``) runs before
+    anything is built."""
+    from pantocosim.catenary.models import law_model, make_catenary
+    from pantocosim.master.scenario import scenario_catenary
+
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     src = sc.source
-    definition = load_catenary(sc.catenary)
+    base = scenario_catenary(sc)
+    definition = base
     if sc.spans:
         from pantocosim.catenary.definition import with_spans
 
-        definition = with_spans(definition, sc.spans)
+        definition = with_spans(base, sc.spans)
     wave = math.sqrt(definition.contact.tension / definition.contact.mass_per_length)
     if sc.speed > MAX_WAVE_SPEED_RATIO * wave and not force:
         raise ParameterError("speed_kmh", sc.speed_kmh,
@@ -106,37 +198,13 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                              f"{MAX_WAVE_SPEED_RATIO * wave * 3.6:.0f} km/h); use --force to "
                              f"run anyway", src)
     support_x = definition.support_x
-    length = float(support_x[-1])
     window, wfield, duration = analysis_window(sc, definition)
-    for k, p in enumerate(sc.pantographs):
-        if not (0.0 < p.position_m < length):
-            raise ParameterError(f"pantographs[{k}].position_m", p.position_m,
-                                 f"must lie on the line (0 .. {length:g} m)", src)
-        if p.position_m > window[0]:
-            raise ParameterError(wfield, list(window), f"starts before pantograph {k + 1} "
-                                 f"(at x = {p.position_m:g} m) reaches it", src)
-        end = p.position_m + sc.speed * duration
-        if end >= length:
-            raise ParameterError(wfield, list(window),
-                                 f"pantograph {k + 1} would run past the end of the model "
-                                 f"(x = {end:.0f} m > {length:g} m) before the run ends", src)
-        if end < window[1]:
-            raise ParameterError("simulation.duration_s", duration,
-                                 f"too short: pantograph {k + 1} does not reach the end of "
-                                 f"the analysis window", src)
+    check_passages(sc, definition, window, wfield, duration)
+    n_steps = int(math.ceil(duration / sc.dt - 1e-9))
+    dofs = check_size(sc, base, definition, element_size, max_dofs, n_steps)
+    check_steps(n_steps, "simulation.dt", sc.dt, src, max_steps, dofs)
     contact = PenaltyContact(sc.contact_stiffness, sc.contact_damping)
-    pantographs = []
-    for k, p in enumerate(sc.pantographs):
-        overrides = dict(p.options)
-        overrides["speed_kmh"] = sc.speed_kmh
-        if p.ramp is not None:
-            overrides["ramp"] = Ramp(start=(p.ramp.start_m - p.position_m) / sc.speed,
-                                     duration=p.ramp.length_m / sc.speed,
-                                     lowered_height=p.ramp.lowered_height)
-        try:
-            pantographs.append(load_pantograph(p.model, **overrides))
-        except ParameterError as exc:
-            raise ParameterError(f"pantographs[{k}].model", p.model, str(exc), src) from None
+    pantographs = [scenario_pantograph(sc, k) for k in range(len(sc.pantographs))]
     x0 = [p.position_m for p in sc.pantographs]
     catenary = make_catenary(sc.catenary_model, definition, x0=x0, speed=sc.speed,
                              element_size=element_size, modal_cutoff_hz=sc.modal_cutoff_hz)
@@ -170,11 +238,14 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     q_cat0, q_pan0 = system.split(q0)
     q_pan0 = [x.copy() for x in q_pan0]
     static = system.contact_forces(0.0, q0, np.zeros_like(q0))
+    for k, spec in enumerate(sc.pantographs):
+        if spec.start == "ramp" and static[k] > 0.0:
+            raise lowered_above_wire(sc, k, float(catenary.wire_height(0.0, q_cat0)[k]))
     dropper_x = np.concatenate([support_x[s] + np.asarray(pos)
                                 for s, pos in enumerate(definition.dropper_positions)])
     return Prepared(scenario=sc, definition=definition, catenary=catenary,
                     pantographs=pantographs, contact=contact, window_m=window,
-                    duration=float(duration), n_steps=int(math.ceil(duration / sc.dt - 1e-9)),
+                    duration=float(duration), n_steps=n_steps,
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
                     support_x=np.asarray(support_x, float), dropper_x=dropper_x,
                     extra={"actuation_height": actuation_height, "mean_wire_height": z_mean})
@@ -227,15 +298,19 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     record(0)
     bar = progress_bar(prep.n_steps, f"{sc.name} monolithic", progress)
     clock = StepClock(sc.dt, realtime=realtime)
-    try:
-        for _ in clock.steps(prep.n_steps):
-            record(stepper.step(sc.dt))
-            bar.update(1)
-    except PantocosimError as exc:
-        error = exc
-    finally:
-        bar.close()
-        rec.close()
+    with stop_on_interrupt() as stop:
+        try:
+            for k in clock.steps(prep.n_steps):
+                record(stepper.step(sc.dt))
+                bar.update(1)
+                stop.check(stepper.t, k + 1, prep.n_steps)
+        except PantocosimError as exc:
+            error = exc
+        except KeyboardInterrupt:
+            error = interrupted_at(rec.columns()["time"][-1], len(rec) - 1, prep.n_steps)
+        finally:
+            bar.close()
+            rec.close()
     wall = _time.perf_counter() - t_wall
     result = RunResult(prep=prep, coupling="monolithic", columns=rec.columns(),
                        wall_time_s=wall, error=error, summary=clock.summary())
@@ -268,8 +343,17 @@ class RunResult:
                 for k in range(1, n_p + 1)]
 
 
-def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
-    """Statistics, JSON summary and plots of a finished (or stopped) run."""
+#: the files a run writes into its output folder (:func:`finish`)
+RESULT_FILES = ("timeseries.csv", "summary.json", "contact_force.png", "spectrum.png",
+                "support_uplift.png")
+
+
+def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
+           report_dir: Path | None = None) -> dict:
+    """Statistics, JSON summary and plots of a finished (or stopped) run, written into
+    ``out_dir``; the summary names the files in ``report_dir`` (default ``out_dir``: where
+    they end up, :class:`~pantocosim.master.output_folder.OutputFolder`). A stopped run's
+    summary says where it stopped (``stopped``)."""
     prep = result.prep
     sc = prep.scenario
     c = result.columns
@@ -312,13 +396,19 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
         summary["peak_memory_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     except (ImportError, OSError):  # pragma: no cover - not on every platform
         pass
+    summary["completed"] = result.error is None
     if result.error is not None:
         summary["error"] = str(result.error)
+        summary["stopped"] = {"reason": str(result.error),
+                              "interrupted": isinstance(result.error, Interrupted),
+                              "time_s": summary["simulated_time_s"],
+                              "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
     if out_dir is not None:
         out = Path(out_dir)
-        summary["files"] = {"timeseries": str(out / "timeseries.csv"),
-                            "summary": str(out / "summary.json")}
+        shown = Path(report_dir) if report_dir is not None else out
+        summary["files"] = {"timeseries": str(shown / "timeseries.csv"),
+                            "summary": str(shown / "summary.json")}
         if plots and stats:
             from pantocosim.master import plots as P
 
@@ -327,16 +417,21 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True) -> dict:
             forces = [c[f"contact_force_{k}"] for k in range(1, n_p + 1)]
             positions = [c[f"x_{k}"] for k in range(1, n_p + 1)]
             title = f"{sc.name} ({result.coupling}, {sc.speed_kmh:g} km/h)"
-            P.plot_contact_force(out / "contact_force.png", c["time"], positions, forces,
-                                 prep.window_m, prep.support_x, prep.dropper_x, labels, title)
+            with writing("file", out / "contact_force.png"):
+                P.plot_contact_force(out / "contact_force.png", c["time"], positions, forces,
+                                     prep.window_m, prep.support_x, prep.dropper_x, labels,
+                                     title)
             masks = [window_mask(x, *prep.window_m) for x in positions]
-            P.plot_spectrum(out / "spectrum.png", c["time"], forces, masks, labels, title)
+            with writing("file", out / "spectrum.png"):
+                P.plot_spectrum(out / "spectrum.png", c["time"], forces, masks, labels, title)
             uplift = np.column_stack([c[f"support_uplift_{j}"]
                                       for j in range(len(prep.support_x))])
-            P.plot_support_uplift(out / "support_uplift.png", c["time"], uplift,
-                                  prep.support_x, title)
-            summary["files"].update(contact_force=str(out / "contact_force.png"),
-                                    spectrum=str(out / "spectrum.png"),
-                                    support_uplift=str(out / "support_uplift.png"))
-        write_json(out / "summary.json", summary)
+            with writing("file", out / "support_uplift.png"):
+                P.plot_support_uplift(out / "support_uplift.png", c["time"], uplift,
+                                      prep.support_x, title)
+            summary["files"].update(contact_force=str(shown / "contact_force.png"),
+                                    spectrum=str(shown / "spectrum.png"),
+                                    support_uplift=str(shown / "support_uplift.png"))
+        with writing("file", out / "summary.json"):
+            write_json(out / "summary.json", summary)
     return summary

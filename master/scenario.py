@@ -9,14 +9,21 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
 
     [[pantographs]]
     model = "dsa380-rigid"         # pantograph preset or parameter file
-    fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings
-    position_m = 32.0              # x of the contact point at t = 0
+    fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings: a
+                                   # pantocosim FMU of this model (checked); a model given by
+                                   # a parameter file runs in any pantograph FMU (default
+                                   # dist/fmus/dsa380-rigid.fmu), which gets the file
+    position_m = 32.0              # x of the contact point at t = 0 (pantographs at least
+                                   # MIN_SPACING_M apart, before the analysis window)
     start = "static"               # "static" (in contact, in equilibrium) or "ramp"
-    ramp = { start_m = 10.0, length_m = 20.0, lowered_height = 5.0 }   # start = "ramp"
+    ramp = { start_m = 32.0, length_m = 20.0, lowered_height = 5.0 }   # start = "ramp":
+                                   # from position_m on, ending before the analysis window,
+                                   # lowered below the contact wire
 
     [analysis]
-    window_supports = [5, 6]       # analyse between these supports (0 = first), or
-    # window_m = [320.0, 384.0]    # an explicit x range, applied to each pantograph's track
+    window_supports = [5, 6]       # analyse between these supports (0 = first), or (not
+    # window_m = [320.0, 384.0]    # both) an explicit x range, applied to each pantograph's
+                                   # track
 
     [simulation]
     dt = 0.001                     # time step [s]
@@ -48,6 +55,9 @@ from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 DEFAULT_SCENARIO = "dsa380-ave-300"
+#: closest two pantographs may be along the track [m]: a pantograph head is about 2 m long
+#: (two collector strips), so two heads closer than that would overlap
+MIN_SPACING_M = 2.0
 
 
 @dataclass
@@ -113,6 +123,19 @@ def scenario_path(name_or_path: str | Path | None) -> Path:
                          f"{', '.join(scenario_names())}) and not a file")
 
 
+def check_spacing(specs: list[PantographSpec], source: str) -> None:
+    """Pantographs must be at least :data:`MIN_SPACING_M` apart (two on one spot would press
+    the same point of the wire)."""
+    order = sorted(range(len(specs)), key=lambda i: specs[i].position_m)
+    for a, b in zip(order, order[1:]):
+        gap = specs[b].position_m - specs[a].position_m
+        if gap < MIN_SPACING_M:
+            raise ParameterError(f"pantographs[{b}].position_m", specs[b].position_m,
+                                 f"{gap:g} m from pantographs[{a}] (position_m = "
+                                 f"{specs[a].position_m:g}); pantographs must be at least "
+                                 f"{MIN_SPACING_M:g} m apart", source)
+
+
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     path = scenario_path(name_or_path)
     source = str(path)
@@ -128,23 +151,35 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         t.unknown_keys({"model", "fmu", "position_m", "start", "ramp", "options"})
         start = t.string("start", "static", choices=("static", "ramp"))
         ramp = None
+        position = t.number("position_m")
         if start == "ramp":
             r = t.sub("ramp")
             r.unknown_keys({"start_m", "length_m", "lowered_height"})
-            ramp = RampSpec(r.number("start_m"), r.number("length_m", nonnegative=True),
+            ramp = RampSpec(r.number("start_m"), r.number("length_m", positive=True),
                             r.number("lowered_height", positive=True))
+            if ramp.start_m < position:
+                raise ParameterError(f"pantographs[{i}].ramp.start_m", ramp.start_m,
+                                     f"behind the pantograph's start (position_m = "
+                                     f"{position:g}); the raising starts where the "
+                                     "pantograph is or further on", source)
         elif t.has("ramp"):
             raise ParameterError(f"pantographs[{i}].ramp", raw["ramp"],
                                  'only allowed with start = "ramp"', source)
         opts = raw.get("options", {})
         if not isinstance(opts, dict):
             raise ParameterError(f"pantographs[{i}].options", opts, "must be a table", source)
-        specs.append(PantographSpec(model=t.string("model"), position_m=t.number("position_m"),
-                                    start=start, ramp=ramp,
-                                    fmu=t.string("fmu") if t.has("fmu") else None,
-                                    options=dict(opts)))
+        fmu = t.string("fmu") if t.has("fmu") else None
+        if fmu is not None and not fmu.strip():
+            raise ParameterError(f"pantographs[{i}].fmu", fmu, "empty; give an .fmu file or "
+                                 "leave the field out (default: the model's FMU)", source)
+        specs.append(PantographSpec(model=t.string("model"), position_m=position,
+                                    start=start, ramp=ramp, fmu=fmu, options=dict(opts)))
+    check_spacing(specs, source)
     analysis = root.sub("analysis")
     analysis.unknown_keys({"window_supports", "window_m"})
+    if analysis.has("window_supports") and analysis.has("window_m"):
+        raise ParameterError("analysis.window_m", analysis.data["window_m"], "give either "
+                             "analysis.window_supports or analysis.window_m, not both", source)
     window_supports = window_m = None
     if analysis.has("window_supports"):
         ws = analysis._get("window_supports", None, True)
@@ -184,3 +219,16 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
         contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))
     return sc
+
+
+def scenario_catenary(sc: Scenario):
+    """The catenary definition of ``sc`` (without its ``spans``); an unknown name is an error
+    of the scenario's field ``catenary``."""
+    from pantocosim.catenary.definition import load_catenary
+
+    try:
+        return load_catenary(sc.catenary)
+    except ParameterError as exc:
+        if exc.field != "catenary" or exc.source:
+            raise
+        raise ParameterError("catenary", exc.value, exc.reason, sc.source) from None

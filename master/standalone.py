@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -13,35 +12,18 @@ from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.core.linear_model import LinearModel
 from pantocosim.pantograph.base import PantographModel
 
-_ALLOWED = {name: getattr(np, name) for name in (
-    "sin", "cos", "tan", "exp", "log", "sqrt", "abs", "sign", "tanh", "arctan", "minimum",
-    "maximum", "where", "heaviside")}
-_ALLOWED.update(pi=math.pi, e=math.e, nan=math.nan, inf=math.inf)
+
+#: largest prescribed contact force [N]: a hundred times any pantograph's contact force
+MAX_FORCE_N = 1e5
 
 
-def force_expression(expr: str) -> Callable[[float], float]:
-    """Compile a force law in ``t`` such as ``120 + 30*sin(4*pi*t)`` (numpy functions)."""
-    try:
-        code = compile(expr, "<force>", "eval")
-    except SyntaxError as exc:
-        raise ParameterError("--force", expr, f"not a valid expression: {exc.msg}") from None
-    for name in code.co_names:
-        if name != "t" and name not in _ALLOWED:
-            raise ParameterError("--force", expr, f"unknown name {name!r} (use t, pi and "
-                                 f"{', '.join(sorted(k for k in _ALLOWED if len(k) > 2))})")
+def force_expression(expr: str, field: str = "--force") -> Callable[[float], float]:
+    """The force law F(t) [N] of a formula in ``t`` such as ``120 + 30*sin(4*pi*t)``
+    (:func:`pantocosim.master.expression.compile_formula`, within +/- :data:`MAX_FORCE_N`),
+    checked at t = 0."""
+    from pantocosim.master.expression import compile_formula
 
-    def force(t: float) -> float:
-        try:
-            with np.errstate(all="ignore"):
-                value = float(eval(code, {"__builtins__": {}}, {**_ALLOWED, "t": np.float64(t)}))
-        except (ArithmeticError, ValueError, TypeError) as exc:
-            raise ParameterError("contact_force", expr, f"force law fails at t = {t:.6g} s: "
-                                 f"{exc}") from None
-        if not math.isfinite(value):
-            raise ParameterError("contact_force", value, f"force law {expr!r} is not finite at "
-                                 f"t = {t:.6g} s")
-        return value
-
+    force = compile_formula(expr, field, "t", max_abs=MAX_FORCE_N, unit=" N")
     force(0.0)
     return force
 
@@ -54,6 +36,8 @@ class StandaloneResult:
     contact_velocity: np.ndarray
     q: np.ndarray
     iterations: np.ndarray
+    #: an :class:`~pantocosim.core.errors.Interrupted` naming where a stopped run stopped
+    stopped: Exception | None = None
 
     def columns(self, dof_names) -> dict:
         cols = {"time": self.time, "contact_force": self.contact_force,
@@ -65,11 +49,13 @@ class StandaloneResult:
 
 def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
                         duration: float, dt: float = 1e-3, alpha: float = -0.05,
-                        q0=None, linear: bool = False) -> StandaloneResult:
+                        q0=None, linear: bool = False, stop=None) -> StandaloneResult:
     """Integrate the pantograph from static equilibrium under F(0) at its working height.
 
     With ``linear=True`` the linearised model (M, C, K about that equilibrium, thesis 2.1.2)
-    is integrated instead, driven by F(t) - F(0).
+    is integrated instead, driven by F(t) - F(0). A ``stop`` request
+    (:class:`~pantocosim.master.interrupt.StopRequest`) ends the run after the step in flight
+    (the result's ``stopped`` says where).
     """
     if not (duration > 0 and dt > 0):
         raise ParameterError("duration", duration, "duration and time step must be > 0")
@@ -105,4 +91,10 @@ def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
         else:
             heights[i] = model.contact_height(integ.q)
             vels[i] = model.contact_velocity(integ.q, integ.v)
+        if stop is not None and stop.requested and i < n - 1:   # Ctrl-C: keep steps 0..i
+            from pantocosim.master.interrupt import interrupted_at
+
+            k = i + 1
+            return StandaloneResult(time[:k], forces[:k], heights[:k], vels[:k], qs[:k],
+                                    iters[:k], stopped=interrupted_at(time[i], i, n_steps))
     return StandaloneResult(time, forces, heights, vels, qs, iters)

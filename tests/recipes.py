@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 
 def run_recipe(name, *args, cwd=None, timeout=1200):
@@ -26,3 +27,13 @@ def read_csv(path):
         rows = list(csv.reader(f))
     data = np.array(rows[1:], dtype=float)
     return {h: data[:, i] for i, h in enumerate(rows[0])}
+
+
+def require_ecospy() -> None:
+    """Skip where ecospy cannot be used: not installed (ImportError), or its native library
+    cannot load because libtbb.so.12 is missing (OSError from ctypes, which
+    ``pytest.importorskip`` does not catch)."""
+    try:
+        import ecospy  # noqa: F401
+    except (ImportError, OSError) as exc:
+        pytest.skip(f"ecospy cannot be loaded here: {exc}")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from recipes import read_csv, run_recipe
+from recipes import read_csv, require_ecospy, run_recipe
 
 #: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
 pytestmark = pytest.mark.slow
@@ -220,7 +220,7 @@ def test_linear_catenary_scenario_runs_in_third_party_masters(master, tmp_path):
     from pantocosim.master.ssp import write_scenario_package
 
     if master == "ecos":
-        pytest.importorskip("ecospy")
+        require_ecospy()
     scenario = ROOT / "tests" / "data" / "ssp-short-linear.toml"
     write_scenario_package(tmp_path, scenarios=[scenario], quiet=True)
     out = tmp_path / f"{master}.csv"
@@ -231,6 +231,21 @@ def test_linear_catenary_scenario_runs_in_third_party_masters(master, tmp_path):
     assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
     assert stats["max_uplift_at_support_m"] == pytest.approx(ref.max_uplift_at_support_m,
                                                              rel=0.01)
+
+
+@pytest.mark.slow
+def test_ecos_runs_the_short_ssp(short_package, tmp_path):
+    """ecos (ecospy) runs the short scenario's SSP as shipped: the monolithic statistics.
+    Skipped where ecospy or its libtbb.so.12 is missing."""
+    require_ecospy()
+    out = tmp_path / "ecos.csv"
+    stats, _ = run_recipe("ecos", "--ssp", short_package / "ssp-short.ssp", "--out", out)
+    c = read_csv(out)
+    assert stats["master"] == "ecos" and np.all(np.isfinite(c["contact_force_1"]))
+    prep, mono = monolithic(SHORT)
+    ref = mono.statistics()[0]
+    assert stats["mean_n"] == pytest.approx(ref.mean_n, rel=2e-3)
+    assert stats["std_n"] == pytest.approx(ref.std_n, rel=0.01)
 
 
 # ------------------------------------------------------------------------- installed package

@@ -243,6 +243,9 @@ def preset_names() -> list[str]:
 
 def load_catenary(name_or_path: str | Path) -> CatenaryDefinition:
     """Load a preset by name (``en50318``, ``benchmark55``, ``ave64``) or a TOML file."""
+    if not str(name_or_path).strip():
+        raise ParameterError("catenary", str(name_or_path), f"empty name (presets: "
+                             f"{preset_names()}, or a definition file)")
     p = Path(name_or_path)
     if p.suffix != ".toml" and not p.exists():
         cand = DATA_DIR / f"{name_or_path}.toml"

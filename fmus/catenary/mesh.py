@@ -72,20 +72,51 @@ class CatenaryMesh:
     messenger_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
 
-def _stations(d: CatenaryDefinition) -> np.ndarray:
+def _key_points(d: CatenaryDefinition) -> np.ndarray:
+    """Sorted x of the supports, droppers and stitch-wire ends (to 1e-9 m)."""
     xs = d.support_x
-    pts = set(np.round(xs, X_DIGITS))
-    for s, pos in enumerate(d.dropper_positions):
-        pts.update(np.round(xs[s] + np.asarray(pos), X_DIGITS))
+    pts = [xs] + [xs[s] + np.asarray(pos, float) for s, pos in enumerate(d.dropper_positions)]
     if d.stitch is not None:
-        for x in xs[1:-1]:
-            pts.update(np.round([x - d.stitch.length / 2, x + d.stitch.length / 2], X_DIGITS))
-    key = np.array(sorted(pts))
+        pts += [xs[1:-1] - d.stitch.length / 2, xs[1:-1] + d.stitch.length / 2]
+    return np.unique(np.round(np.concatenate(pts), X_DIGITS))
+
+
+def _divisions(key: np.ndarray, element_size: float) -> np.ndarray:
+    """Elements between consecutive key points: the fewest not longer than element_size."""
+    return np.maximum(1, np.ceil(np.diff(key) / element_size - X_TOL)).astype(np.int64)
+
+
+def _stations(d: CatenaryDefinition) -> np.ndarray:
+    key = _key_points(d)
     out = [key[:1]]
-    for a, b in zip(key[:-1], key[1:]):
-        n = max(1, int(np.ceil((b - a) / d.element_size - X_TOL)))
+    for a, b, n in zip(key[:-1], key[1:], _divisions(key, d.element_size)):
         out.append(a + (b - a) * np.arange(1, n + 1) / n)
     return np.concatenate(out)
+
+
+def station_count(d: CatenaryDefinition) -> tuple[int, int]:
+    """(stations, stations under the stitch wires) of the mesh of ``d``, counted without
+    building it (cheap for any size: the size guard, :mod:`.size`)."""
+    key = _key_points(d)
+    n = _divisions(key, d.element_size)
+    first = np.concatenate([[0], np.cumsum(n)])       # station index of each key point
+    stitch = 0
+    if d.stitch is not None:
+        xs = d.support_x[1:-1]
+        a = np.searchsorted(key, np.round(xs - d.stitch.length / 2, X_DIGITS))
+        b = np.searchsorted(key, np.round(xs + d.stitch.length / 2, X_DIGITS))
+        stitch = int(np.sum(first[b] - first[a] + 1))
+    return int(first[-1] + 1), stitch
+
+
+def estimate_dofs(d: CatenaryDefinition) -> int:
+    """DOFs of the model of ``d`` without building it: 6 per node, a contact-wire and a
+    messenger node at every station, a stitch-wire node where there is one (its two ends
+    share the messenger's position: 3 each), less the anchored positions of both wires at
+    the line ends (within 1 % of the built model's count; the masts' supports add a few)."""
+    stations, stitch = station_count(d)
+    ends = 2 * (d.n_spans - 1) if d.stitch is not None else 0
+    return 12 * stations + 6 * stitch - 3 * ends - 12
 
 
 # ==================================================================== geometry

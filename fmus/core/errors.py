@@ -32,3 +32,23 @@ class ConvergenceError(PantocosimError, RuntimeError):
         self.step = step
         self.residual = residual
         super().__init__(message)
+
+
+class OutputError(PantocosimError, OSError):
+    """A result file or folder cannot be written (full disk, no permission, not a folder).
+
+    Names the command-line field (``--out``, ``--plot``) or the file and the system's reason,
+    e.g. ``--out = '/proc/x': cannot create the folder: No such file or directory``.
+    """
+
+    def __init__(self, field: str, path, reason: str):
+        self.field = field
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"{field} = {self.path!r}: {reason}")
+
+
+class Interrupted(PantocosimError):
+    """The user stopped a run (Ctrl-C, SIGINT); says where it stopped. Exit status 130."""
+
+    exit_code = 130

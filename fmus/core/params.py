@@ -22,8 +22,15 @@ def load_toml(path: str | Path) -> dict:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise ParameterError("file", str(p), "no such file") from None
+    except IsADirectoryError:
+        raise ParameterError("file", str(p), "is a folder, not a TOML file") from None
+    except UnicodeDecodeError as exc:
+        raise ParameterError("file", str(p), f"not a text (UTF-8) TOML file: byte "
+                             f"0x{exc.object[exc.start]:02x} at offset {exc.start}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError("file", str(p), f"invalid TOML: {exc}") from None
+    except OSError as exc:
+        raise ParameterError("file", str(p), f"cannot be read: {exc.strerror}") from None
 
 
 class Table:

@@ -21,7 +21,8 @@ outputs
   ``wire_height_k`` [m], ``wire_velocity_k`` [m/s] (including the convective term V dz/dx
   seen by the moving pantograph), ``contact_force_out_k`` [N], ``support_uplift_j`` [m]
   (j = 0..63; uplift of the contact wire at support j relative to the unloaded static
-  configuration; 0 beyond the last support) and ``n_supports``.
+  configuration; 0 beyond the last support; a line of more supports logs a warning at
+  initialisation) and ``n_supports``.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
 ``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
@@ -338,6 +339,11 @@ class CatenarySlave(IntegratorSlave):
                 self._set_law_outputs(self._laws(model))
             self._start_penalty(model, contact, F0, self._input_heights(n, F0))
         self.n_supports = float(len(model.support_x))
+        if len(model.support_x) > MAX_SUPPORTS:
+            from pythonfmu.enums import Fmi2Status
+
+            self.log(f"the line has {len(model.support_x)} supports: support_uplift_j gives "
+                     f"the uplift of supports 0..{MAX_SUPPORTS - 1} only", Fmi2Status.warning)
         self.apply_pending_state()
         self._update_outputs(initial=True)
 

@@ -22,6 +22,9 @@ PRESETS = {
 def preset_path(name_or_path: str | Path) -> Path:
     """File of a preset name, or the given path; unknown names raise a clear error."""
     key = str(name_or_path)
+    if not key.strip():
+        raise ParameterError("pantograph", key, f"empty name (presets: "
+                             f"{', '.join(sorted(PRESETS))}, or a parameter file)")
     if key in PRESETS:
         return DATA_DIR / PRESETS[key]
     p = Path(key)

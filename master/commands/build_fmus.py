@@ -16,7 +16,17 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from pantocosim.master.fmu_build import build_all
+    from pantocosim.core.errors import OutputError
+    from pantocosim.master.fmu_build import build_all, check_names, default_out
+    from pantocosim.master.output_folder import reason
 
-    build_all(Path(args.out) if args.out else None, only=args.only, ssp=not args.no_ssp)
+    check_names(args.only)
+    out = Path(args.out) if args.out else default_out()
+    if out.exists() and not out.is_dir():
+        raise OutputError("--out", out, "is a file, not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError("--out", out, f"cannot create the folder: {reason(exc)}") from None
+    build_all(out, only=args.only, ssp=not args.no_ssp)
     return 0

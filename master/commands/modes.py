@@ -15,6 +15,9 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--element-size", type=float, default=None,
                    help="override the definition's target element size [m]")
+    from pantocosim.master.commands.run import add_size_options
+
+    add_size_options(p, steps=False)
     return p
 
 
@@ -25,8 +28,14 @@ def run(args) -> int:
 
     if args.count < 1:
         raise ParameterError("--count", args.count, "must be >= 1")
+    from pantocosim.master.size_guard import check_cli_catenary
+
     if args.element_size is not None:
         check_number("--element-size", args.element_size, positive=True)
+    dofs = check_cli_catenary(args.catenary, args.element_size, args.max_dofs)
+    if args.count > dofs // 12:
+        raise ParameterError("--count", args.count, f"more modes than the model can resolve "
+                             f"(about {dofs // 12} for its {dofs:,} DOFs)")
     model = CatenaryModel(args.catenary, element_size=args.element_size)
     f, _ = model.modes(args.count)
     if args.json:

@@ -19,6 +19,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+#: the files the command writes into its output folder
+OUTPUT_FILES = ("trajectories.png", "node23.png", "energy.png", "summary.json")
+
 
 def add_parser(sub):
     p = sub.add_parser("pendulum", help="spatial flexible double pendulum with impacts",
@@ -36,22 +39,59 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    import numpy as np
-
     from pantocosim.core.errors import ParameterError
-    from pantocosim.multibody.double_pendulum import CASES, PendulumSpec, build, simulate
+    from pantocosim.master.commands.pantograph import check_times
+    from pantocosim.master.output_folder import OutputFolder
+    from pantocosim.multibody.double_pendulum import CASES
 
     cases = [c.strip() for c in args.cases.split(",") if c.strip()]
+    if not cases:
+        raise ParameterError("--cases", args.cases, f"no case given (known: "
+                             f"{', '.join(CASES)})")
     for c in cases:
         if c not in CASES:
             raise ParameterError("--cases", c, f"unknown case (known: {', '.join(CASES)})")
+    check_times(args.duration, args.step, args.alpha, None, dt_name="--step")
+    folder = OutputFolder(args.out, known=OUTPUT_FILES)
+    try:
+        runs, summary = _simulate(cases, args, folder.path)
+        folder.commit()
+    except BaseException:
+        folder.discard()
+        raise
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    print("\n| case | E (Pa) | max out-of-plane node 12 (m) | paper (m) |")
+    print("|---|---|---|---|")
+    for c, s in summary.items():
+        print(f"| {c} | {s['E']:.1e} | {s['max_out_of_plane_node12_m']:.3e} | {s['paper_m']:g} |")
+    print("\n| case | pulse work (J) | contact dissipation (J) | HHT dissipation (J) | "
+          "max residual / scale |")
+    print("|---|---|---|---|---|")
+    for c, s in summary.items():
+        print(f"| {c} | {s['pulse_work_J']:.4f} | {s['contact_dissipation_J']:.4f} | "
+              f"{s['hht_dissipation_J']:.4f} | {s['max_energy_residual_over_scale']:.2e} |")
+    print(f"\nfigures and summary.json in {out}")
+    return 0
+
+
+def _simulate(cases, args, out: Path):
+    """Run the cases and write the figures and summary.json into ``out``."""
+    import numpy as np
+
+    from pantocosim.core.errors import ConvergenceError
+    from pantocosim.master.output_folder import writing
+    from pantocosim.multibody.double_pendulum import CASES, PendulumSpec, build, simulate
+
     runs, summary = {}, {}
     for c in cases:
         E, paper = CASES[c]
         model = build(PendulumSpec(E=E))
-        r = simulate(model, args.duration, args.step, alpha=args.alpha)
+        try:
+            r = simulate(model, args.duration, args.step, alpha=args.alpha)
+        except (FloatingPointError, ConvergenceError) as exc:
+            # a beam element turned over within one step, or Newton failed: the step
+            raise ConvergenceError(f"--step = {args.step!r}: case {c!r} failed ({exc}); "
+                                   "a shorter time step may help") from None
         runs[c] = r
         en = r.energy
         scale = max(abs(en["pulse_work"][-1]), en["kinetic"].max())
@@ -73,20 +113,10 @@ def run(args) -> int:
               f"{summary[c]['max_out_of_plane_node12_m']:.3e} m (paper {paper:g} m), "
               f"first impact {summary[c]['first_impact_s']} s, drift "
               f"{summary[c]['max_constraint_drift']:.1e}", flush=True)
-    _figures(runs, out, args)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    print("\n| case | E (Pa) | max out-of-plane node 12 (m) | paper (m) |")
-    print("|---|---|---|---|")
-    for c, s in summary.items():
-        print(f"| {c} | {s['E']:.1e} | {s['max_out_of_plane_node12_m']:.3e} | {s['paper_m']:g} |")
-    print("\n| case | pulse work (J) | contact dissipation (J) | HHT dissipation (J) | "
-          "max residual / scale |")
-    print("|---|---|---|---|---|")
-    for c, s in summary.items():
-        print(f"| {c} | {s['pulse_work_J']:.4f} | {s['contact_dissipation_J']:.4f} | "
-              f"{s['hht_dissipation_J']:.4f} | {s['max_energy_residual_over_scale']:.2e} |")
-    print(f"\nfigures and summary.json in {out}")
-    return 0
+    with writing("file", out):
+        _figures(runs, out, args)
+        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return runs, summary
 
 
 def _figures(runs, out, args) -> None:

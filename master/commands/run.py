@@ -24,17 +24,32 @@ def add_parser(sub):
     p.add_argument("--modal-cutoff-hz", type=float, default=None,
                    help="modal catenary: modes below this frequency (default: the scenario's "
                    "modal_cutoff_hz)")
-    p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING)")
+    p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING); "
+                   "the run writes beside it and moves its files in when done (earlier "
+                   "results are replaced only by a run that computed something)")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
     p.add_argument("--force", action="store_true",
                    help="run even above 0.7 of the wave speed")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_size_options(p)
     p.add_argument("--realtime", action="store_true",
                    help="pace each step to the wall clock as a hardware-in-the-loop loop "
                    "would (step k ends no earlier than start + (k + 1) dt) and report missed "
                    "deadlines; the step-time percentiles are reported either way")
     return p
+
+
+def add_size_options(p, steps: bool = True) -> None:
+    """``--max-dofs`` (and ``--max-steps``): lift the size guard's limits
+    (:mod:`pantocosim.master.size_guard`)."""
+    from pantocosim.master.size_guard import MAX_DOFS, MAX_STEPS
+
+    p.add_argument("--max-dofs", type=int, default=None, metavar="N",
+                   help=f"build catenary models of up to N DOFs (default {MAX_DOFS:,})")
+    if steps:
+        p.add_argument("--max-steps", type=int, default=None, metavar="N",
+                       help=f"run up to N time steps (default {MAX_STEPS:,})")
 
 
 def print_statistics(summary: dict) -> None:
@@ -83,30 +98,78 @@ def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
 
 
 def run(args) -> int:
-    from pantocosim.core.errors import PantocosimError
-    from pantocosim.master.run import finish, prepare, run_monolithic
+    from pantocosim.core.errors import Interrupted, OutputError, PantocosimError
+    from pantocosim.master.interrupt import stop_on_interrupt
+    from pantocosim.master.output_folder import OutputFolder
+    from pantocosim.master.run import RESULT_FILES, finish
     from pantocosim.master.scenario import load_scenario
+    from pantocosim.master.size_guard import check_limit_option
 
+    check_limit_option("--max-dofs", args.max_dofs)
+    check_limit_option("--max-steps", args.max_steps)
     scenario = with_model(load_scenario(args.scenario), args.catenary_model,
                           args.modal_cutoff_hz)
     coupling = "jacobi" if args.coupling == "explicit" else args.coupling
     out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
-    prep = prepare(scenario, force=args.force)
-    if coupling == "monolithic":
-        result = run_monolithic(prep, out, progress=None if not args.quiet else False,
-                                realtime=args.realtime)
-    else:
-        from pantocosim.master.cosim import run_cosim
-
-        result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
-                           progress=None if not args.quiet else False,
-                           realtime=args.realtime)
-    result.coupling = args.coupling
-    summary = finish(result, out, plots=not args.no_plots)
+    folder = None
+    try:
+        folder = OutputFolder(out, known=RESULT_FILES)
+        result = simulate(args, scenario, coupling, folder.path)
+        if len(result.columns["time"]) < 2 or isinstance(result.error, OutputError):
+            raise result.error   # nothing computed (the set-up failed), or a full disk
+        with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
+            summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
+            folder.commit()
+    except OutputError as exc:
+        if folder is None or exc.field == "--out":   # --out itself, or moving into place
+            if folder is not None:
+                folder.discard()
+            raise
+        folder.discard()
+        raise OutputError("--out", out, f"{Path(exc.path).name} {exc.reason}; nothing was "
+                          f"moved into {out}: the results there are as they were") from None
+    except (Interrupted, KeyboardInterrupt):   # before the time loop (loading, static start)
+        if folder is not None:
+            folder.discard()
+        raise Interrupted(f"interrupted (Ctrl-C) during the set-up: nothing written, {out} is "
+                          "as it was") from None
+    except BaseException:
+        if folder is not None:
+            folder.discard()
+        raise
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
         print_statistics(summary)
+    if isinstance(result.error, Interrupted):
+        raise Interrupted(f"{result.error}; the results so far are in {out} (summary.json "
+                          "says where the run stopped)")
     if result.error is not None:
         raise PantocosimError(f"run stopped: {result.error} (results so far kept in {out})")
+    if late.requested:
+        raise Interrupted(f"interrupted (Ctrl-C) while the results were written: they are "
+                          f"complete in {out}")
     return 0
+
+
+def simulate(args, scenario, coupling: str, out: Path):
+    """Set up and run the scenario (monolithic or co-simulation) writing into ``out``."""
+    from pantocosim.master.run import prepare, run_monolithic
+
+    plan = None
+    if coupling != "monolithic":
+        from pantocosim.master.cosim import fmu_paths
+
+        plan = fmu_paths(scenario)   # the FMU files are checked before the long set-up
+    prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
+                   max_steps=args.max_steps)
+    progress = None if not args.quiet else False
+    if coupling == "monolithic":
+        result = run_monolithic(prep, out, progress=progress, realtime=args.realtime)
+    else:
+        from pantocosim.master.cosim import run_cosim
+
+        result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
+                           progress=progress, realtime=args.realtime, plan=plan)
+    result.coupling = args.coupling
+    return result

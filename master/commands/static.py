@@ -20,6 +20,9 @@ def add_parser(sub):
     p.add_argument("--plot", metavar="FILE.png", help="side view and elasticity plot")
     p.add_argument("--element-size", type=float, default=None,
                    help="override the definition's target element size [m]")
+    from pantocosim.master.commands.run import add_size_options
+
+    add_size_options(p, steps=False)
     return p
 
 
@@ -28,8 +31,14 @@ def run(args) -> int:
     from pantocosim.catenary.model import CatenaryModel
     from pantocosim.core.params import check_number
 
+    from pantocosim.master.output_folder import check_file_target
+    from pantocosim.master.size_guard import check_cli_catenary
+
     if args.element_size is not None:
         check_number("--element-size", args.element_size, positive=True)
+    if args.plot:
+        check_file_target("--plot", args.plot)
+    check_cli_catenary(args.catenary, args.element_size, args.max_dofs)
     model = CatenaryModel(args.catenary, element_size=args.element_size)
     report, extra = static_report(model)
     if args.plot:
@@ -110,5 +119,7 @@ def plot_static(model, report, path) -> None:
         ax[k].set_xlim(a, b)
         ax[k].grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    from pantocosim.master.output_folder import save_figure
+
+    save_figure(fig, "--plot", path)
     plt.close(fig)

@@ -72,6 +72,12 @@ def main(argv=None) -> int:
         ssp, step, stop, out, n_sup, x0, speed, pset = a.child_args
         child(ssp, float(step), float(stop), out, int(n_sup), float(x0), float(speed), pset)
         return 0
+    try:
+        import ecospy  # noqa: F401 - loads its native library (libtbb.so.12)
+    except (ImportError, OSError) as exc:
+        print(f"ecos: error: ecospy cannot be loaded ({exc}); see the recipe: pip install "
+              "ecospy, apt-get install -y libtbb12", file=sys.stderr)
+        return 2
     r = run_common.ssp_run(a, "ecos")
     sets = r.ssd["parameter_sets"]
     if len(sets) > 1:
