@@ -15,7 +15,7 @@ import numpy as np
 
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
-from pantocosim.master.coupling import Coupler, CouplingSettings
+from pantocosim.master.coupling import Coupler, CouplingSettings, scheme_named
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run import Prepared, RunResult, column_names, progress_bar
@@ -311,7 +311,7 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
                 t = (i + 1) * sc.dt
                 # explicit schemes record the force the law gives at the new state; implicit
                 # records the converged interface force
-                F = coupler.forces if scheme == "implicit" else coupler.contact_forces()
+                F = coupler.forces if coupler.scheme.iterative else coupler.contact_forces()
                 record(t, F, iters)
                 bar.update(1)
                 stop.check(t, i + 1, prep.n_steps)
@@ -336,7 +336,8 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
     result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
                        wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall,
                        summary=clock.summary())
-    result.coupling_iterations = iterations if scheme == "implicit" else None
-    result.coupling_tolerance = settings.tolerance if scheme == "implicit" else None
+    iterative = scheme_named(scheme).iterative
+    result.coupling_iterations = iterations if iterative else None
+    result.coupling_tolerance = settings.tolerance if iterative else None
     result.newton_iterations = newton
     return result

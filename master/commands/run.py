@@ -7,16 +7,17 @@ from pathlib import Path
 
 
 def add_parser(sub):
+    from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
+
     p = sub.add_parser("run", help="simulate a scenario and print EN 50317 statistics",
                        description="Simulate SCENARIO (preset name or TOML file; default "
                        "dsa380-ave-300) and write the time series (CSV), a JSON summary with "
                        "the EN 50317 contact-force statistics, and plots.")
     p.add_argument("scenario", nargs="?", default=None, help="scenario preset or file")
-    p.add_argument("--coupling", default="monolithic",
-                   choices=["monolithic", "explicit", "jacobi", "gauss-seidel", "implicit"],
+    p.add_argument("--coupling", default="monolithic", choices=["monolithic", *SCHEME_NAMES],
                    help="monolithic reference solve, or co-simulation of the FMUs: explicit "
                    "(= jacobi), gauss-seidel, implicit (iterative with rollback)")
-    p.add_argument("--accelerator", default="iqn-imvj", choices=["iqn-imvj", "iqn-ils", "aitken"],
+    p.add_argument("--accelerator", default=DEFAULT_ACCELERATOR, choices=list(ACCELERATORS),
                    help="interface acceleration of the implicit coupling")
     p.add_argument("--catenary-model", default=None, choices=["nonlinear", "linear", "modal"],
                    help="catenary model (default: the scenario's [simulation] catenary_model, "
@@ -109,7 +110,9 @@ def run(args) -> int:
     check_limit_option("--max-steps", args.max_steps)
     scenario = with_model(load_scenario(args.scenario), args.catenary_model,
                           args.modal_cutoff_hz)
-    coupling = "jacobi" if args.coupling == "explicit" else args.coupling
+    from pantocosim.master.coupling import SCHEME_NAMES
+
+    coupling = SCHEME_NAMES.get(args.coupling, args.coupling)   # an alias -> its scheme
     out = Path(args.out) if args.out else Path("out") / f"{scenario.name}-{args.coupling}"
     folder = None
     try:

@@ -1,0 +1,19 @@
+"""A coupling scheme: how one communication step sets, steps and iterates the participants
+of a :class:`~pantocosim.master.coupling.coupler.Coupler` (one scheme per module, behind
+:data:`pantocosim.master.coupling.schemes.SCHEMES`)."""
+
+from __future__ import annotations
+
+
+class Scheme:
+    #: registry name and other names it answers to (``--coupling``)
+    name = ""
+    aliases: tuple[str, ...] = ()
+    #: iterative schemes converge the interface forces: the recorded force is the converged
+    #: one, and the run reports coupling iterations and the interface tolerance
+    iterative = False
+
+    def step(self, coupler, t: float, h: float, states) -> tuple:
+        """Advance every participant from t to t + h: (interface forces, iterations);
+        ``states`` are the participants' states at t (for rollback)."""
+        raise NotImplementedError
