@@ -11,6 +11,10 @@ coordinates q_l = q[idx_j]:
 so the constraint Jacobian is exact and the multiplier term sum_j lambda_j H_j of the tangent
 is exact too. The equations of motion are the Lagrange equations with multipliers
 (seed 004, eq. 112): M a + f(q, v) + G^T lambda = 0, g(q) = 0.
+
+Rheonomic constraints (an actuator imposing a motion, seed 004, 9.6) add a known function of
+time, g_j(q, t) = ... + r_j(t): a set's ``drive`` returns (r, r', r'') at t, and the second
+time derivative of g_j becomes G_j a + v^T H_j v + r_j''(t).
 """
 
 from __future__ import annotations
@@ -19,24 +23,41 @@ import numpy as np
 
 
 class ConstraintSet:
-    """``m`` constraints on ``nl`` local coordinates each (idx (m, nl) into the global q)."""
+    """``m`` constraints on ``nl`` local coordinates each (idx (m, nl) into the global q).
 
-    def __init__(self, idx, H, b, c, name: str = ""):
+    ``drive``: None, or a function t -> (r, r', r'') (each broadcastable to (m,)) added to c.
+    """
+
+    def __init__(self, idx, H, b, c, name: str = "", drive=None):
         self.idx = np.ascontiguousarray(idx, dtype=np.int64)
         m, nl = self.idx.shape
         self.H = np.ascontiguousarray(np.broadcast_to(H, (m, nl, nl)), dtype=float)
         self.b = np.ascontiguousarray(np.broadcast_to(b, (m, nl)), dtype=float)
         self.c = np.ascontiguousarray(np.broadcast_to(c, (m,)), dtype=float)
         self.name = name
+        #: (first row, number of rows, drive) of the driven rows
+        self.drives = [] if drive is None else [(0, m, drive)]
 
     @property
     def size(self) -> int:
         return self.idx.shape[0]
 
-    def values(self, q):
+    def values(self, q, t: float = 0.0):
         ql = q[self.idx]
-        return 0.5 * np.einsum("mi,mij,mj->m", ql, self.H, ql) + np.einsum("mi,mi->m", self.b,
-                                                                             ql) + self.c
+        g = 0.5 * np.einsum("mi,mij,mj->m", ql, self.H, ql) + np.einsum("mi,mi->m", self.b,
+                                                                          ql) + self.c
+        if self.drives:
+            g += self.time_terms(t)[0]
+        return g
+
+    def time_terms(self, t: float):
+        """(r, r', r''): the driven part of the constraints and its time derivatives at t
+        (zero on the rows without a drive)."""
+        out = np.zeros((3, self.size))
+        for start, m, drive in self.drives:
+            for k, val in enumerate(drive(t)):
+                out[k, start:start + m] = val
+        return out
 
     def gradients(self, q):
         """(m, nl) local rows of the Jacobian."""
@@ -53,9 +74,12 @@ class ConstraintSet:
         """One set of all constraints of ``sets`` (padded to the widest local size)."""
         sets = [s for s in sets if s.size]
         nl = max(s.idx.shape[1] for s in sets)
-        idx, H, b, c = [], [], [], []
+        idx, H, b, c, drives = [], [], [], [], []
+        start = 0
         for s in sets:
             m, k = s.idx.shape
+            drives.extend((start + i, n, d) for i, n, d in s.drives)
+            start += m
             pad = nl - k
             # padding points at coordinate 0 with zero coefficients
             idx.append(np.hstack([s.idx, np.zeros((m, pad), np.int64)]))
@@ -64,7 +88,9 @@ class ConstraintSet:
             H.append(Hp)
             b.append(np.hstack([s.b, np.zeros((m, pad))]))
             c.append(s.c)
-        return ConstraintSet(np.vstack(idx), np.concatenate(H), np.vstack(b), np.concatenate(c))
+        out = ConstraintSet(np.vstack(idx), np.concatenate(H), np.vstack(b), np.concatenate(c))
+        out.drives = drives
+        return out
 
 
 def orthonormality(director_dofs) -> ConstraintSet:

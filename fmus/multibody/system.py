@@ -87,6 +87,8 @@ class System(SecondOrderModel):
         self.n_dofs = self.n_q          # until the constraints are counted
         M = Triplets(self.n_q)
         sets = [orthonormality(self.d_dofs(np.arange(n_nodes)))]
+        n_rows = sets[0].size
+        self._rows_of = {}
         for comp in self.components:
             if hasattr(comp, "bind"):
                 comp.bind(self)
@@ -94,7 +96,11 @@ class System(SecondOrderModel):
             if hasattr(comp, "add_mass"):
                 comp.add_mass(M)
             if hasattr(comp, "constraints"):
-                sets.extend(comp.constraints(self))
+                own = comp.constraints(self)
+                size = sum(c.size for c in own)
+                self._rows_of[id(comp)] = slice(n_rows, n_rows + size)
+                n_rows += size
+                sets.extend(own)
         self.M = M.tocsr()
         self.constraints = ConstraintSet.concatenate(sets)
         self.n_c = self.constraints.size
@@ -116,13 +122,13 @@ class System(SecondOrderModel):
         return q
 
     # ------------------------------------------------------------------ pieces
-    def constraint_jacobian(self, q) -> tuple[np.ndarray, sp.csr_matrix]:
-        """(g, G): values and the sparse (n_c, n_q) Jacobian at q."""
+    def constraint_jacobian(self, q, t: float = 0.0) -> tuple[np.ndarray, sp.csr_matrix]:
+        """(g, G): values at (q, t) and the sparse (n_c, n_q) Jacobian at q."""
         cs = self.constraints
         qq = q[:self.n_q]
         G = sp.csr_matrix((cs.gradients(qq).reshape(-1), (self._rows, cs.idx.reshape(-1))),
                           shape=(self.n_c, self.n_q))
-        return cs.values(qq), G
+        return cs.values(qq, t), G
 
     def forces(self, t, q, v, tangent=True):
         """f(t, q, v) of the node equations (internal + damping - external) and its tangents
@@ -140,7 +146,7 @@ class System(SecondOrderModel):
         nq, nc, s = self.n_q, self.n_c, self.constraint_scale
         lam = q[nq:]
         f, K, C = self.forces(t, q, v, tangent)
-        g, G = self.constraint_jacobian(q)
+        g, G = self.constraint_jacobian(q, t)
         f_rest = np.concatenate([f + s * (G.T @ lam), s * g])
         f_inertia = np.concatenate([self.M @ a[:nq], np.zeros(nc)])
         ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest)
@@ -156,19 +162,24 @@ class System(SecondOrderModel):
                 ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
         return ev
 
-    def consistent_start(self, t, q, v=None):
-        """Multipliers and accelerations consistent with (q, v): the KKT system
-        [M G^T; G 0] [a; s lambda] = [-f; -v^T H v] (second derivative of g = 0).
+    def consistent_start(self, t, q, v=None, project_velocity: bool = False):
+        """Multipliers and accelerations consistent with (q, v) at t: the KKT system
+        [M G^T; G 0] [a; s lambda] = [-f; -v^T H v - r''(t)] (second time derivative of
+        g(q, t) = 0, r the driven part). ``project_velocity``: first replace v by its
+        M-orthogonal projection on G v + r'(t) = 0 (for a start that moves an actuator).
         Returns (q with lambda, v, a)."""
         nq, s = self.n_q, self.constraint_scale
         q = np.array(q, dtype=float)
         v = np.zeros(self.n_dofs) if v is None else np.array(v, dtype=float)
         q[nq:] = 0.0
-        f, _, _ = self.forces(t, q, v, tangent=False)
-        _, G = self.constraint_jacobian(q)
-        curv = self.constraints.curvature(v[:nq])
+        _, G = self.constraint_jacobian(q, t)
+        r = self.constraints.time_terms(t)
         A = sp.bmat([[self.M, G.T], [G, None]], format="csc")
-        sol = spla.spsolve(A, np.concatenate([-f, -curv]))
+        if project_velocity:
+            v[:nq] = spla.spsolve(A, np.concatenate([self.M @ v[:nq], -r[1]]))[:nq]
+        f, _, _ = self.forces(t, q, v, tangent=False)
+        curv = self.constraints.curvature(v[:nq])
+        sol = spla.spsolve(A, np.concatenate([-f, -curv - r[2]]))
         a = np.zeros(self.n_dofs)
         a[:nq] = sol[:nq]
         q[nq:] = sol[nq:] / s
@@ -191,9 +202,15 @@ class System(SecondOrderModel):
                     out[key] = out.get(key, 0.0) + val
         return out
 
-    def constraint_drift(self, q) -> float:
-        """max |g(q)|: how far q lies off the constraint manifold."""
-        return float(np.max(np.abs(self.constraints.values(q[:self.n_q]))))
+    def constraint_drift(self, q, t: float = 0.0) -> float:
+        """max |g(q, t)|: how far q lies off the constraint manifold."""
+        return float(np.max(np.abs(self.constraints.values(q[:self.n_q], t))))
+
+    def multipliers(self, q, component) -> np.ndarray:
+        """s lambda of ``component``'s constraints (in the order of its sets): the
+        generalised constraint force on the node coordinates is -G_c^T (s lambda)."""
+        rows = self._rows_of[id(component)]
+        return self.constraint_scale * q[self.n_q + rows.start:self.n_q + rows.stop]
 
     def position(self, q, node) -> np.ndarray:
         return q[self.x_dofs(node)]
