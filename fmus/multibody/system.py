@@ -27,16 +27,13 @@ import scipy.sparse.linalg as spla
 from pantocosim.core.model import Evaluation, SecondOrderModel
 
 from .constraint_set import ConstraintSet, orthonormality
+from .pattern import Pattern, PatternMatrix, factorize_csr, scatter_add
 from .triplets import Triplets
 
 NODE_DOFS = 12
 
 
 class System(SecondOrderModel):
-    #: systems with at most this many unknowns hand dense matrices to the integrator
-    #: (assembly by np.bincount and LAPACK are cheaper than sparse bookkeeping there)
-    DENSE_LIMIT = 800
-
     def __init__(self, constraint_scale: float = 1.0e6):
         self.X0: list[np.ndarray] = []
         self.R0: list[np.ndarray] = []
@@ -106,13 +103,32 @@ class System(SecondOrderModel):
         self.n_c = self.constraints.size
         self.n_dofs = self.n_q + self.n_c
         self._rows = np.repeat(np.arange(self.n_c), self.constraints.idx.shape[1])
-        z = sp.csr_matrix((self.n_c, self.n_c))
-        self._mass_full = sp.block_diag([self.M, z], format="csr")
-        self.dense = self.n_dofs <= self.DENSE_LIMIT
-        if self.dense:
-            self._mass_full = self._mass_full.toarray()
+        self._build_pattern()
         self._bound = True
         return self
+
+    def _build_pattern(self) -> None:
+        """The one CSR pattern of the Newton matrix: mass, the couplings of every component
+        that has a tangent (``tangent_dofs``), the constraints; components that scatter by
+        positions get them (``locate``)."""
+        Mc = self.M.tocoo()
+        rows, cols = [Mc.row], [Mc.col]
+        for comp in self.components:
+            if hasattr(comp, "tangent_dofs"):
+                d = np.asarray(comp.tangent_dofs())
+                rows.append(np.broadcast_to(d[:, :, None], d.shape + d.shape[-1:]))
+                cols.append(np.broadcast_to(d[:, None, :], d.shape + d.shape[-1:]))
+        r, c = self.constraints.couplings(self.n_q)
+        self.pattern = Pattern(self.n_dofs, rows + r, cols + c)
+        for comp in self.components:
+            if hasattr(comp, "locate"):
+                comp.locate(self.pattern)
+        self.constraints.locate(self.pattern, self.n_q)
+        self._mass_data = np.zeros(self.pattern.nnz)
+        scatter_add(self._mass_data, self.pattern.positions(Mc.row, Mc.col), Mc.data)
+        self._mass_full = self.pattern.matrix(self._mass_data)
+        self._force_components = [c for c in self.components if hasattr(c, "add_forces")]
+        self._keyed = [c for c in self.components if hasattr(c, "state_key")]
 
     def reference(self) -> np.ndarray:
         """q of the reference configuration (multipliers 0)."""
@@ -132,35 +148,36 @@ class System(SecondOrderModel):
 
     def forces(self, t, q, v, tangent=True):
         """f(t, q, v) of the node equations (internal + damping - external) and its tangents
-        K = df/dq, C = df/dv as :class:`Triplets` (None unless ``tangent``)."""
+        K = df/dq, C = df/dv as :class:`PatternMatrix` (None unless ``tangent``)."""
         nq = self.n_q
         f = np.zeros(nq)
-        K = Triplets(self.n_dofs) if tangent else None
-        C = Triplets(self.n_dofs) if tangent else None
-        for comp in self.components:
-            if hasattr(comp, "add_forces"):
-                comp.add_forces(t, q[:nq], v[:nq], f, K, C)
+        K = PatternMatrix(self.pattern) if tangent else None
+        C = PatternMatrix(self.pattern) if tangent else None
+        for comp in self._force_components:
+            comp.add_forces(t, q[:nq], v[:nq], f, K, C)
         return f, K, C
 
     def evaluate(self, t, q, v, a, inputs=None, tangent=True) -> Evaluation:
         nq, nc, s = self.n_q, self.n_c, self.constraint_scale
-        lam = q[nq:]
         f, K, C = self.forces(t, q, v, tangent)
-        g, G = self.constraint_jacobian(q, t)
-        f_rest = np.concatenate([f + s * (G.T @ lam), s * g])
+        g = self.constraints.add_forces(t, q, q[nq:], s, f, K.data if tangent else None)
+        f_rest = np.concatenate([f, s * g])
         f_inertia = np.concatenate([self.M @ a[:nq], np.zeros(nc)])
-        ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest)
+        key = tuple(c.state_key(q[:nq]) for c in self._keyed)
+        ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest, structure_key=key)
         if tangent:
-            cs = self.constraints
-            K.add(cs.idx, cs.idx, (s * lam)[:, None, None] * cs.H)
-            Gc = G.tocoo()
-            K.add_entries(Gc.row + nq, Gc.col, s * Gc.data)
-            K.add_entries(Gc.col, Gc.row + nq, s * Gc.data)
-            if self.dense:
-                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.toarray(), K.toarray()
-            else:
-                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
+            ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
         return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """c_a M + c_f (c_v C + K): one sum of data arrays on the shared pattern."""
+        if ev.mass is not self._mass_full or ev.inertia_q is not None:
+            return super().effective_matrix(ev, c_a, c_v, c_f)
+        return self.pattern.matrix(c_a * self._mass_data
+                                   + c_f * (c_v * ev.damping.data + ev.stiffness.data))
+
+    def factorize(self, S):
+        return factorize_csr(S) if sp.isspmatrix_csr(S) else super().factorize(S)
 
     def consistent_start(self, t, q, v=None, project_velocity: bool = False):
         """Multipliers and accelerations consistent with (q, v) at t: the KKT system
