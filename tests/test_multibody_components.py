@@ -171,3 +171,15 @@ def test_planar_joint_keeps_the_body_in_its_plane():
     assert np.allclose(a[s.x_dofs(n)], [0, -G, 0], atol=1e-12)
     assert np.allclose(a[s.d_dofs(n)], 0.0, atol=1e-12)
     assert s.multipliers(q, plane)[0] == pytest.approx(5.0, rel=1e-12)
+
+
+def test_rotation_vector_history_is_continuous_over_turns():
+    """The node-23 rotation of the pendulum figures: theta u stays continuous through
+    theta = pi and 2 pi (scipy returns |phi| <= pi)."""
+    from pantocosim.multibody.double_pendulum import rotation_vector
+    axis = np.array([0.6, 0.0, -0.8])
+    angles = np.linspace(0.0, 5 * np.pi, 41)
+    phi = None
+    for th in angles:
+        phi = rotation_vector(rotation(axis, th), phi)
+        assert np.allclose(phi, th * axis, atol=1e-9)
