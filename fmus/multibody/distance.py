@@ -28,6 +28,14 @@ def body_point(system, node: int, point=None):
     return system.node_dofs(node), T
 
 
+def _squared(law):
+    """The drive -L(t)^2 of g and its time derivatives, from (L, L', L'')."""
+    def drive(t):
+        L, Ld, Ldd = law(t)
+        return -L * L, -2.0 * L * Ld, -2.0 * (Ld * Ld + L * Ldd)
+    return drive
+
+
 class Distance:
     """|p_B - p_A| = L between ``point_a`` of node A's body and ``point_b`` of node B's body
     (``node_b`` None: ``point_b`` is a fixed point). ``length``: None (the reference
@@ -60,14 +68,8 @@ class Distance:
         H = 2.0 * D.T @ D
         b = 2.0 * D.T @ p
         c = p @ p
-        drive = None
-        if callable(self.length):
-            law = self.length
-
-            def drive(t):
-                L, Ld, Ldd = law(t)
-                return -L * L, -2.0 * L * Ld, -2.0 * (Ld * Ld + L * Ldd)
-        else:
+        drive = _squared(self.length) if callable(self.length) else None
+        if drive is None:
             L = self.reference_length(system) if self.length is None else float(self.length)
             if not L > 0.0:
                 raise ValueError(f"distance: length must be > 0, got {L}")

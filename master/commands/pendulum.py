@@ -111,7 +111,6 @@ def _figures(runs, out, args, summary) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     planes = [(0, 1, "X", "Y"), (0, 2, "X", "Z"), (2, 1, "Z", "Y")]
     fig, axes = plt.subplots(2, 3, figsize=(13, 8))
