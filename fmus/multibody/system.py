@@ -16,6 +16,20 @@ eq. 112; seed 002 eq. 15 without the augmented-Lagrangian penalty):
 ``s`` (``constraint_scale``) only balances the rows of the Newton matrix. With the HHT weights
 the constraint rows read (1 + alpha) g_{n+1} - alpha g_n = 0: index-3 HHT, the constraints
 hold at every step to the Newton tolerance (drift reported by :meth:`constraint_drift`).
+Constraints may depend on time (actuators: g(q, t), ``constraint_set.py``).
+
+The component protocol (each member optional):
+
+| member | called | does |
+|---|---|---|
+| ``bind(system)`` | at assembly | keeps its coordinates, precomputes |
+| ``add_mass(M)`` | at assembly | adds its constant mass blocks (:class:`Triplets`) |
+| ``constraints(system)`` | at assembly | its :class:`ConstraintSet` list |
+| ``tangent_dofs()`` | at assembly | (k, m) coordinate groups its tangent couples |
+| ``locate(pattern)`` | at assembly | keeps the positions of its blocks on the pattern |
+| ``add_forces(t, q, v, f, K, C)`` | every evaluation | adds forces to f and tangents to K, C (:class:`PatternMatrix`: ``add`` blocks, or scatter into ``data``) |
+| ``state_key(q)`` | every evaluation | a hashable state the tangent depends on (contact) |
+| ``energy(t, q, v)`` | reports | named potentials |
 """
 
 from __future__ import annotations
