@@ -27,9 +27,12 @@ The component protocol (each member optional):
 | ``constraints(system)`` | at assembly | its :class:`ConstraintSet` list |
 | ``tangent_dofs()`` | at assembly | (k, m) coordinate groups its tangent couples |
 | ``locate(pattern)`` | at assembly | keeps the positions of its blocks on the pattern |
-| ``add_forces(t, q, v, f, K, C)`` | every evaluation | adds forces to f and tangents to K, C (:class:`PatternMatrix`: ``add`` blocks, or scatter into ``data``) |
+| ``add_forces(t, q, v, f, K, C)`` | every evaluation | adds forces to f, tangents to K, C |
 | ``state_key(q)`` | every evaluation | a hashable state the tangent depends on (contact) |
 | ``energy(t, q, v)`` | reports | named potentials |
+
+K and C are :class:`PatternMatrix`: small components ``add`` blocks, element sets scatter
+into ``K.data`` at the positions they located.
 """
 
 from __future__ import annotations
