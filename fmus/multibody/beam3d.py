@@ -47,6 +47,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 
 @dataclass(frozen=True)
@@ -111,34 +112,131 @@ _N_SERIES = 30
 _C = np.array([math.comb(2 * n, n) / (4.0 ** n * (2 * n + 1)) for n in range(_N_SERIES)])
 
 
-def arc_factor(s, L=1.0):
+@njit(cache=True)
+def arc_factor(s, L):
     """h(s) = asin(s)/s and the two derived factors g = L^2 h'(s)/s and
     gq = L^4 (h'' - h'/s)/s^2 (power series below s = 0.5, closed forms above)."""
-    s = np.asarray(s, dtype=float)
-    if np.any(s >= 1.0):
+    if not s < 1.0:
         raise FloatingPointError("beam element rotated by more than 90 degrees")
-    L = np.broadcast_to(np.asarray(L, dtype=float), s.shape)
-    h = np.empty_like(s)
-    hp_s = np.empty_like(s)        # h'/s
-    q = np.empty_like(s)           # (h'' - h'/s)/s^2
-    small = s < 0.5
-    ss = s[small] ** 2
-    n = np.arange(_N_SERIES)
-    powers = ss[:, None] ** n[None, :]                    # s^(2n)
-    h[small] = powers @ _C
-    hp_s[small] = powers[:, :-1] @ (2 * n[1:] * _C[1:])   # sum 2n c_n s^(2n-2)
-    q[small] = powers[:, :-2] @ (2 * n[2:] * (2 * n[2:] - 2) * _C[2:])
-    big = ~small
-    x = s[big]
-    a = np.arcsin(x)
-    p = 1.0 / np.sqrt(1.0 - x * x)
-    hb = a / x
-    hpb = p / x - a / x ** 2
-    hppb = p ** 3 - 2.0 * p / x ** 2 + 2.0 * a / x ** 3
-    h[big] = hb
-    hp_s[big] = hpb / x
-    q[big] = (hppb - hpb / x) / x ** 2
-    return h, L ** 2 * hp_s, L ** 4 * q
+    if s < 0.5:
+        ss = s * s
+        h, hp_s, q = _C[0], 0.0, 0.0
+        p1, p2 = 1.0, 0.0                      # s^(2n-2), s^(2n-4)
+        for n in range(1, _N_SERIES):
+            hp_s += 2 * n * _C[n] * p1
+            q += 2 * n * (2 * n - 2) * _C[n] * p2
+            h += _C[n] * p1 * ss
+            p2 = p1
+            p1 *= ss
+    else:
+        a = math.asin(s)
+        p = 1.0 / math.sqrt(1.0 - s * s)
+        h = a / s
+        hp = p / s - a / (s * s)
+        hpp = p ** 3 - 2.0 * p / (s * s) + 2.0 * a / s ** 3
+        hp_s = hp / s
+        q = (hpp - hp / s) / (s * s)
+    return h, L * L * hp_s, L ** 4 * q
+
+
+@njit(cache=True)
+def _element(qe, ai, aj, av, cnt, L, c, e0, fe, Ke, want_k, Aq, W, vec, J, B):
+    """Internal force fe (24) and, if ``want_k``, tangent Ke (24, 24) of one element at its
+    coordinates qe; A_k in sparse form (rows ai, columns aj, values av, cnt[k] entries).
+    Work arrays: Aq, W (6, 24), vec (6, 6), J, B (6, 6). Returns e (a view of vec)."""
+    et, e, gv, sigma, tau = vec[0], vec[1], vec[2], vec[3], vec[4]
+    for k in range(6):
+        for i in range(24):
+            Aq[k, i] = 0.0
+        for p in range(cnt[k]):
+            Aq[k, ai[k, p]] += av[k, p] * qe[aj[k, p]]
+        acc = 0.0
+        for i in range(24):
+            acc += Aq[k, i] * qe[i]
+        et[k] = acc
+    kap = math.sqrt(et[3] ** 2 + et[4] ** 2 + et[5] ** 2)
+    h, g, gq = arc_factor(L * kap, L)
+    for k in range(6):
+        e[k] = h * et[k]
+        gv[k] = g * et[k] if k >= 3 else 0.0
+    for k in range(6):
+        sigma[k] = L * c[k] * (e[k] - e0[k])
+    for m in range(6):                          # J = h I + e~ gv^T, tau = J^T sigma
+        acc = 0.0
+        for k in range(6):
+            J[k, m] = (h if k == m else 0.0) + et[k] * gv[m]
+            acc += sigma[k] * J[k, m]
+        tau[m] = acc
+    for i in range(24):
+        acc = 0.0
+        for m in range(6):
+            acc += 2.0 * tau[m] * Aq[m, i]
+        fe[i] = acc
+    if not want_k:
+        return e
+    se = 0.0
+    for k in range(6):
+        se += sigma[k] * et[k]
+    for m in range(6):
+        for n in range(6):
+            acc = 0.0
+            for k in range(6):
+                acc += J[k, m] * L * c[k] * J[k, n]
+            acc += sigma[m] * gv[n] + sigma[n] * gv[m]
+            if m >= 3 and n >= 3:
+                acc += se * ((g if m == n else 0.0) + gq * et[m] * et[n])
+            B[m, n] = 4.0 * acc
+    for n in range(6):
+        for i in range(24):
+            acc = 0.0
+            for m in range(6):
+                acc += B[m, n] * Aq[m, i]
+            W[n, i] = acc
+    for i in range(24):
+        for j in range(24):
+            acc = 0.0
+            for n in range(6):
+                acc += W[n, i] * Aq[n, j]
+            Ke[i, j] = acc
+    for m in range(6):
+        for p in range(cnt[m]):
+            Ke[ai[m, p], aj[m, p]] += 2.0 * tau[m] * av[m, p]
+    return e
+
+
+@njit(cache=True)
+def _beam_kernel(q, dofs, ai, aj, av, cnt, L, c, e0, f, kdata, pos, want_k, strains,
+                 qe, fe, Ke, Aq, W, vec, J, B):
+    """Every element of a beam: forces added to f, tangents to kdata at pos (ne, 576),
+    strains e into ``strains`` (ne, 6). Nothing allocated (work arrays passed in)."""
+    for el in range(dofs.shape[0]):
+        for i in range(24):
+            qe[i] = q[dofs[el, i]]
+        e = _element(qe, ai[el], aj[el], av[el], cnt[el], L[el], c, e0[el], fe, Ke, want_k,
+                     Aq, W, vec, J, B)
+        for k in range(6):
+            strains[el, k] = e[k]
+        for i in range(24):
+            f[dofs[el, i]] += fe[i]
+        if want_k:
+            for i in range(24):
+                for j in range(24):
+                    kdata[pos[el, 24 * i + j]] += Ke[i, j]
+
+
+def _sparse_forms(L) -> tuple:
+    """(ai, aj, av, cnt): the strain forms A_k of every element in sparse form."""
+    A = np.stack([strain_forms(x) for x in L])                      # (ne, 6, 24, 24)
+    cnt = np.count_nonzero(A, axis=(2, 3))
+    P = int(cnt.max())
+    ai = np.zeros(A.shape[:2] + (P,), np.int64)
+    aj = np.zeros_like(ai)
+    av = np.zeros(ai.shape)
+    for e in range(A.shape[0]):
+        for k in range(6):
+            i, j = np.nonzero(A[e, k])
+            ai[e, k, :i.size], aj[e, k, :i.size], av[e, k, :i.size] = i, j, A[e, k, i, j]
+    return ai, aj, av, cnt.astype(np.int64)
 
 
 class DirectorBeam:
@@ -157,15 +255,59 @@ class DirectorBeam:
         self.L = np.linalg.norm(X[n[1:]] - X[n[:-1]], axis=1)
         if np.any(self.L <= 0):
             raise ValueError(f"{self.name}: zero-length element")
-        self.A = np.stack([strain_forms(L) for L in self.L])            # (ne, 6, 24, 24)
-        q0 = system.reference()
-        self.e0 = np.zeros((len(self.L), 6))
-        self.e0 = self.strains(q0[self.dofs])
+        self.forms = _sparse_forms(self.L)
+        ne = len(self.L)
+        self._work = (np.empty(24), np.empty(24), np.empty((24, 24)), np.empty((6, 24)),
+                      np.empty((6, 24)), np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)))
+        self._strains = np.empty((ne, 6))
+        self._no_pos = np.zeros((ne, 576), np.int64)
+        self.e0 = np.zeros((ne, 6))
+        self.e0 = self.strains(system.reference()[self.dofs])
 
-    # ------------------------------------------------------------------ kinematics
+    def tangent_dofs(self) -> np.ndarray:
+        """(ne, 24): each element couples its 24 coordinates."""
+        return self.dofs
+
+    def locate(self, pattern) -> None:
+        self.pos = pattern.positions(self.dofs[:, :, None], self.dofs[:, None, :]).reshape(
+            -1, 576)
+
+    # ------------------------------------------------------------------ kernels
+    def _run(self, q, dofs, f, kdata, pos, want_k):
+        _beam_kernel(q, dofs, *self.forms, self.L, self.c, self.e0, f, kdata, pos, want_k,
+                     self._strains, *self._work)
+        return self._strains
+
     def strains(self, qe) -> np.ndarray:
-        """(ne, 6) Gamma_1, Gamma_2, Gamma_3 (axial, with the 1 of the reference), K_1..3."""
-        return self.corrected_strains(qe)[0]
+        """(ne, 6) Gamma_1, Gamma_2, Gamma_3 (axial, with the 1 of the reference), K_1..3 at
+        element coordinates qe (ne, 24)."""
+        qe = np.ascontiguousarray(qe, dtype=float)
+        dofs = np.arange(qe.size).reshape(qe.shape)
+        return self._run(qe.ravel(), dofs, np.zeros(qe.size), np.zeros(1), self._no_pos,
+                         False).copy()
+
+    def element_forces(self, qe, tangent=True):
+        """(f_e (ne, 24), K_e (ne, 24, 24) or None) at element coordinates qe (ne, 24).
+
+        e = h(s) e~ with s = L |K~|; J = de/de~ = h I + e~ gv^T (gv = g K~ on the curvature
+        components, g = L h'(s)/|K~|), so f = sum_m tau_m 2 A_m q with tau = J^T sigma,
+        sigma_k = L c_k (e_k - e_k0), and K = sum_mn B_mn (2 A_m q)(2 A_n q)^T
+        + sum_m tau_m 2 A_m with B = J^T (L c) J + sum_k sigma_k d2e_k/de~ de~.
+        (The numba kernel the system runs, element by element into separate arrays.)"""
+        qe = np.ascontiguousarray(qe, dtype=float)
+        ne = qe.shape[0]
+        dofs = np.arange(qe.size).reshape(qe.shape)
+        f = np.zeros((ne, 24))
+        K = np.zeros((ne, 24, 24)) if tangent else None
+        for e in range(ne):
+            kd = K[e].ravel() if tangent else np.zeros(1)
+            pos = np.arange(576).reshape(1, 576)
+            _beam_kernel(qe[e], dofs[:1], *(x[e:e + 1] for x in self.forms), self.L[e:e + 1],
+                         self.c, self.e0[e:e + 1], f[e], kd, pos, tangent,
+                         np.empty((1, 6)), *self._work)
+            if tangent:
+                K[e] = kd.reshape(24, 24)
+        return f, K
 
     # ------------------------------------------------------------------ protocol
     def add_mass(self, M) -> None:
@@ -182,52 +324,11 @@ class DirectorBeam:
                         me[ia:ia + 3, ib:ib + 3] += mu * L * lin[a, b] * np.eye(3)
             M.add(self.dofs[e], self.dofs[e], me)
 
-    def corrected_strains(self, qe):
-        """(e, Aq, et): the strains e = h(s) e~ of the element, the A_k q_e and e~."""
-        Aq = np.einsum("ekij,ej->eki", self.A, qe)
-        et = np.einsum("eki,ei->ek", Aq, qe)
-        s = self.L * np.linalg.norm(et[:, 3:], axis=1)
-        h, _, _ = arc_factor(s)
-        return h[:, None] * et, Aq, et
-
-    def element_forces(self, qe, tangent=True):
-        """(f_e (ne, 24), K_e (ne, 24, 24) or None) at element coordinates qe (ne, 24).
-
-        e = h(s) e~ with s = L |K~|; J = de/de~ = h I + e~ gv^T (gv = g K~ on the curvature
-        components, g = L h'(s)/|K~|), so f = sum_m tau_m 2 A_m q with tau = J^T sigma,
-        sigma_k = L c_k (e_k - e_k0), and K = sum_mn B_mn (2 A_m q)(2 A_n q)^T
-        + sum_m tau_m 2 A_m with B = J^T (L c) J + sum_k sigma_k d2e_k/de~ de~."""
-        Aq = np.einsum("ekij,ej->eki", self.A, qe)
-        et = np.einsum("eki,ei->ek", Aq, qe)
-        kap = et[:, 3:]
-        s = self.L * np.linalg.norm(kap, axis=1)
-        h, g, gq = arc_factor(s, self.L)
-        e = h[:, None] * et
-        gv = np.zeros_like(et)
-        gv[:, 3:] = g[:, None] * kap
-        J = h[:, None, None] * np.eye(6)[None] + et[:, :, None] * gv[:, None, :]
-        w = self.L[:, None] * self.c[None, :]
-        sigma = w * (e - self.e0)
-        tau = np.einsum("ek,ekm->em", sigma, J)
-        f = np.einsum("em,emi->ei", 2.0 * tau, Aq)
-        if not tangent:
-            return f, None
-        # d2 e_k / de~_m de~_n = delta_km gv_n + delta_kn gv_m + e~_k dgv_m/de~_n
-        dgv = np.zeros((len(self.L), 6, 6))
-        dgv[:, 3:, 3:] = (g[:, None, None] * np.eye(3)[None]
-                          + gq[:, None, None] * kap[:, :, None] * kap[:, None, :])
-        B = np.einsum("ekm,ek,ekn->emn", J, w, J)
-        B += sigma[:, :, None] * gv[:, None, :] + sigma[:, None, :] * gv[:, :, None]
-        B += np.einsum("ek,ek->e", sigma, et)[:, None, None] * dgv
-        K = (np.einsum("emn,emi,enj->eij", 4.0 * B, Aq, Aq)
-             + np.einsum("em,emij->eij", 2.0 * tau, self.A))
-        return f, K
-
     def add_forces(self, t, q, v, f, K, C) -> None:
-        fe, Ke = self.element_forces(q[self.dofs], tangent=K is not None)
-        np.add.at(f, self.dofs, fe)
-        if K is not None:
-            K.add(self.dofs, self.dofs, Ke)
+        if K is None:
+            self._run(q, self.dofs, f, np.zeros(1), self._no_pos, False)
+        else:
+            self._run(q, self.dofs, f, K.data, self.pos, True)
 
     def strain_energy(self, q) -> float:
         de = self.strains(q[self.dofs]) - self.e0

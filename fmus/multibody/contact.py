@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .pattern import scatter_add
+
 
 class GroundContact:
     def __init__(self, node: int, normal=(0.0, 1.0, 0.0), offset: float = 0.0,
@@ -26,6 +28,17 @@ class GroundContact:
 
     def bind(self, system) -> None:
         self.dofs = system.x_dofs(self.node)
+
+    def tangent_dofs(self) -> np.ndarray:
+        return self.dofs[None, :]
+
+    def locate(self, pattern) -> None:
+        self.pos = pattern.positions(self.dofs[:, None], self.dofs[None, :]).ravel()
+
+    def state_key(self, q) -> bool:
+        """In contact or not: the tangent changes with it (an integrator reusing a
+        factorization refactorizes)."""
+        return self.gap(q) < 0.0
 
     def gap(self, q) -> float:
         return float(self.n @ q[self.dofs] - self.offset)
@@ -44,9 +57,9 @@ class GroundContact:
         vn = float(self.n @ v[self.dofs])
         f[self.dofs] += (self.k * qn + self.c * vn) * self.n
         if K is not None:
-            nn = np.outer(self.n, self.n)
-            K.add(self.dofs, self.dofs, self.k * nn)
-            C.add(self.dofs, self.dofs, self.c * nn)
+            nn = np.outer(self.n, self.n).ravel()
+            scatter_add(K.data, self.pos, self.k * nn)
+            scatter_add(C.data, self.pos, self.c * nn)
 
     def energy(self, t, q, v) -> dict:
         qn = self.gap(q)

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .pattern import scatter_add
+
 
 def _skew(m):
     return np.array([[0.0, -m[2], m[1]], [m[2], 0.0, -m[0]], [-m[1], m[0], 0.0]])
@@ -81,6 +83,13 @@ class NodalMoment:
     def bind(self, system) -> None:
         self.dofs = [system.d_dofs(self.node, i) for i in range(3)]
 
+    def tangent_dofs(self) -> np.ndarray:
+        return np.concatenate(self.dofs)[None, :]
+
+    def locate(self, pattern) -> None:
+        self.pos = np.concatenate([pattern.positions(d[:, None], d[None, :]).ravel()
+                                   for d in self.dofs])
+
     def add_forces(self, t, q, v, f, K, C) -> None:
         m = self.scale * np.asarray(self.moment(t), dtype=float)
         if not np.any(m):
@@ -88,8 +97,8 @@ class NodalMoment:
         S = 0.5 * _skew(m)
         for d in self.dofs:
             f[d] -= S @ q[d]
-            if K is not None:
-                K.add(d, d, -S)
+        if K is not None:
+            scatter_add(K.data, self.pos, np.tile(-S.ravel(), 3))
 
     def angular_velocity(self, q, v) -> np.ndarray:
         return 0.5 * sum(np.cross(q[d], v[d]) for d in self.dofs)

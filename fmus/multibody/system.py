@@ -16,6 +16,23 @@ eq. 112; seed 002 eq. 15 without the augmented-Lagrangian penalty):
 ``s`` (``constraint_scale``) only balances the rows of the Newton matrix. With the HHT weights
 the constraint rows read (1 + alpha) g_{n+1} - alpha g_n = 0: index-3 HHT, the constraints
 hold at every step to the Newton tolerance (drift reported by :meth:`constraint_drift`).
+Constraints may depend on time (actuators: g(q, t), ``constraint_set.py``).
+
+The component protocol (each member optional):
+
+| member | called | does |
+|---|---|---|
+| ``bind(system)`` | at assembly | keeps its coordinates, precomputes |
+| ``add_mass(M)`` | at assembly | adds its constant mass blocks (:class:`Triplets`) |
+| ``constraints(system)`` | at assembly | its :class:`ConstraintSet` list |
+| ``tangent_dofs()`` | at assembly | (k, m) coordinate groups its tangent couples |
+| ``locate(pattern)`` | at assembly | keeps the positions of its blocks on the pattern |
+| ``add_forces(t, q, v, f, K, C)`` | every evaluation | adds forces to f, tangents to K, C |
+| ``state_key(q)`` | every evaluation | a hashable state the tangent depends on (contact) |
+| ``energy(t, q, v)`` | reports | named potentials |
+
+K and C are :class:`PatternMatrix`: small components ``add`` blocks, element sets scatter
+into ``K.data`` at the positions they located.
 """
 
 from __future__ import annotations
@@ -27,16 +44,13 @@ import scipy.sparse.linalg as spla
 from pantocosim.core.model import Evaluation, SecondOrderModel
 
 from .constraint_set import ConstraintSet, orthonormality
+from .pattern import Pattern, PatternMatrix, factorize_csr, scatter_add
 from .triplets import Triplets
 
 NODE_DOFS = 12
 
 
 class System(SecondOrderModel):
-    #: systems with at most this many unknowns hand dense matrices to the integrator
-    #: (assembly by np.bincount and LAPACK are cheaper than sparse bookkeeping there)
-    DENSE_LIMIT = 800
-
     def __init__(self, constraint_scale: float = 1.0e6):
         self.X0: list[np.ndarray] = []
         self.R0: list[np.ndarray] = []
@@ -87,6 +101,8 @@ class System(SecondOrderModel):
         self.n_dofs = self.n_q          # until the constraints are counted
         M = Triplets(self.n_q)
         sets = [orthonormality(self.d_dofs(np.arange(n_nodes)))]
+        n_rows = sets[0].size
+        self._rows_of = {}
         for comp in self.components:
             if hasattr(comp, "bind"):
                 comp.bind(self)
@@ -94,19 +110,42 @@ class System(SecondOrderModel):
             if hasattr(comp, "add_mass"):
                 comp.add_mass(M)
             if hasattr(comp, "constraints"):
-                sets.extend(comp.constraints(self))
+                own = comp.constraints(self)
+                size = sum(c.size for c in own)
+                self._rows_of[id(comp)] = slice(n_rows, n_rows + size)
+                n_rows += size
+                sets.extend(own)
         self.M = M.tocsr()
         self.constraints = ConstraintSet.concatenate(sets)
         self.n_c = self.constraints.size
         self.n_dofs = self.n_q + self.n_c
         self._rows = np.repeat(np.arange(self.n_c), self.constraints.idx.shape[1])
-        z = sp.csr_matrix((self.n_c, self.n_c))
-        self._mass_full = sp.block_diag([self.M, z], format="csr")
-        self.dense = self.n_dofs <= self.DENSE_LIMIT
-        if self.dense:
-            self._mass_full = self._mass_full.toarray()
+        self._build_pattern()
         self._bound = True
         return self
+
+    def _build_pattern(self) -> None:
+        """The one CSR pattern of the Newton matrix: mass, the couplings of every component
+        that has a tangent (``tangent_dofs``), the constraints; components that scatter by
+        positions get them (``locate``)."""
+        Mc = self.M.tocoo()
+        rows, cols = [Mc.row], [Mc.col]
+        for comp in self.components:
+            if hasattr(comp, "tangent_dofs"):
+                d = np.asarray(comp.tangent_dofs())
+                rows.append(np.broadcast_to(d[:, :, None], d.shape + d.shape[-1:]))
+                cols.append(np.broadcast_to(d[:, None, :], d.shape + d.shape[-1:]))
+        r, c = self.constraints.couplings(self.n_q)
+        self.pattern = Pattern(self.n_dofs, rows + r, cols + c)
+        for comp in self.components:
+            if hasattr(comp, "locate"):
+                comp.locate(self.pattern)
+        self.constraints.locate(self.pattern, self.n_q)
+        self._mass_data = np.zeros(self.pattern.nnz)
+        scatter_add(self._mass_data, self.pattern.positions(Mc.row, Mc.col), Mc.data)
+        self._mass_full = self.pattern.matrix(self._mass_data)
+        self._force_components = [c for c in self.components if hasattr(c, "add_forces")]
+        self._keyed = [c for c in self.components if hasattr(c, "state_key")]
 
     def reference(self) -> np.ndarray:
         """q of the reference configuration (multipliers 0)."""
@@ -116,59 +155,65 @@ class System(SecondOrderModel):
         return q
 
     # ------------------------------------------------------------------ pieces
-    def constraint_jacobian(self, q) -> tuple[np.ndarray, sp.csr_matrix]:
-        """(g, G): values and the sparse (n_c, n_q) Jacobian at q."""
+    def constraint_jacobian(self, q, t: float = 0.0) -> tuple[np.ndarray, sp.csr_matrix]:
+        """(g, G): values at (q, t) and the sparse (n_c, n_q) Jacobian at q."""
         cs = self.constraints
         qq = q[:self.n_q]
         G = sp.csr_matrix((cs.gradients(qq).reshape(-1), (self._rows, cs.idx.reshape(-1))),
                           shape=(self.n_c, self.n_q))
-        return cs.values(qq), G
+        return cs.values(qq, t), G
 
     def forces(self, t, q, v, tangent=True):
         """f(t, q, v) of the node equations (internal + damping - external) and its tangents
-        K = df/dq, C = df/dv as :class:`Triplets` (None unless ``tangent``)."""
+        K = df/dq, C = df/dv as :class:`PatternMatrix` (None unless ``tangent``)."""
         nq = self.n_q
         f = np.zeros(nq)
-        K = Triplets(self.n_dofs) if tangent else None
-        C = Triplets(self.n_dofs) if tangent else None
-        for comp in self.components:
-            if hasattr(comp, "add_forces"):
-                comp.add_forces(t, q[:nq], v[:nq], f, K, C)
+        K = PatternMatrix(self.pattern) if tangent else None
+        C = PatternMatrix(self.pattern) if tangent else None
+        for comp in self._force_components:
+            comp.add_forces(t, q[:nq], v[:nq], f, K, C)
         return f, K, C
 
     def evaluate(self, t, q, v, a, inputs=None, tangent=True) -> Evaluation:
         nq, nc, s = self.n_q, self.n_c, self.constraint_scale
-        lam = q[nq:]
         f, K, C = self.forces(t, q, v, tangent)
-        g, G = self.constraint_jacobian(q)
-        f_rest = np.concatenate([f + s * (G.T @ lam), s * g])
+        g = self.constraints.add_forces(t, q, q[nq:], s, f, K.data if tangent else None)
+        f_rest = np.concatenate([f, s * g])
         f_inertia = np.concatenate([self.M @ a[:nq], np.zeros(nc)])
-        ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest)
+        key = tuple(c.state_key(q[:nq]) for c in self._keyed)
+        ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest, structure_key=key)
         if tangent:
-            cs = self.constraints
-            K.add(cs.idx, cs.idx, (s * lam)[:, None, None] * cs.H)
-            Gc = G.tocoo()
-            K.add_entries(Gc.row + nq, Gc.col, s * Gc.data)
-            K.add_entries(Gc.col, Gc.row + nq, s * Gc.data)
-            if self.dense:
-                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.toarray(), K.toarray()
-            else:
-                ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
+            ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
         return ev
 
-    def consistent_start(self, t, q, v=None):
-        """Multipliers and accelerations consistent with (q, v): the KKT system
-        [M G^T; G 0] [a; s lambda] = [-f; -v^T H v] (second derivative of g = 0).
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        """c_a M + c_f (c_v C + K): one sum of data arrays on the shared pattern."""
+        if ev.mass is not self._mass_full or ev.inertia_q is not None:
+            return super().effective_matrix(ev, c_a, c_v, c_f)
+        return self.pattern.matrix(c_a * self._mass_data
+                                   + c_f * (c_v * ev.damping.data + ev.stiffness.data))
+
+    def factorize(self, S):
+        return factorize_csr(S) if sp.isspmatrix_csr(S) else super().factorize(S)
+
+    def consistent_start(self, t, q, v=None, project_velocity: bool = False):
+        """Multipliers and accelerations consistent with (q, v) at t: the KKT system
+        [M G^T; G 0] [a; s lambda] = [-f; -v^T H v - r''(t)] (second time derivative of
+        g(q, t) = 0, r the driven part). ``project_velocity``: first replace v by its
+        M-orthogonal projection on G v + r'(t) = 0 (for a start that moves an actuator).
         Returns (q with lambda, v, a)."""
         nq, s = self.n_q, self.constraint_scale
         q = np.array(q, dtype=float)
         v = np.zeros(self.n_dofs) if v is None else np.array(v, dtype=float)
         q[nq:] = 0.0
-        f, _, _ = self.forces(t, q, v, tangent=False)
-        _, G = self.constraint_jacobian(q)
-        curv = self.constraints.curvature(v[:nq])
+        _, G = self.constraint_jacobian(q, t)
+        r = self.constraints.time_terms(t)
         A = sp.bmat([[self.M, G.T], [G, None]], format="csc")
-        sol = spla.spsolve(A, np.concatenate([-f, -curv]))
+        if project_velocity:
+            v[:nq] = spla.spsolve(A, np.concatenate([self.M @ v[:nq], -r[1]]))[:nq]
+        f, _, _ = self.forces(t, q, v, tangent=False)
+        curv = self.constraints.curvature(v[:nq])
+        sol = spla.spsolve(A, np.concatenate([-f, -curv - r[2]]))
         a = np.zeros(self.n_dofs)
         a[:nq] = sol[:nq]
         q[nq:] = sol[nq:] / s
@@ -191,9 +236,15 @@ class System(SecondOrderModel):
                     out[key] = out.get(key, 0.0) + val
         return out
 
-    def constraint_drift(self, q) -> float:
-        """max |g(q)|: how far q lies off the constraint manifold."""
-        return float(np.max(np.abs(self.constraints.values(q[:self.n_q]))))
+    def constraint_drift(self, q, t: float = 0.0) -> float:
+        """max |g(q, t)|: how far q lies off the constraint manifold."""
+        return float(np.max(np.abs(self.constraints.values(q[:self.n_q], t))))
+
+    def multipliers(self, q, component) -> np.ndarray:
+        """s lambda of ``component``'s constraints (in the order of its sets): the
+        generalised constraint force on the node coordinates is -G_c^T (s lambda)."""
+        rows = self._rows_of[id(component)]
+        return self.constraint_scale * q[self.n_q + rows.start:self.n_q + rows.stop]
 
     def position(self, q, node) -> np.ndarray:
         return q[self.x_dofs(node)]

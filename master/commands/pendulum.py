@@ -1,14 +1,16 @@
 """``pantocosim pendulum``: the spatial flexible double pendulum with impacts of seed 002.
 
 Runs the paper's three cases (E = 2.1e15 "rigid", 2.1e11 steel, 2.1e10 Pa) with the
-multibody core on the HHT-alpha integrator, and writes into OUT:
+multibody core on the HHT-alpha integrator, and writes into OUT (``--out docs/figures``
+refreshes the figures of docs/pendulum.md):
 
-- ``trajectories.png``: tips of bar 1 (node 12) and bar 2 (node 23) in the planes XY, XZ, YZ
-  (the paper's Figs. 4-6);
-- ``node23.png``: height, vertical velocity and vertical acceleration of node 23 (Fig. 7);
-- ``energy.png``: the energy account of each case;
-- ``summary.json`` and the printed table of the maximum out-of-plane displacement of node 12
-  against the paper's values, the energy balance and the constraint drift.
+- ``pendulum_trajectories.png``: tips of bar 1 (node 12) and bar 2 (node 23) in the planes
+  XY, XZ, YZ (the paper's Figs. 4-6);
+- ``pendulum_node23.png``: X component of the rotation vector, vertical velocity and vertical
+  acceleration of node 23, one column per case (the paper's Fig. 7);
+- ``pendulum_energy.png``: the energy account of each case;
+- ``pendulum_summary.json`` and the printed table of the maximum out-of-plane displacement of
+  node 12 against the paper's values, the energy balance and the constraint drift.
 
 The modelling choices the paper leaves open are listed in
 :mod:`pantocosim.multibody.double_pendulum`.
@@ -17,10 +19,12 @@ The modelling choices the paper leaves open are listed in
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 #: the files the command writes into its output folder
-OUTPUT_FILES = ("trajectories.png", "node23.png", "energy.png", "summary.json")
+OUTPUT_FILES = ("pendulum_trajectories.png", "pendulum_node23.png", "pendulum_energy.png",
+                "pendulum_summary.json")
 
 
 def add_parser(sub):
@@ -70,12 +74,19 @@ def run(args) -> int:
     for c, s in summary.items():
         print(f"| {c} | {s['pulse_work_J']:.4f} | {s['contact_dissipation_J']:.4f} | "
               f"{s['hht_dissipation_J']:.4f} | {s['max_energy_residual_over_scale']:.2e} |")
-    print(f"\nfigures and summary.json in {out}")
+    print("\n| case | node 23: max abs rotation X (rad) | max abs vertical velocity (m/s) | "
+          "max abs vertical acceleration (m/s2) |")
+    print("|---|---|---|---|")
+    for c, s in summary.items():
+        print(f"| {c} | {s['node23_max_abs_rotation_x_rad']:.3f} | "
+              f"{s['node23_max_abs_vertical_velocity_m_s']:.3f} | "
+              f"{s['node23_max_abs_vertical_acceleration_m_s2']:.4g} |")
+    print(f"\nfigures and pendulum_summary.json in {out}")
     return 0
 
 
 def _simulate(cases, args, out: Path):
-    """Run the cases and write the figures and summary.json into ``out``."""
+    """Run the cases and write the figures and pendulum_summary.json into ``out``."""
     import numpy as np
 
     from pantocosim.core.errors import ConvergenceError
@@ -85,6 +96,7 @@ def _simulate(cases, args, out: Path):
     runs, summary = {}, {}
     for c in cases:
         E, paper = CASES[c]
+        start = time.perf_counter()
         model = build(PendulumSpec(E=E))
         try:
             r = simulate(model, args.duration, args.step, alpha=args.alpha)
@@ -108,23 +120,28 @@ def _simulate(cases, args, out: Path):
             "energy_scale_J": float(scale),
             "max_constraint_drift": float(r.drift.max()),
             "mean_newton_iterations": float(r.iterations[1:].mean()),
+            "node23_max_abs_rotation_x_rad": float(np.abs(r.rotations[23][:, 0]).max()),
+            "node23_max_abs_vertical_velocity_m_s": float(np.abs(r.velocities[23][:, 1]).max()),
+            "node23_max_abs_vertical_acceleration_m_s2": float(
+                np.abs(r.accelerations[23][:, 1]).max()),
+            "wall_time_s": round(time.perf_counter() - start, 1),
         }
         print(f"{c:>6}: E = {E:.2e} Pa, node 12 out of plane max "
               f"{summary[c]['max_out_of_plane_node12_m']:.3e} m (paper {paper:g} m), "
               f"first impact {summary[c]['first_impact_s']} s, drift "
-              f"{summary[c]['max_constraint_drift']:.1e}", flush=True)
+              f"{summary[c]['max_constraint_drift']:.1e}, {summary[c]['wall_time_s']} s",
+              flush=True)
     with writing("file", out):
-        _figures(runs, out, args)
-        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        _figures(runs, out, args, summary)
+        (out / "pendulum_summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return runs, summary
 
 
-def _figures(runs, out, args) -> None:
+def _figures(runs, out, args, summary) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
 
     planes = [(0, 1, "X", "Y"), (0, 2, "X", "Z"), (2, 1, "Z", "Y")]
     fig, axes = plt.subplots(2, 3, figsize=(13, 8))
@@ -138,25 +155,9 @@ def _figures(runs, out, args) -> None:
                 ax.set_title(f"node {node}, plane {a}{b}")
     axes[0, 0].legend()
     fig.tight_layout()
-    fig.savefig(out / "trajectories.png", dpi=120)
+    fig.savefig(out / "pendulum_trajectories.png", dpi=120)
     plt.close(fig)
-
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
-    for c, r in runs.items():
-        vy = r.velocities[23][:, 1]
-        ay = np.gradient(vy, r.t)
-        axes[0].plot(r.t, r.positions[23][:, 1], lw=0.8, label=c)
-        axes[1].plot(r.t, vy, lw=0.8, label=c)
-        axes[2].plot(r.t, ay, lw=0.6, label=c)
-    axes[0].axhline(-1.8, color="k", lw=0.5)
-    axes[0].set_ylabel("y node 23 [m]")
-    axes[1].set_ylabel("vertical velocity [m/s]")
-    axes[2].set_ylabel("vertical acceleration [m/s2]")
-    axes[2].set_xlabel("t [s]")
-    axes[0].legend()
-    fig.tight_layout()
-    fig.savefig(out / "node23.png", dpi=120)
-    plt.close(fig)
+    _node23_figure(runs, out, plt, summary)
 
     fig, axes = plt.subplots(len(runs), 1, figsize=(9, 3.2 * len(runs)), squeeze=False)
     for ax, (c, r) in zip(axes[:, 0], runs.items()):
@@ -169,5 +170,29 @@ def _figures(runs, out, args) -> None:
         ax.legend(fontsize=7, ncol=3)
     axes[-1, 0].set_xlabel("t [s]")
     fig.tight_layout()
-    fig.savefig(out / "energy.png", dpi=120)
+    fig.savefig(out / "pendulum_energy.png", dpi=120)
+    plt.close(fig)
+
+
+def _node23_figure(runs, out, plt, summary) -> None:
+    """The paper's Fig. 7 for every case: X component of the rotation vector, vertical
+    velocity and vertical (HHT) acceleration of node 23, first contact marked."""
+    rows = [("rotations", 0, "rotation vector X [rad]"),
+            ("velocities", 1, "vertical velocity [m/s]"),
+            ("accelerations", 1, "vertical acceleration [m/s2]")]
+    fig, axes = plt.subplots(3, len(runs), figsize=(4.4 * len(runs), 8.5), sharex=True,
+                             squeeze=False)
+    for col, (c, r) in enumerate(runs.items()):
+        impact = summary[c]["first_impact_s"]
+        for row, (field, comp, label) in enumerate(rows):
+            ax = axes[row, col]
+            ax.plot(r.t, getattr(r, field)[23][:, comp], lw=0.6 if row == 2 else 0.8)
+            if impact is not None:
+                ax.axvline(impact, color="k", lw=0.5, ls=":")
+            if col == 0:
+                ax.set_ylabel(label)
+        axes[0, col].set_title(f"node 23, {c}")
+        axes[-1, col].set_xlabel("t [s]")
+    fig.tight_layout()
+    fig.savefig(out / "pendulum_node23.png", dpi=120)
     plt.close(fig)
