@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.core.hht import DEFAULT_ALPHA
+
 CASES = {
     # name: (catenary, spans, pantograph, speed km/h, position m)
     "en50318-300": ("en50318", 10, "en50318-2mass", 300.0, 30.0),
@@ -65,7 +67,7 @@ def scenario_text(name, catenary, spans, pantograph, speed, x0, duration,
             f"speed_kmh = {speed}\n\n[[pantographs]]\nmodel = \"{pantograph}\"\n"
             f"position_m = {x0}\nstart = \"static\"\n\n[analysis]\n"
             f"window_m = [{x0 + 1.0}, {x0 + speed / 3.6 * duration - 1.0}]\n\n"
-            f"[simulation]\ndt = 0.001\nalpha = -0.05\nduration_s = {duration}\n{extra}")
+            f"[simulation]\ndt = 0.001\nalpha = {DEFAULT_ALPHA}\nduration_s = {duration}\n{extra}")
 
 
 def select_cases(names=None) -> list[str]:
@@ -104,7 +106,7 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None) -> d
     return summary
 
 
-def factorised_newton_matrix(model, h: float = 1e-3, alpha: float = -0.05):
+def factorised_newton_matrix(model, h: float = 1e-3, alpha: float = DEFAULT_ALPHA):
     """``solve`` of a catenary model's HHT Newton matrix at its static configuration."""
     from pantocosim.core.hht import HHTSettings
 

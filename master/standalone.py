@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTIntegrator, HHTSettings
 from pantocosim.core.linear_model import LinearModel
 from pantocosim.pantograph.base import PantographModel
 
@@ -48,7 +48,7 @@ class StandaloneResult:
 
 
 def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
-                        duration: float, dt: float = 1e-3, alpha: float = -0.05,
+                        duration: float, dt: float = 1e-3, alpha: float = DEFAULT_ALPHA,
                         q0=None, linear: bool = False, stop=None) -> StandaloneResult:
     """Integrate the pantograph from static equilibrium under F(0) at its working height.
 

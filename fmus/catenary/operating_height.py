@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTIntegrator, HHTSettings
 from pantocosim.core.model import Evaluation, SecondOrderModel
 
 
@@ -47,7 +47,7 @@ class LinearisedCatenary(SecondOrderModel):
 
 
 def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: float,
-                             duration: float, alpha: float = -0.05) -> np.ndarray:
+                             duration: float, alpha: float = DEFAULT_ALPHA) -> np.ndarray:
     """Mean contact-wire height under each moving constant force over the window [m]."""
     model = LinearisedCatenary(catenary)
     forces = np.asarray(forces, dtype=float)
@@ -106,7 +106,7 @@ class ContactHeightLaws:
 
 
 def mean_dynamic_height_law(catenary, k: int, window: tuple[float, float], dt: float,
-                            duration: float, alpha: float = -0.05) -> tuple[float, float]:
+                            duration: float, alpha: float = DEFAULT_ALPHA) -> tuple[float, float]:
     """(offset, slope): the mean dynamic wire height of :func:`mean_dynamic_wire_height` under
     pantograph ``k``'s constant force F alone is offset + slope F (secant through
     :data:`LAW_FORCES`: the runs start from the nonlinear static state, as the monolithic
@@ -135,7 +135,7 @@ def static_height_law(catenary, k: int) -> tuple[float, float]:
 
 
 def contact_height_laws(catenary, contact_stiffness: float, window: tuple[float, float],
-                        dt: float, duration: float, alpha: float = -0.05
+                        dt: float, duration: float, alpha: float = DEFAULT_ALPHA
                         ) -> ContactHeightLaws:
     """The start laws of every pantograph of ``catenary`` (a CatenaryModel); each force acts
     alone (the cross terms of several pantographs are left out)."""

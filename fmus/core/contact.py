@@ -17,9 +17,13 @@ import numpy as np
 from .params import check_number
 
 
+#: penalty stiffness k_H of the contact [N/m] (thesis 3.2)
+DEFAULT_CONTACT_STIFFNESS = 50_000.0
+
+
 @dataclass(frozen=True)
 class PenaltyContact:
-    stiffness: float = 50_000.0   # k_H [N/m]
+    stiffness: float = DEFAULT_CONTACT_STIFFNESS   # k_H [N/m]
     damping: float = 0.0          # c_H [N s/m], optional contact damping
 
     def __post_init__(self):

@@ -28,6 +28,9 @@ from .errors import ConvergenceError, ParameterError
 from .model import SecondOrderModel
 
 
+#: HHT alpha of every run unless a scenario or option sets another (thesis 3.3.2: a little
+#: numerical damping of the highest frequencies)
+DEFAULT_ALPHA = -0.05
 #: Newton residual tolerance of simulation runs, relative to the largest force in the
 #: residual (:meth:`HHTSettings.for_runs`)
 RUN_RTOL = 1e-4
@@ -37,7 +40,7 @@ RUN_RTOL_MAX = 1e-2
 
 @dataclass
 class HHTSettings:
-    alpha: float = -0.05
+    alpha: float = DEFAULT_ALPHA
     #: residual test: ||R||_inf <= rtol * (size of the forces in R)
     rtol: float = 1e-10
     #: energy test: |dq_k . R_k| <= etol * |dq_0 . R_0|
@@ -234,7 +237,7 @@ class HHTIntegrator:
 
     Usage::
 
-        integ = HHTIntegrator(model, HHTSettings(alpha=-0.05))
+        integ = HHTIntegrator(model, HHTSettings(alpha=DEFAULT_ALPHA))
         integ.initialize(t0, q0, v0, inputs0)          # computes a0 unless given
         info = integ.step(h, inputs_at_t_plus_h)
     """

@@ -41,6 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.core.contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.core.hht import DEFAULT_ALPHA
+
 from .slave_base import IntegratorSlave
 
 MAX_PANTOGRAPHS = 4
@@ -98,11 +101,11 @@ class CatenarySlave(IntegratorSlave):
             self.real(f"static_force_{k}", 0.0, "parameter", "N",
                       f"upward static contact force of pantograph {k} at t0 (static start); "
                       "0 = none")
-        self.real("hht_alpha", -0.05, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
+        self.real("hht_alpha", DEFAULT_ALPHA, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
         self.integer("contact_mode", 0, "0 = contact forces are inputs (contact_force_k); "
                      "1 = built-in penalty contact from pantograph_height_k and "
                      "pantograph_velocity_k")
-        self.real("contact_stiffness", 50000.0, "parameter", "N/m",
+        self.real("contact_stiffness", DEFAULT_CONTACT_STIFFNESS, "parameter", "N/m",
                   "penalty stiffness k_H (contact_mode 1)")
         self.real("contact_damping", 0.0, "parameter", "N.s/m",
                   "penalty contact damping c_H (contact_mode 1)")

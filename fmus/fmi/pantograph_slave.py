@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.core.hht import DEFAULT_ALPHA
+
 from .slave_base import IntegratorSlave
 
 #: 0 = static at initial_height under initial_contact_force, 1 = ramp raising (3.3.1),
@@ -65,7 +67,7 @@ class PantographSlave(IntegratorSlave):
                   "friction smoothing k_t (thesis 2.16)")
         self.boolean("one_way_damper", defaults["one_way_damper"],
                      "the damper acts only while the mechanism moves down")
-        self.real("hht_alpha", -0.05, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
+        self.real("hht_alpha", DEFAULT_ALPHA, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
         self.real("initial_height", defaults["working_height"], "parameter", "m",
                   "contact height at t0 (static start: equilibrium at this height)")
         self.real("initial_contact_force", -1.0, "parameter", "N",

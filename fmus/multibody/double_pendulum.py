@@ -29,6 +29,7 @@ from scipy.spatial.transform import Rotation
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
 from .beam3d import Section, straight_beam
+from ..core.hht import DEFAULT_ALPHA
 from .contact import GroundContact
 from .joints import Revolute, Universal
 from .loads import Gravity, NodalMoment, triangular_pulse
@@ -132,7 +133,7 @@ def rotation_vector(R, previous=None) -> np.ndarray:
     return (theta + 2.0 * np.pi * k) * u
 
 
-def simulate(model, t_end: float, h, alpha: float = -0.05, nodes=(12, 23),
+def simulate(model, t_end: float, h, alpha: float = DEFAULT_ALPHA, nodes=(12, 23),
              rtol: float = 1e-8, progress=None) -> Run:
     """Integrate with the project's HHT-alpha integrator and keep the histories of
     ``nodes`` (paper numbering: position, velocity, acceleration, rotation vector) and the

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pantocosim.core.hht import DEFAULT_ALPHA
+
 
 def add_parser(sub):
     p = sub.add_parser("pantograph", help="simulate a pantograph under a prescribed force",
@@ -15,7 +17,7 @@ def add_parser(sub):
                    help='contact force in t, e.g. "120 + 30*sin(4*pi*t)"')
     p.add_argument("--duration", type=float, required=True, help="simulated time [s]")
     p.add_argument("--dt", type=float, default=1e-3, help="time step [s] (default 1 ms)")
-    p.add_argument("--alpha", type=float, default=-0.05, help="HHT alpha in [-1/3, 0]")
+    p.add_argument("--alpha", type=float, default=DEFAULT_ALPHA, help="HHT alpha in [-1/3, 0]")
     p.add_argument("--speed", type=float, default=0.0,
                    help="train speed [km/h] for the aerodynamic uplift (default 0)")
     p.add_argument("--friction", type=float, default=None, help="collector friction f_r [N]")

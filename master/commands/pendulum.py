@@ -22,6 +22,8 @@ import json
 import time
 from pathlib import Path
 
+from pantocosim.core.hht import DEFAULT_ALPHA
+
 #: the files the command writes into its output folder
 OUTPUT_FILES = ("pendulum_trajectories.png", "pendulum_node23.png", "pendulum_energy.png",
                 "pendulum_summary.json")
@@ -37,7 +39,7 @@ def add_parser(sub):
     p.add_argument("--step", type=float, default=2.5e-4,
                    help="HHT time step [s] (default 0.25 ms: 1 ms under-resolves the "
                    "k = 1e6 N/m contact, energy errors of several per cent)")
-    p.add_argument("--alpha", type=float, default=-0.05, help="HHT alpha")
+    p.add_argument("--alpha", type=float, default=DEFAULT_ALPHA, help="HHT alpha")
     p.add_argument("--cases", default="rigid,steel,soft", help="comma-separated cases")
     return p
 
