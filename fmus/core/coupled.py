@@ -97,9 +97,9 @@ class CoupledSystem(SecondOrderModel):
         ev = Evaluation(f_inertia=f_in, f_rest=f_rest, structure_key=(
             ev_c.structure_key, tuple(e.structure_key for e in ev_p)))
         ev.parts = (ev_c, ev_p)
-        # contact linearisation of the latest evaluation: the Newton solve adds it to the
-        # (possibly reused) factorization as a low-rank update
-        self._contact_lin = (t, lin)
+        # the contact linearisation of this evaluation: newton_solve adds it to the (possibly
+        # reused) factorization as a low-rank update
+        ev.contact_lin = (t, lin)
         # the global tangents are never assembled (mass, damping, stiffness stay None): the
         # Newton matrix comes from the parts in effective_matrix; assembled() builds it for
         # checks
@@ -114,9 +114,15 @@ class CoupledSystem(SecondOrderModel):
             [p.effective_matrix(e, c_a, c_v, c_f) for p, e in zip(self.pantographs, ev_p)],
             c_v, c_f)
 
+    def newton_solve(self, solve, ev, rhs):
+        """The Newton correction with the blocks' factorization ``solve`` and the contact
+        linearisation of the evaluation ``ev``."""
+        return solve(rhs, ev.contact_lin)
+
     def factorize(self, S):
-        """Factorize the subsystem blocks once (catenary: banded Cholesky); each solve adds the
-        current contact linearisation U V^T (rank = contacts in touch) exactly:
+        """Factorize the subsystem blocks once (catenary: banded Cholesky); the returned
+        ``solve(r, contact_lin)`` adds the contact linearisation U V^T of an evaluation
+        (rank = contacts in touch) exactly:
         (A + U V^T)^-1 r = A^-1 r - A^-1 U (I + V^T A^-1 U)^-1 V^T A^-1 r."""
         cat_solve = self.catenary.factorize(S.cat)
         pan_solves = [p.factorize(Sp) for p, Sp in zip(self.pantographs, S.pans)]
@@ -131,7 +137,7 @@ class CoupledSystem(SecondOrderModel):
                 x[o:e] = ps(r[o:e])
             return x
 
-        def contact_update(lin):
+        def contact_update(t, lin):
             """A^-1 U (n x m), V^T as (pantograph slice, values, catenary dofs, values) rows
             and I + V^T A^-1 U for the current contact linearisation."""
             m = len(lin)
@@ -139,7 +145,7 @@ class CoupledSystem(SecondOrderModel):
             rows = []
             for j, (k, cp, g, dF, cF, wq_c) in enumerate(lin):
                 o = self.offsets[k]
-                key = (self._contact_lin[0], k, g.tobytes())
+                key = (t, k, g.tobytes())
                 col = cache.get(key)
                 if col is None:
                     col = np.zeros(self.n_dofs)
@@ -164,14 +170,14 @@ class CoupledSystem(SecondOrderModel):
 
         memo = [None, None]
 
-        def solve(r):
+        def solve(r, contact_lin):
             r = np.asarray(r, dtype=float)
             x = block_solve(r)
-            lin = self._contact_lin[1]
+            t, lin = contact_lin
             if not lin:
                 return x
             if memo[0] is not lin:
-                memo[0], memo[1] = lin, contact_update(lin)
+                memo[0], memo[1] = lin, contact_update(t, lin)
             AU, rows, small = memo[1]
             vx = np.array([v_dot(row, x) for row in rows])
             return x - AU @ np.linalg.solve(small, vx)
@@ -186,7 +192,7 @@ class CoupledSystem(SecondOrderModel):
         blocks += [sp.csr_matrix(np.asarray(p.effective_matrix(e, c_a, c_v, c_f)))
                    for p, e in zip(self.pantographs, ev_p)]
         S = sp.block_diag(blocks, format="lil")
-        t, lin = self._contact_lin
+        t, lin = ev.contact_lin
         for k, cp, g, dF, cF, wq_c in lin:
             o = self.offsets[k]
             u = np.zeros(self.n_dofs)
@@ -212,7 +218,8 @@ class CoupledSystem(SecondOrderModel):
                         if hasattr(self.catenary, "weight") else 1.0, 1.0)
             if float(np.max(np.abs(R))) <= tol * scale:
                 return q
-            dq = -self.factorize(self.effective_matrix(ev, 0.0, 0.0, 1.0))(R)
+            dq = -self.newton_solve(self.factorize(self.effective_matrix(ev, 0.0, 0.0, 1.0)),
+                                    ev, R)
             q = q + dq
         raise ConvergenceError(f"static start did not converge: residual "
                                f"{float(np.max(np.abs(R))):.3e} N after {max_iter} iterations",

@@ -301,7 +301,8 @@ class HHTIntegrator:
         if a0 is None:
             # at a = 0 the Newton matrix with c_a = 1, c_v = c_f = 0 is the mass matrix
             solve = self.model.factorize(self.model.effective_matrix(ev, 1.0, 0.0, 0.0))
-            self.a = -np.asarray(solve(ev.f_rest + ev.f_inertia), dtype=float).reshape(n)
+            self.a = -np.asarray(self.model.newton_solve(solve, ev, ev.f_rest + ev.f_inertia),
+                                 dtype=float).reshape(n)
         else:
             self.a = np.array(a0, dtype=float).reshape(n)
         self.f_rest = np.array(ev.f_rest, dtype=float)
@@ -377,7 +378,8 @@ class HHTIntegrator:
                 refactorizations += 1
                 if k == 0 and redo_key is not None:
                     self._redo_memo = (redo_key, factor)
-            q, e, dq_size, q_size = _newton_update(q, _vector(factor[3](R), n), R)
+            q, e, dq_size, q_size = _newton_update(
+                q, _vector(model.newton_solve(factor[3], ev, R), n), R)
             if e0 is None:
                 e0 = max(e, 1e-300)
             e_prev = e

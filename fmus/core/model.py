@@ -96,6 +96,13 @@ class SecondOrderModel:
         lu = _dense_lu(np.asarray(S))
         return lu
 
+    def newton_solve(self, solve, ev: Evaluation, rhs):
+        """The solution of the Newton matrix at ``ev`` for ``rhs``, with ``solve`` from
+        :meth:`factorize` (possibly of an earlier iterate): ``solve(rhs)``. A model whose
+        Newton matrix has a part carried by the evaluation (the coupled system's contact
+        linearisation) adds it here, so nothing is left behind between calls."""
+        return solve(rhs)
+
     def commit(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                inputs: np.ndarray | None) -> None:
         """Called once a step is accepted (e.g. to update history-dependent sets)."""
