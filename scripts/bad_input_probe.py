@@ -253,12 +253,18 @@ def interrupt_check(d: Path, proc):
 
 
 def stepping():
-    """sigint_when: the run is in its time loop (its time series, beside or in the output
-    folder, holds rows: the first block is written after 500 steps)."""
+    """sigint_when: the run is in its time loop (its time series, in the output folder or in
+    a staging folder beside it, holds rows: the first block is written after 500 steps)."""
     def when(d: Path, t: float):
         if t > 120:
             return True
-        return any(p.stat().st_size > 2000 for p in d.glob(".*/timeseries.csv"))
+        for p in list(d.glob(".*/timeseries.csv")) + list(d.glob("out/timeseries.csv")):
+            try:
+                if p.stat().st_size > 2000:
+                    return True
+            except OSError:   # moved into place meanwhile
+                pass
+        return False
     return when
 
 
