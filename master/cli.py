@@ -15,8 +15,8 @@ from pantocosim import __version__
 from pantocosim.core.errors import PantocosimError
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
-COMMANDS = ["run", "modal", "pantograph", "static", "modes", "pendulum", "build-fmus", "regress",
-            "bench"]
+COMMANDS = ["run", "sweep", "report", "modal", "pantograph", "static", "modes", "pendulum",
+            "build-fmus", "regress", "bench"]
 
 
 def build_parser() -> argparse.ArgumentParser:
