@@ -25,6 +25,8 @@ from pantocosim.master.campaign.worker import CASE_FILE, run_case
 
 #: seconds to wait for ``--workers N`` workers to join a given scheduler
 WAIT_FOR_WORKERS_S = 120.0
+#: Dask's setting of the workers' statistical profiler (environment variable)
+PROFILE_ENV = "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED"
 
 
 @dataclass
@@ -159,9 +161,15 @@ def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):
                 raise PantocosimError(f"fewer than {workers} workers joined {scheduler} "
                                       f"within {WAIT_FOR_WORKERS_S:g} s") from None
         return client, None
+    import dask
+
     n = workers or max(1, min(os.cpu_count() or 1, n_cases))
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           host="127.0.0.1", dashboard_address="127.0.0.1:8787")
+    # Dask's statistical profiler keeps an hour of per-second profiles in each worker: off,
+    # so worker memory stays flat over a campaign (docs/campaigns.md), unless asked for
+    profile = os.environ.get(PROFILE_ENV, "false").lower() in ("1", "true", "yes")
+    with dask.config.set({"distributed.worker.profile.enabled": profile}):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               host="127.0.0.1", dashboard_address="127.0.0.1:8787")
     return Client(cluster), cluster
 
 

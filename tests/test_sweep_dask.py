@@ -1,0 +1,179 @@
+"""`pantocosim sweep` on Dask (issue 19): a LocalCluster of 2 worker processes, a scheduler
+and a worker started as separate processes on localhost, resume after an interrupted sweep.
+Each sweep has 3 short cases (5 spans, one analysed span, linear catenary), one of which
+fails (above 0.7 of the wave speed) and is recorded while the others go on."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+#: Dask clusters and several runs each: outside `pytest -m "not slow"` (CI runs everything)
+pytestmark = pytest.mark.slow
+
+SWEEP = """
+name = "test-3"
+scenario = "en50318-300"
+[set]
+catenary_model = "linear"
+spans = 5
+analysis.window_supports = [2, 3]
+[axes]
+speed_kmh = [{speeds}]
+"""
+CLI = [sys.executable, "-m", "pantocosim.master.cli"]
+
+
+def write_sweep(tmp_path, speeds=(200.0, 300.0, 420.0)):
+    f = tmp_path / "t-sweep.toml"
+    f.write_text(SWEEP.format(speeds=", ".join(str(s) for s in speeds)))
+    return f
+
+
+def sweep(args, cwd, timeout=600):
+    return subprocess.run(CLI + ["sweep", *map(str, args), "--quiet"], capture_output=True,
+                          text=True, timeout=timeout, cwd=cwd)
+
+
+def results(out):
+    from pantocosim.master.campaign.table import read_table
+
+    return {r["speed_kmh"]: r for r in read_table(out)}
+
+
+def check_results(out, proc):
+    """2 cases ok with sensible statistics, the 420 km/h case failed with its message."""
+    assert proc.returncode == 1, proc.stdout + proc.stderr   # 1: a case failed
+    assert "2 ok, 1 failed" in proc.stdout, proc.stdout
+    rows = results(out)
+    assert sorted(rows) == [200.0, 300.0, 420.0]
+    bad = rows[420.0]
+    assert bad["status"] == "failed" and "wave speed" in bad["error"]
+    assert bad["mean_n"] is None and bad["assessment"] == "n/a"
+    for v in (200.0, 300.0):
+        r = rows[v]
+        assert r["status"] == "ok", r
+        # constant 115 N uplift of the EN 50318-type pantograph: mean within 2 %
+        assert abs(r["mean_n"] - 115.0) < 2.3, r
+        assert 5.0 < r["std_n"] < 60.0 and r["loss_of_contact_percent"] == 0.0
+        assert r["assessment"] in ("pass", "fail")
+        folder = Path(r["folder"])
+        assert (folder / "timeseries.csv").exists() and (folder / "summary.json").exists()
+    # faster is rougher on this line
+    assert rows[300.0]["std_n"] > rows[200.0]["std_n"]
+    with open(out / "results.csv") as fh:
+        assert len(fh.read().strip().splitlines()) == 4
+    return rows
+
+
+def test_local_cluster_two_workers(tmp_path):
+    out = tmp_path / "out"
+    proc = sweep([write_sweep(tmp_path), "--workers", "2", "--out", out], tmp_path)
+    rows = check_results(out, proc)
+    assert "dashboard: http://127.0.0.1:" in proc.stdout
+    ok = [r for r in rows.values() if r["status"] == "ok"]
+    # worker processes, not threads: the cases ran in processes other than this one
+    pids = {r["worker_pid"] for r in rows.values()}
+    assert os.getpid() not in pids and len(ok) == 2
+    timing = json.loads((out / "sweep.json").read_text())["timing"]
+    assert timing["cases_run"] == 3 and timing["sum_case_wall_time_s"] > 0
+    # the case's statistics are those of `pantocosim run` of its own scenario file
+    case = rows[300.0]
+    again = subprocess.run(CLI + ["run", str(Path(case["folder"]) / "scenario.toml"), "--json",
+                                  "--no-plots", "--quiet", "--out", str(tmp_path / "again")],
+                           capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    stats = json.loads(again.stdout)["pantographs"][0]["statistics"]
+    for k in ("mean_n", "std_n", "max_n", "min_n", "max_uplift_at_support_m"):
+        assert stats[k] == pytest.approx(case[k], rel=1e-9, abs=1e-12), k
+    # the report of this sweep
+    rep = subprocess.run(CLI + ["report", str(out)], capture_output=True, text=True,
+                         timeout=300)
+    assert rep.returncode == 0, rep.stderr
+    text = (out / "report" / "report.md").read_text()
+    assert "3 in the sweep, 2 ok, 1 failed" in text and (out / "report" / "pass_fail.png").exists()
+
+
+def test_scheduler_and_worker_processes(tmp_path):
+    """The cluster path: `dask scheduler` and `dask worker` as separate processes, the sweep
+    given the scheduler's address."""
+    dask = str(Path(sys.executable).parent / "dask")
+    sched_file = tmp_path / "scheduler.json"
+    procs = []
+    try:
+        procs.append(subprocess.Popen(
+            [dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
+             "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(sched_file)],
+            cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        deadline = time.time() + 60
+        while not sched_file.exists() and time.time() < deadline:
+            time.sleep(0.2)
+        address = json.loads(sched_file.read_text())["address"]
+        procs.append(subprocess.Popen(
+            [dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+             "--host", "127.0.0.1", "--no-dashboard"],
+            cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        out = tmp_path / "out"
+        proc = sweep([write_sweep(tmp_path), "--scheduler", address, "--workers", "1",
+                      "--out", out], tmp_path)
+        rows = check_results(out, proc)
+        assert f"Dask scheduler {address}" in proc.stdout
+        assert len({r["worker"] for r in rows.values()}) == 1
+        assert json.loads((out / "sweep.json").read_text())["scheduler"] == address
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def test_resume_after_interruption(tmp_path):
+    """Ctrl-C after the first case: the finished case is kept and not run again; running the
+    sweep again runs only the rest."""
+    from pantocosim.master.campaign.spec import load_sweep
+
+    f = write_sweep(tmp_path, (200.0, 250.0, 300.0))
+    out = tmp_path / "out"
+    keys = [c.key for c in load_sweep(f).cases]
+    proc = subprocess.Popen(CLI + ["sweep", str(f), "--workers", "1", "--out", str(out),
+                                   "--quiet"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.time() + 400
+        while time.time() < deadline:
+            done = [k for k in keys if (out / "cases" / k / "case.json").exists()]
+            if done or proc.poll() is not None:
+                break
+            time.sleep(0.2)
+        assert done, "no case finished"
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, stdout + stderr
+    assert "interrupted" in stdout and "run the sweep again to resume" in stdout
+    finished = {k: (out / "cases" / k / "case.json").stat().st_mtime_ns for k in keys
+                if (out / "cases" / k / "case.json").exists()}
+    assert 1 <= len(finished) < 3
+    first = results(out)
+    assert len(first) == len(finished)          # the table holds what finished
+    again = sweep([f, "--workers", "1", "--out", out], tmp_path)
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert f"{len(finished)} already done, {3 - len(finished)} to run" in again.stdout
+    for k, mtime in finished.items():            # not run again
+        assert (out / "cases" / k / "case.json").stat().st_mtime_ns == mtime
+    rows = results(out)
+    assert sorted(rows) == [200.0, 250.0, 300.0]
+    assert all(r["status"] == "ok" for r in rows.values())
+    for v, r in first.items():
+        assert rows[v]["mean_n"] == r["mean_n"]
