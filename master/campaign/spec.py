@@ -113,9 +113,11 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
     settings = _flatten(t.sub("set", required=False).data)
     axes = _axes(t, settings, combine, source)
     base = _base_inputs(base_path, run)
-    for name, value in settings:
+    _check_case(base, source, "scenario", str(base_path), str(base_path))
+    for name, value in settings:     # one at a time: errors name the entry
         _apply(base, name, value, f"set.{name}", source)
-    _check_case(base, source, "set", dict(settings), str(base_path))
+        _check_case(base, source, f"set.{name}", value,
+                    f"{base.scenario['name']} with {name} = {_short(value)}")
     builder = _CaseBuilder(base, source, run)
     for name, values in axes:       # each value on its own first: errors name the axis
         for v in values:
