@@ -183,6 +183,10 @@ def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, out
         info = client.scheduler_info()
         echo(f"  Dask scheduler {client.scheduler.address}, "
              f"{len(info.get('workers', {}))} workers")
+        if any(n > 1 for n in client.nthreads().values()):
+            echo("  warning: workers with more than one thread run several cases in one "
+                 "process (start them with --nthreads 1: FMUs and the worker memory "
+                 "figures want one case per process)")
         link = _dashboard(client)
         if link:
             echo(f"  dashboard: {link}")
