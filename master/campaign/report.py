@@ -109,11 +109,15 @@ def plot_force_vs_speed(path: Path, rows, criteria: Criteria, axes) -> Path | No
     if not ok:
         return None
     models = sorted({r["pantograph_model"] for r in ok})
-    fig, axs = plt.subplots(1, len(models), figsize=(max(7.0, 5.2 * len(models)), 5.0),
+    ncols = min(2, len(models))
+    nrows = math.ceil(len(models) / ncols)
+    fig, axs = plt.subplots(nrows, ncols, figsize=(max(7.0, 6.0 * ncols), 0.6 + 4.4 * nrows),
                             squeeze=False, sharey=True)
+    for ax in axs.flat[len(models):]:
+        ax.set_visible(False)
     speeds = np.array(sorted({float(r["speed_kmh"]) for r in ok}))
     v = np.linspace(speeds.min() * 0.95, speeds.max() * 1.05, 100) if len(speeds) else speeds
-    for ax, model in zip(axs[0], models):
+    for k, (ax, model) in enumerate(zip(axs.flat, models)):
         _criteria_bands(ax, criteria, v)
         groups = defaultdict(list)
         for r in ok:
@@ -140,8 +144,10 @@ def plot_force_vs_speed(path: Path, rows, criteria: Criteria, axes) -> Path | No
         ax.set_title(model)
         ax.set_xlabel("speed [km/h]")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
-    axs[0][0].set_ylabel("contact force [N]")
+        if k == 0 or len(groups) > 1:
+            ax.legend(fontsize=7, loc="upper left")
+    for row in axs:
+        row[0].set_ylabel("contact force [N]")
     fig.suptitle("F_m (o), F_m +/- 3 sigma and actual extremes against speed")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
