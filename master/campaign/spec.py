@@ -60,7 +60,7 @@ class Case:
 
     @property
     def label(self) -> str:
-        return ", ".join(f"{k} = {_short(v)}" for k, v in self.values.items())
+        return _label(self.values)
 
 
 @dataclass
@@ -253,22 +253,26 @@ def _load_catenary(inputs: CaseInputs, field_name: str, source: str) -> None:
     inputs.catenary_source = d.source
 
 
-def _check_case(inputs: CaseInputs, source: str, field_name: str, value, where: str) -> None:
-    """Validate the case's scenario, catenary and pantograph files as a run would."""
-    from pantocosim.catenary.definition import parse_definition
+def _check_case(inputs: CaseInputs, source: str, field_name: str, value, where: str,
+                checked: set | None = None) -> None:
+    """Validate the case's scenario, catenary and pantograph files as a run would (files
+    named in ``checked`` were found valid before)."""
+    from pantocosim.catenary.definition import load_catenary, parse_definition
     from pantocosim.master.scenario import parse_scenario
     from pantocosim.pantograph.presets import preset_path
 
+    checked = set() if checked is None else checked
     try:
         parse_scenario(copy.deepcopy(inputs.scenario), where)
         if inputs.catenary is not None:
             parse_definition(copy.deepcopy(inputs.catenary), inputs.catenary_source)
-        else:
-            from pantocosim.catenary.definition import load_catenary
-
+        elif ("catenary", inputs.scenario["catenary"]) not in checked:
             load_catenary(str(inputs.scenario["catenary"]))
+            checked.add(("catenary", inputs.scenario["catenary"]))
         for p in inputs.scenario["pantographs"]:
-            preset_path(p["model"])
+            if ("pantograph", p["model"]) not in checked:
+                preset_path(p["model"])
+                checked.add(("pantograph", p["model"]))
     except ParameterError as exc:
         raise ParameterError(field_name, value, f"{exc}", source) from None
 
@@ -281,6 +285,7 @@ class _CaseBuilder:
         self.source = source
         self.run = run
         self.files: dict = {}
+        self.checked: set = set()
 
     def build(self, values: dict, field_name: str, shown) -> Case:
         inputs = copy.deepcopy(self.base)
@@ -288,7 +293,7 @@ class _CaseBuilder:
             _apply(inputs, name, v, field_name if field_name != "case" else f"axes.{name}",
                    self.source)
         where = f"{self.base.scenario['name']} with {_label(values)}"
-        _check_case(inputs, self.source, field_name, shown, where)
+        _check_case(inputs, self.source, field_name, shown, where, self.checked)
         run = dict(self.run, **inputs.run)
         case = Case(index=-1, values=dict(values), scenario=inputs.scenario,
                     catenary=inputs.catenary, run=run)
