@@ -174,60 +174,67 @@ def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):
 
 
 def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, outcome):
-    from distributed import as_completed
-    from tqdm import tqdm
-
+    """Submit the cases and collect them as they finish; returns their records."""
     client, cluster = make_client(scheduler, workers, len(todo), echo)
-    records = []
     try:
-        info = client.scheduler_info()
-        echo(f"  Dask scheduler {client.scheduler.address}, "
-             f"{len(info.get('workers', {}))} workers")
-        if any(n > 1 for n in client.nthreads().values()):
-            echo("  warning: workers with more than one thread run several cases in one "
-                 "process (start them with --nthreads 1: FMUs and the worker memory "
-                 "figures want one case per process)")
-        link = _dashboard(client)
-        if link:
-            echo(f"  dashboard: {link}")
+        _describe(client, echo)
         token = uuid.uuid4().hex[:8]
-        by_key = {}
         submitted = time.time()
+        futures = {}
         for case in todo:
             f = client.submit(run_case, task_of(case, out), key=f"case-{case.key}-{token}",
                               pure=False)
-            by_key[f.key] = (case, f)
-        enabled = sys.stderr.isatty() if progress is None else progress
-        bar = tqdm(total=len(todo), desc="cases", unit="case", disable=not enabled,
-                   file=sys.stderr)
+            futures[f.key] = (case, f)
         try:
-            for f in as_completed([f for _, f in by_key.values()]):
-                case, _ = by_key[f.key]
-                try:
-                    record = f.result()
-                except Exception as exc:  # noqa: BLE001 - the worker or the task was lost
-                    record = {"key": case.key, "status": "lost",
-                              "error": f"{type(exc).__name__}: {exc}",
-                              "folder": str(case_folder(out, case.key))}
-                record["submitted_at"] = submitted
-                record["received_at"] = time.time()
-                records.append(record)
-                outcome.ok += record["status"] == "ok"
-                outcome.failed += record["status"] == "failed"
-                outcome.lost += record["status"] == "lost"
-                if record["status"] != "ok":
-                    bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: "
-                              f"{record['error']}")
-                table.add(rows_of(record, case, criteria))
-                bar.update(1)
+            return _collect(futures, submitted, out, progress, table, criteria, outcome)
         finally:
-            bar.close()
-            for _, f in by_key.values():
+            for _, f in futures.values():
                 f.cancel()
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _describe(client, echo) -> None:
+    info = client.scheduler_info()
+    echo(f"  Dask scheduler {client.scheduler.address}, "
+         f"{len(info.get('workers', {}))} workers")
+    if any(n > 1 for n in client.nthreads().values()):
+        echo("  warning: workers with more than one thread run several cases in one "
+             "process (start them with --nthreads 1: FMUs and the worker memory "
+             "figures want one case per process)")
+    link = _dashboard(client)
+    if link:
+        echo(f"  dashboard: {link}")
+
+
+def _collect(futures, submitted, out, progress, table, criteria, outcome) -> list:
+    """Records of the cases in the order they finish, each written to the table at once; a
+    task that raised (its worker died, the task was cancelled) is recorded as lost."""
+    from distributed import as_completed
+    from tqdm import tqdm
+
+    enabled = sys.stderr.isatty() if progress is None else progress
+    records = []
+    with tqdm(total=len(futures), desc="cases", unit="case", disable=not enabled,
+              file=sys.stderr) as bar:
+        for f in as_completed([f for _, f in futures.values()]):
+            case, _ = futures[f.key]
+            try:
+                record = f.result()
+            except Exception as exc:  # noqa: BLE001 - the worker or the task was lost
+                record = {"key": case.key, "status": "lost",
+                          "error": f"{type(exc).__name__}: {exc}",
+                          "folder": str(case_folder(out, case.key))}
+            record.update(submitted_at=submitted, received_at=time.time())
+            records.append(record)
+            setattr(outcome, record["status"], getattr(outcome, record["status"]) + 1)
+            if record["status"] != "ok":
+                bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: "
+                          f"{record['error']}")
+            table.add(rows_of(record, case, criteria))
+            bar.update(1)
     return records
 
 
