@@ -248,9 +248,10 @@ def _dashboard(client) -> str | None:
 
 
 def timing_statistics(records: list) -> dict:
-    """Wall time of the sweep against the cases' own wall times, dispatch overhead, worker
-    memory. Overhead of a case: the time its worker idled between the previous case (or
-    the submission) and this one, plus the time its result took to reach the client."""
+    """Wall time of the sweep against the cases' own wall times, CPU time of the cases over
+    the wall time (the cores the cases had on average), dispatch overhead, worker memory.
+    Overhead of a case: the time its worker idled between the previous case (or the
+    submission) and this one, plus the time its result took to reach the client."""
     done = [r for r in records if "case_wall_time_s" in r]
     if not done:
         return {}
@@ -270,8 +271,10 @@ def timing_statistics(records: list) -> dict:
         returns.append(max(0.0, r["received_at"] - r["finished_at"]))
     n = len(done)
     overhead = (sum(gaps) + sum(returns)) / n
+    cpu = sum(r.get("case_cpu_time_s", 0.0) for r in done)
     return {"cases_run": n, "wall_time_s": wall, "sum_case_wall_time_s": own,
             "wall_over_sum": wall / own if own > 0 else None,
+            "sum_case_cpu_time_s": cpu, "cores_used": cpu / wall if wall > 0 else None,
             "mean_case_wall_time_s": own / n,
             "overhead_per_case_s": overhead,
             "overhead_percent_of_case": 100.0 * overhead / (own / n) if own > 0 else None,

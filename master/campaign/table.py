@@ -20,7 +20,7 @@ from pantocosim.master.campaign.assessment import STATISTICS, Criteria, assess
 DESCRIPTORS = ("scenario", "speed_kmh", "catenary", "catenary_model", "coupling")
 #: axes already shown by a descriptor or the pantograph columns
 SHOWN = set(DESCRIPTORS) | {"pantograph"}
-TIMINGS = ("case_wall_time_s", "prepare_time_s", "run_time_s", "finish_time_s",
+TIMINGS = ("case_wall_time_s", "case_cpu_time_s", "prepare_time_s", "run_time_s", "finish_time_s",
            "run_wall_time_s", "setup_time_s", "steps", "simulated_time_s", "worker",
            "worker_pid", "worker_rss_mb", "started_at", "finished_at")
 

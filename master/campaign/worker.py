@@ -28,7 +28,7 @@ def run_case(task: dict) -> dict:
     folder = Path(task["folder"])
     folder.mkdir(parents=True, exist_ok=True)
     started = time.time()
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     scenario = dict(task["scenario"])
     if task.get("catenary") is not None:
         cat = folder / "catenary.toml"
@@ -49,7 +49,8 @@ def run_case(task: dict) -> dict:
         record.update(status="failed", error=f"{type(exc).__name__}: {exc}")
         (folder / "error.txt").write_text(traceback.format_exc())
     record.update(times)
-    record.update(case_wall_time_s=time.perf_counter() - t0, started_at=started,
+    record.update(case_wall_time_s=time.perf_counter() - t0,
+                  case_cpu_time_s=time.process_time() - cpu0, started_at=started,
                   finished_at=time.time(), **_worker())
     tmp = folder / (CASE_FILE + ".tmp")
     tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")

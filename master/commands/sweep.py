@@ -48,7 +48,8 @@ def run(args) -> int:
           f"{outcome.skipped} from earlier runs; results in {out}/results.csv")
     if t:
         print(f"  wall {t['wall_time_s']:.1f} s for {t['cases_run']} cases of "
-              f"{t['sum_case_wall_time_s']:.1f} s in all (ratio {t['wall_over_sum']:.2f}); "
+              f"{t['sum_case_wall_time_s']:.1f} s in all (ratio {t['wall_over_sum']:.2f}), "
+              f"{t['cores_used']:.2f} cores busy on average; "
               f"overhead per case {t['overhead_per_case_s'] * 1e3:.0f} ms "
               f"({t['overhead_percent_of_case']:.2f} % of a case)")
     if outcome.interrupted:
