@@ -326,3 +326,27 @@ def test_resume_skips_done_cases_without_a_cluster(tmp_path):
     outcome = run_sweep(sw, out, scheduler="tcp://127.0.0.1:1", echo=lambda *a: None)
     assert (outcome.skipped, outcome.ok, outcome.failed) == (2, 0, 0)
     assert sorted(r["mean_n"] for r in read_table(out)) == [200.0, 250.0]
+
+
+def test_interrupted_sweep_keeps_cases_finished_on_workers(tmp_path):
+    """A case whose worker wrote case.json but whose result had not reached the client when
+    the sweep was interrupted still gets its row."""
+    from pantocosim.master.campaign.execute import Outcome, _late, case_folder
+
+    sw = load_sweep(sweep_file(tmp_path, "[axes]\nspeed_kmh = [200.0, 250.0]\n"))
+    out = tmp_path / "out"
+    out.mkdir()
+    done = sw.cases[1]
+    f = case_folder(out, done.key)
+    f.mkdir(parents=True)
+    (f / "case.json").write_text(json.dumps({
+        "key": done.key, "status": "ok", "error": None, "folder": str(f),
+        "summary": {"pantographs": [{"index": 1, "model": "en50318-2mass",
+                                     "statistics": stats(mean=111.0)}]}}))
+    crit = load_criteria()
+    table = ResultsTable(out, columns(["speed_kmh"], crit))
+    outcome = Outcome(folder=out, total=2)
+    _late(sw.cases, out, outcome, table, crit)
+    table.close()
+    assert outcome.ok == 1
+    assert [(r["speed_kmh"], r["mean_n"]) for r in read_table(out)] == [(250.0, 111.0)]

@@ -39,6 +39,7 @@ class Outcome:
     lost: int = 0
     interrupted: bool = False
     stats: dict = field(default_factory=dict)
+    collected: set = field(default_factory=set)     # keys of the cases recorded this run
 
 
 def case_folder(out: Path, key: str) -> Path:
@@ -94,6 +95,7 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
                                criteria, outcome)
     except KeyboardInterrupt:
         outcome.interrupted = True
+        _late(todo, out, outcome, table, criteria)
         echo(f"interrupted: {outcome.skipped + outcome.ok + outcome.failed} of "
              f"{outcome.total} cases done; run the sweep again to resume")
     finally:
@@ -107,6 +109,17 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
          "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None},
         indent=2) + "\n")
     return outcome
+
+
+def _late(todo, out: Path, outcome: Outcome, table, criteria) -> None:
+    """Rows of the cases that finished on their worker (``case.json`` written) but whose
+    result had not reached this process when the sweep was interrupted."""
+    for case in todo:
+        if case.key not in outcome.collected:
+            record = previous(case, out, retry_failed=False)
+            if record is not None:
+                setattr(outcome, record["status"], getattr(outcome, record["status"]) + 1)
+                table.add(rows_of(record, case, criteria))
 
 
 def _keep_inputs(sweep: Sweep, criteria, out: Path) -> None:
@@ -229,6 +242,7 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
                           "folder": str(case_folder(out, case.key))}
             record.update(submitted_at=submitted, received_at=time.time())
             records.append(record)
+            outcome.collected.add(case.key)
             setattr(outcome, record["status"], getattr(outcome, record["status"]) + 1)
             if record["status"] != "ok":
                 bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: "
