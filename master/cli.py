@@ -30,8 +30,8 @@ class Parser(argparse.ArgumentParser):
                   "--help)\n")
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
-COMMANDS = ["run", "modal", "pantograph", "static", "modes", "pendulum", "build-fmus", "regress",
-            "bench", "validate"]
+COMMANDS = ["run", "sweep", "report", "modal", "pantograph", "static", "modes", "pendulum",
+            "build-fmus", "regress", "bench", "validate"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -138,8 +138,12 @@ def check_spacing(specs: list[PantographSpec], source: str) -> None:
 
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     path = scenario_path(name_or_path)
-    source = str(path)
-    root = Table(load_toml(path), source)
+    return parse_scenario(load_toml(path), str(path), path.stem)
+
+
+def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> Scenario:
+    """Validate the parsed TOML table of a scenario (``source`` names it in errors)."""
+    root = Table(data, source)
     root.unknown_keys({"name", "description", "catenary", "spans", "speed_kmh", "pantographs",
                        "analysis", "simulation", "contact"})
     pans = root._get("pantographs", None, required=True)
@@ -201,7 +205,7 @@ def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     contact = root.sub("contact", required=False)
     contact.unknown_keys({"stiffness", "damping"})
     sc = Scenario(
-        name=root.string("name", path.stem), source=source,
+        name=root.string("name", default_name), source=source,
         description=root.string("description", ""),
         catenary=root.string("catenary"),
         spans=root.integer("spans", minimum=2) if root.has("spans") else None,

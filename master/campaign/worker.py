@@ -1,0 +1,108 @@
+"""One case of a sweep, run on a Dask worker (a worker process, one thread).
+
+The case writes its own run folder as ``pantocosim run`` does (``timeseries.csv``,
+``summary.json``, plots if asked) plus ``scenario.toml`` (and ``catenary.toml`` when the sweep
+changes catenary fields), which ``pantocosim run`` runs again as they are, and last
+``case.json``: status, error, timings, worker memory. ``case.json`` marks the case done, so a
+sweep run again skips it. Any error of the run is caught and recorded: the sweep goes on.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+import traceback
+from pathlib import Path
+
+CASE_FILE = "case.json"
+
+
+def run_case(task: dict) -> dict:
+    """Run one case (``task`` from :func:`pantocosim.master.campaign.execute.task_of`) and
+    return its record (also written to ``case.json`` in its folder)."""
+    import tomli_w
+
+    from pantocosim.core.errors import PantocosimError
+
+    folder = Path(task["folder"])
+    folder.mkdir(parents=True, exist_ok=True)
+    started = time.time()
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    scenario = dict(task["scenario"])
+    if task.get("catenary") is not None:
+        cat = folder / "catenary.toml"
+        cat.write_text(tomli_w.dumps(task["catenary"]))
+        scenario["catenary"] = str(cat)
+    (folder / "scenario.toml").write_text(tomli_w.dumps(scenario))
+    record = {"key": task["key"], "index": task["index"], "values": task["values"],
+              "folder": str(folder), "status": "ok", "error": None, "summary": None}
+    times = {}
+    try:
+        summary = _run(folder, task["run"], times)
+        record["summary"] = _essentials(summary)
+        if summary.get("error"):
+            record.update(status="failed", error=summary["error"])
+    except PantocosimError as exc:
+        record.update(status="failed", error=str(exc))
+    except Exception as exc:  # noqa: BLE001 - any failure of one case is recorded
+        record.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+        (folder / "error.txt").write_text(traceback.format_exc())
+    record.update(times)
+    record.update(case_wall_time_s=time.perf_counter() - t0,
+                  case_cpu_time_s=time.process_time() - cpu0, started_at=started,
+                  finished_at=time.time(), **_worker())
+    tmp = folder / (CASE_FILE + ".tmp")
+    tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")
+    os.replace(tmp, folder / CASE_FILE)
+    return record
+
+
+def _run(folder: Path, run: dict, times: dict) -> dict:
+    from pantocosim.master.campaign.axes import COUPLINGS
+    from pantocosim.master.run import finish, prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    t = time.perf_counter()
+    prep = prepare(load_scenario(folder / "scenario.toml"), force=run["force"])
+    times["prepare_time_s"] = time.perf_counter() - t
+    scheme = COUPLINGS[run["coupling"]]
+    t = time.perf_counter()
+    if scheme == "monolithic":
+        result = run_monolithic(prep, folder, progress=False)
+    else:
+        from pantocosim.master.cosim import run_cosim
+
+        result = run_cosim(prep, folder, scheme=scheme, accelerator=run["accelerator"],
+                           progress=False)
+    times["run_time_s"] = time.perf_counter() - t
+    result.coupling = run["coupling"]
+    t = time.perf_counter()
+    summary = finish(result, folder, plots=run["plots"])
+    times["finish_time_s"] = time.perf_counter() - t
+    return summary
+
+
+def _essentials(summary: dict) -> dict:
+    """What the results table needs of a run's summary."""
+    keys = ("wall_time_s", "setup_time_s", "simulated_time_s", "steps", "catenary_dofs",
+            "target_mean_n", "analysis_window_m", "newton_iterations_mean",
+            "coupling_iterations_mean")
+    out = {k: summary[k] for k in keys if k in summary}
+    out["pantographs"] = [{"index": p["index"], "model": p["model"],
+                           "statistics": p["statistics"]} for p in summary["pantographs"]]
+    return out
+
+
+def _worker() -> dict:
+    """Which worker ran the case and its resident memory now [MB]."""
+    import psutil
+
+    try:
+        from distributed import get_worker
+
+        address = get_worker().address
+    except (ImportError, ValueError):
+        address = "local"
+    return {"worker": address, "worker_pid": os.getpid(),
+            "worker_rss_mb": psutil.Process().memory_info().rss / 2**20}
