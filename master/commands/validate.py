@@ -45,12 +45,10 @@ def run_speed(ranges, out: Path, quiet: bool) -> dict:
     return summary
 
 
-def report(std, speeds: list, summaries: list) -> dict:
-    from pantocosim.master.validation import compare
-
+def report(std, outcomes: list) -> dict:
+    """The JSON report; ``outcomes``: (ranges, run summary, compared rows) per speed."""
     out = {"standard": std.standard, "source": std.source, "speeds": []}
-    for ranges, summary in zip(speeds, summaries):
-        rows = compare(ranges, summary["statistics"])
+    for ranges, summary, rows in outcomes:
         out["speeds"].append({
             "speed_kmh": ranges.speed_kmh, "scenario": ranges.scenario,
             "catenary_model": "nonlinear", "coupling": "monolithic",
@@ -62,17 +60,17 @@ def report(std, speeds: list, summaries: list) -> dict:
     return out
 
 
-def markdown(std, speeds: list, summaries: list) -> str:
-    from pantocosim.master.validation import compare, markdown_table
+def markdown(std, outcomes: list) -> str:
+    from pantocosim.master.validation import markdown_table
 
     lines = [f"# {std.standard} validation", "", f"Ranges: {std.source}.", "",
              "Reference models: nonlinear catenary, monolithic coupling; statistics of the "
              "0-20 Hz filtered contact force over whole spans (EN 50317).", ""]
-    for ranges, summary in zip(speeds, summaries):
+    for ranges, summary, rows in outcomes:
         w = summary["analysis_window_m"]
         lines += [f"## {ranges.speed_kmh:g} km/h (scenario {ranges.scenario}, window "
                   f"{w[0]:g}-{w[1]:g} m)", ""]
-        lines += markdown_table(compare(ranges, summary["statistics"])) + [""]
+        lines += markdown_table(rows) + [""]
     return "\n".join(lines)
 
 
@@ -92,7 +90,7 @@ def run(args) -> int:
     from pantocosim.master.validation import compare, load_standard
 
     std = load_standard(args.standard)
-    speeds = list(std.speeds) if not args.speed else [std.at(v) for v in args.speed]
+    speeds = list(std.speeds) if not args.speed else [std.at(v) for v in dict.fromkeys(args.speed)]
     out = Path(args.out) if args.out else Path("out") / f"validate-{std.name}"
     if out.exists() and not out.is_dir():
         raise ParameterError("--out", str(out), "exists and is not a folder")
@@ -100,11 +98,14 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ParameterError("--out", str(out), f"cannot create the folder: {exc}") from None
-    summaries = [run_speed(r, out, args.quiet) for r in speeds]
-    data = report(std, speeds, summaries)
+    outcomes = []
+    for ranges in speeds:
+        summary = run_speed(ranges, out, args.quiet)
+        outcomes.append((ranges, summary, compare(ranges, summary["statistics"])))
+    data = report(std, outcomes)
     try:
         (out / "validation.json").write_text(json.dumps(data, indent=2) + "\n")
-        (out / "validation.md").write_text(markdown(std, speeds, summaries))
+        (out / "validation.md").write_text(markdown(std, outcomes))
     except OSError as exc:
         raise PantocosimError(f"cannot write the validation table to {out}: {exc}") from None
     if args.json:
@@ -112,7 +113,7 @@ def run(args) -> int:
     else:
         print(f"{std.standard} ({std.description})")
         print(f"  ranges: {std.source}")
-        for ranges, summary in zip(speeds, summaries):
-            print_table(ranges, compare(ranges, summary["statistics"]))
+        for ranges, _, rows in outcomes:
+            print_table(ranges, rows)
         print(f"  table written to {out / 'validation.md'} and validation.json")
     return 0 if all(s["all_inside"] for s in data["speeds"]) else 1
