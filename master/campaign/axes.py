@@ -19,10 +19,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.coupling import SCHEME_NAMES
 
-#: couplings a case can run with (``explicit`` is the Jacobi scheme, as in ``pantocosim run``)
-COUPLINGS = {"monolithic": "monolithic", "explicit": "jacobi", "jacobi": "jacobi",
-             "gauss-seidel": "gauss-seidel", "implicit": "implicit"}
+#: couplings a case can run with: the monolithic solve or a co-simulation scheme (its
+#: aliases too, as in ``pantocosim run``) -> the name it runs under
+COUPLINGS = {"monolithic": "monolithic", **SCHEME_NAMES}
 
 #: axis names that stand for a field of the scenario's [simulation] table
 SIMULATION_SHORTCUTS = ("catenary_model", "modal_cutoff_hz", "dt", "alpha", "duration_s",
