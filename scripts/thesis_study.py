@@ -163,7 +163,7 @@ def write_report(rows, docs: Path) -> None:
         "The absolute values differ from the thesis because its DSA-380 geometry, masses and "
         "spring data and its catenary parameters are unpublished: our DSA-380 is a "
         "constructed, frequency-calibrated parameter set and the AVE catenary tensions and "
-        "geometry are assumptions (reference-data.md sections 1 and 3.3).",
+        "geometry are assumptions (docs/dsa380-calibration.md, docs/catenary.md).",
     ]
     (docs / "thesis-study.md").write_text("\n".join(lines) + "\n")
 
