@@ -1,6 +1,6 @@
 """One straight wire against analytic solutions: tensioned-beam frequencies, the exact
 (elastic) catenary under self weight, and the moving constant force on a taut string
-(design reference-data section 5), the last one on the shared HHT-alpha integrator."""
+(the closed form of a constant force moving on a taut string), the last one on the shared HHT-alpha integrator."""
 
 import numpy as np
 from scipy.integrate import quad
