@@ -47,7 +47,9 @@ class ModalCatenary(SecondOrderModel):
         lin = self.linear = linear or LinearCatenary(catenary, x0, speed,
                                                       element_size=element_size)
         self.cutoff_hz = float(cutoff_hz)
-        self.frequencies, self.Phi = modes_below(lin.K0, lin.M, self.cutoff_hz)
+        S = lin.structure
+        self.frequencies, self.Phi = modes_below(
+            lin.K0, lin.M, self.cutoff_hz, bands=(S.lower_band(lin.K0_data), S.lower_band(S.M_data)))
         self.omega2 = (2.0 * np.pi * self.frequencies) ** 2
         self.m = m = self.Phi.shape[1]
         self.n_p = len(lin.x0)
@@ -142,11 +144,50 @@ class ModalCatenary(SecondOrderModel):
         dr = self.droppers
         N = dr.N0 + dr.ka * (self.T @ y)
         slack = dr.slack(N)
-        removed = self.T[slack].T @ N[slack]
-        c = self._slack_committed
-        if c.any():
-            removed += self.T[c].T @ (dr.beta * dr.ka[c] * (self.T[c] @ v))
-        return removed, slack, N
+        return self.slack_forces(y, v, slack, self._slack_committed), slack, N
+
+    def dropper_slack(self, y) -> np.ndarray:
+        """The droppers slack at y."""
+        k = self.m + self.nz
+        return self.droppers.slack(self.droppers.N0 + self.droppers.ka * (
+            self.T[:, :k] @ y[:k]))
+
+    def slack_forces(self, y, v, slack, committed) -> np.ndarray:
+        """The forces the droppers no longer carry: sum_{slack} N_d t_d (N_d at y) and the
+        committed ones' damping share sum beta k_a (t_d . v) t_d, on y."""
+        dr, T = self.droppers, self.T
+        out = np.zeros(self.n_dofs)
+        if slack.any():
+            Ts = T[slack]
+            out += Ts.T @ (dr.N0[slack] + dr.ka[slack] * (Ts @ y))
+        if committed.any():
+            Tc = T[committed]
+            out += Tc.T @ (dr.beta * dr.ka[committed] * (Tc @ v))
+        return out
+
+    def free_forces(self, g, y, v, out) -> np.ndarray:
+        """f_rest at (y, v) without the loads and the slack droppers' terms (into out)."""
+        m, nz = self.m, self.nz
+        out[:m] = self.zeta_c * v[:m] + self.omega2 * y[:m]
+        out[m:m + nz] = self.kbar * (y[m:m + nz] + self.linear.beta_r * v[m:m + nz])
+        out[m + nz:] = g.Ginv @ y[m + nz:]
+        out += self.r0
+        return out
+
+    def step_solve(self, c_a, c_v, c_f, slack, committed):
+        """The solve with the Newton matrix of (c_a, c_v, c_f) and the slack sets (kept
+        while they last)."""
+        rows, s = self.droppers.removed_stiffness(slack, committed, c_v, c_f)
+        key = (c_a, c_v, c_f, rows.tobytes(), s.tobytes())
+        if getattr(self, "_solve_key", None) != key:
+            self._solve_key, self._solve_obj = key, _ModalSolve(self, c_a, c_v, c_f, rows, s)
+        return self._solve_obj
+
+    def closed_form(self, settings, keep_free_response: bool = False):
+        """The closed-form HHT stepper of this model (:mod:`.modal_step`)."""
+        from .modal_step import ModalHHT
+
+        return ModalHHT(self, settings, keep_free_response)
 
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         g = self.geometry(t)
@@ -272,11 +313,11 @@ class _ModalSolve:
             self.Ts = Ts
             self.small = np.eye(rows.size) - s[:, None] * (Ts @ self.U)
 
-    def __call__(self, r):
+    def __call__(self, r, out=None):
         model = self.model
         m, nz = model.m, model.nz
         r = np.asarray(r, dtype=float)
-        x = np.empty_like(r)
+        x = np.empty_like(r) if out is None else out
         k = m + nz
         x[:k] = (r[:k].T * self.inv_diag).T
         if model.nx:
