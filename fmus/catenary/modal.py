@@ -32,6 +32,7 @@ import numpy as np
 from ..core.errors import ConvergenceError
 from ..core.model import Evaluation, SecondOrderModel
 from .linear import LinearCatenary
+from . import modal_kernels as _k
 from .modal_basis import modes_below
 from .modal_residual import InterfaceFlexibility
 from .model import CatenaryModel
@@ -72,10 +73,10 @@ class ModalCatenary(SecondOrderModel):
         self.T = np.zeros((len(dr), self.n_dofs))
         self.T[:, :m] = flex.B_phi
         self.T[:, m:m + self.nz] = flex.B_Q[:, :self.nz]
-        self._elem_pos = {int(e): k for k, e in enumerate(lin.locator.elems)}
+        self.T_K = np.ascontiguousarray(self.T[:, :m + self.nz])
         self.q_static = np.zeros(self.n_dofs)
         self._slack_committed = np.zeros(len(dr), dtype=bool)
-        self._geo = None
+        self._init_geometry()
 
     # ------------------------------------------------------------------ delegated geometry
     def positions(self, t):
@@ -89,47 +90,55 @@ class ModalCatenary(SecondOrderModel):
     wire_velocity = CatenaryModel.wire_velocity
 
     # ------------------------------------------------------------------ moving correction
+    def _init_geometry(self):
+        """Persistent buffers of the contact points (refilled for each new time)."""
+        npan, N, m, nz = self.n_p, self.n_dofs, self.m, self.nz
+        loc = self.linear.locator
+        self._loc = (np.ascontiguousarray(loc.x_start), np.ascontiguousarray(loc.x_end),
+                     np.ascontiguousarray(loc.E_x), np.ascontiguousarray(loc.Le),
+                     np.ascontiguousarray(self.flex.elem_s),
+                     np.ascontiguousarray(loc.x_full_ref[loc.z_full_dofs]))
+        g = self._g = SimpleNamespace(
+            t=None, S_idx=np.zeros((npan, 4), np.int64), w=np.zeros((npan, 4)),
+            dw=np.zeros((npan, 4)), offset=np.zeros(npan), doffset=np.zeros(npan),
+            Wc=np.zeros((npan, N)), Wcx=np.zeros((npan, N)), G=np.zeros((self.nx, self.nx)),
+            Ginv=np.zeros((self.nx, self.nx)), sup=None)
+        g.phi, g.phix = g.Wc[:, :m], g.Wcx[:, :m]
+        g.qd, g.qdx = g.Wc[:, m:m + nz], g.Wcx[:, m:m + nz]
+        for k in range(self.nx):
+            g.Wc[k, m + nz + k] = 1.0
+        dofs = np.arange(N)
+        g.points = [SimpleNamespace(dofs=dofs, weights=g.Wc[k], dweights_dx=g.Wcx[k],
+                                    offset=0.0, doffset_dx=0.0, element=-1)
+                    for k in range(npan)]
+
     def geometry(self, t: float):
-        """The contact points in y and G(t)^-1 of the contact residual at time t."""
+        """The contact points in y (weights [phi(x), Q^T N, e_k]) and G(t), G(t)^-1 of the
+        contact residual at time t. The buffers are the model's: valid until another time
+        is asked for."""
         t = float(t)
-        if self._geo is not None and self._geo.t == t:
-            return self._geo
-        flex, m, nz, nx = self.flex, self.m, self.nz, self.nx
-        cps = self.linear.contact_points(t)
-        pts = [flex.point(self._elem_pos[cp.element], cp.weights, cp.dweights_dx)
-               for cp in cps]
-        phi = np.array([w @ flex.Phi_S[s] for s, w, _ in pts])               # (np, m)
-        phix = np.array([dw @ flex.Phi_S[s] for s, _, dw in pts])
-        qd = np.array([w @ flex.Q_S[s][:, :nz] for s, w, _ in pts])           # (np, nz)
-        qdx = np.array([dw @ flex.Q_S[s][:, :nz] for s, _, dw in pts])
-        if nx:
-            G = np.array([[flex.k0_inv(sj, wj, sk, wk) for sk, wk, _ in pts]
-                          for sj, wj, _ in pts])
-            G -= (phi / self.omega2) @ phi.T
-            if nz:
-                G -= qd @ qd.T / self.kbar
-            G = 0.5 * (G + G.T)
-            Ginv = np.linalg.inv(G)
-        else:
-            G = Ginv = np.zeros((0, 0))
-        dofs = np.arange(m + nz)
-        points = []
-        for k, cp in enumerate(cps):
-            e = np.zeros(nx)
-            if nx:
-                e[k] = 1.0
-            ed = np.zeros(nx)
-            points.append(SimpleNamespace(
-                dofs=np.concatenate([dofs, m + nz + np.flatnonzero(e)]),
-                weights=np.concatenate([phi[k], qd[k], e[e != 0.0]]),
-                offset=float(cp.weights @ self.linear.q_static[cp.dofs] + cp.offset),
-                dweights_dx=np.concatenate([phix[k], qdx[k], ed[e != 0.0]]),
-                doffset_dx=float(cp.dweights_dx @ self.linear.q_static[cp.dofs]
-                                 + cp.doffset_dx),
-                element=cp.element, xi=cp.xi))
-        self._geo = SimpleNamespace(t=t, pts=pts, phi=phi, qd=qd, G=G, Ginv=Ginv,
-                                    points=points)
-        return self._geo
+        g = self._g
+        if g.t == t:
+            return g
+        xs = self.positions(t)
+        if np.any(xs < self._loc[0][0] - 1e-9) or np.any(xs > self._loc[1][-1] + 1e-9):
+            self.linear.locator.locate(float(xs.min() if xs.min() < self._loc[0][0]
+                                             else xs.max()))      # raises the ParameterError
+        e = _k.locate_points(xs, *self._loc, g.S_idx, g.w, g.dw, g.offset, g.doffset)
+        flex = self.flex
+        _k.point_rows(g.S_idx, g.w, g.dw, flex.Phi_S, flex.Q_S[:, :self.nz], g.phi, g.phix,
+                      g.qd, g.qdx)
+        if self.nx:
+            if not _k.residual_flexibility(g.S_idx, g.w, flex.C_band, flex.band, g.phi,
+                                           self.omega2, g.qd, self.kbar, g.G):
+                raise ValueError("modal catenary: pantographs farther apart than the "
+                                 "residual tables cover")
+            g.Ginv[...] = np.linalg.inv(g.G)
+        for k, p in enumerate(g.points):
+            p.offset, p.doffset_dx = float(g.offset[k]), float(g.doffset[k])
+            p.element = int(self.linear.locator.elems[e[k]])
+        g.t, g.sup = t, None
+        return g
 
     def contact_points(self, t: float):
         return self.geometry(t).points
@@ -137,8 +146,7 @@ class ModalCatenary(SecondOrderModel):
     # ------------------------------------------------------------------ model interface
     def input_vector(self, t, inputs) -> np.ndarray:
         F = np.atleast_1d(np.asarray(inputs, dtype=float))
-        g = self.geometry(t)
-        return np.concatenate([g.phi.T @ F, g.qd.T @ F, F if self.nx else F[:0]])
+        return self.geometry(t).Wc.T @ F
 
     def _dropper_forces(self, y, v):
         dr = self.droppers
@@ -235,26 +243,26 @@ class ModalCatenary(SecondOrderModel):
         return np.where(self.droppers.slack(N), 0.0, N)
 
     def _support_rows(self, g):
-        """psi(t) G^-1 at the supports (nsup, np)."""
+        """psi(t) G^-1 at the supports (nsup, np), kept with the time's geometry."""
         flex = self.flex
-        if not self.nx:
-            return np.zeros((flex.sup.size, 0))
-        cols = [flex.C_sup[:, s] @ w for s, w, _ in g.pts]
-        H = np.column_stack(cols) - flex.Phi_sup @ (g.phi / self.omega2).T
-        if self.nz:
-            H -= flex.Q_sup[:, :self.nz] @ g.qd.T / self.kbar
-        return H @ g.Ginv
+        if g.sup is None:
+            g.sup = np.zeros((flex.sup.size, self.nx))
+            if self.nx:
+                _k.support_rows(g.S_idx, g.w, flex.C_sup, flex.Phi_sup,
+                                flex.Q_sup[:, :self.nz], g.phi, self.omega2, g.qd,
+                                self.kbar, g.Ginv, g.sup)
+        return g.sup
 
     def support_uplift(self, q) -> np.ndarray:
         """Uplift at the supports (modes, droppers' residual, contact residual at the
         latest evaluated time)."""
-        g = self._geo or self.geometry(0.0)
+        g = self._g if self._g.t is not None else self.geometry(0.0)
         m, nz = self.m, self.nz
         out = self.flex.Phi_sup @ q[:m]
         if nz:
-            out = out + self.flex.Q_sup[:, :nz] @ q[m:m + nz]
+            out += self.flex.Q_sup[:, :nz] @ q[m:m + nz]
         if self.nx:
-            out = out + self._support_rows(g) @ q[m + nz:]
+            out += self._support_rows(g) @ q[m + nz:]
         return out
 
     def full_displacement(self, t, q) -> np.ndarray:
@@ -267,7 +275,7 @@ class ModalCatenary(SecondOrderModel):
         if self.nx:
             g = self.geometry(t)
             solve = lin._factor_cache(0.0, 0.0, 1.0).solve
-            for k, cp in enumerate(lin.contact_points(t)):
+            for k, cp in enumerate(list(lin.contact_points(t))):
                 Nk = np.zeros(lin.n_dofs)
                 Nk[cp.dofs] = cp.weights
                 psi = np.asarray(solve(Nk)).ravel() - self.Phi @ (g.phi[k] / self.omega2)
@@ -298,31 +306,26 @@ class ModalCatenary(SecondOrderModel):
 
 
 class _ModalSolve:
-    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi."""
+    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi (G at
+    the latest geometry)."""
 
     def __init__(self, model: ModalCatenary, c_a, c_v, c_f, rows, s):
         self.model, self.c, self.rows, self.s = model, (c_a, c_v, c_f), rows, s
         m, nz = model.m, model.nz
-        d = np.empty(m + nz)
+        self.K = k = m + nz
+        d = np.empty(k)
         d[:m] = c_a + c_f * (c_v * model.zeta_c + model.omega2)
         d[m:] = c_f * model.kbar * (1.0 + c_v * model.linear.beta_r) if c_f else 1.0
         self.inv_diag = 1.0 / d
-        if rows.size:
-            Ts = model.T[rows, :m + nz]                          # (ns, m + nz); xi: zero
-            self.U = (Ts * self.inv_diag).T                       # A0^-1 Ts^T
-            self.Ts = Ts
-            self.small = np.eye(rows.size) - s[:, None] * (Ts @ self.U)
+        self.Ts = np.ascontiguousarray(model.T[rows, :k])        # (ns, K); xi: zero
+        self.U = np.ascontiguousarray((self.Ts * self.inv_diag).T)  # A0^-1 Ts^T
+        self.small_inv = (np.linalg.inv(np.eye(rows.size) - s[:, None] * (self.Ts @ self.U))
+                          if rows.size else np.zeros((0, 0)))
+        self.s = np.ascontiguousarray(s, dtype=float)
 
     def __call__(self, r, out=None):
-        model = self.model
-        m, nz = model.m, model.nz
-        r = np.asarray(r, dtype=float)
-        x = np.empty_like(r) if out is None else out
-        k = m + nz
-        x[:k] = (r[:k].T * self.inv_diag).T
-        if model.nx:
-            c_f = self.c[2]
-            x[k:] = model._geo.G @ r[k:] / c_f if c_f else r[k:]
-        if self.rows.size:
-            x[:k] += self.U @ np.linalg.solve(self.small, self.s * (self.Ts @ x[:k]))
-        return x
+        r = np.ascontiguousarray(r, dtype=float)
+        out = np.empty_like(r) if out is None else out
+        _k.diag_woodbury(r, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
+                         self.Ts, self.small_inv, self.s, out)
+        return out

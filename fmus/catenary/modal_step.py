@@ -20,8 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.affine_hht import MAX_SLACK_PASSES, _new_id, _predict
+from ..core.affine_hht import MAX_SLACK_PASSES, _new_id
 from ..core.errors import ConvergenceError
+from . import modal_kernels as _k
 
 
 class ModalHHT:
@@ -40,6 +41,9 @@ class ModalHHT:
         self.q_p, self.v_p, self._zero = (np.zeros(N) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(N) for _ in range(3))
         self.committed = np.zeros(len(model.droppers), dtype=bool)
+        self._y, self._e = np.zeros(N), np.zeros(len(model.droppers))
+        self._slack_buf = np.zeros(len(model.droppers), dtype=bool)
+        self._F = np.zeros(0)
         self.W = np.zeros((0, N))
         self._h, self._coef, self._slack = None, None, None
         self._loads = []
@@ -82,12 +86,11 @@ class ModalHHT:
             self._solve(self.committed)
             return
         c_a, c_v, c_f = self._coef
-        _predict(self.q, self.v, self.a, self._zero, h, s.beta, s.gamma, self.q_p, self.v_p,
-                 self._delta)
-        g = self.model.geometry(self.t + h)
-        self.model.free_forces(g, self.q_p, self.v_p, out=self._rhs)
-        self._rhs *= -c_f
-        self._rhs += s.alpha * self.f
+        model = self.model
+        g = model.geometry(self.t + h)
+        _k.predict_rhs(self.q, self.v, self.a, self.f, h, s.alpha, s.beta, s.gamma, c_f,
+                       model.zeta_c, model.omega2, model.r0, model.kbar, model.linear.beta_r,
+                       model.m, model.nz, g.Ginv, self.q_p, self.v_p, self._rhs)
         if self.keep_free_response:
             self._memo = ((self._id, h), (self.q_p.copy(), self.v_p.copy(), self._rhs.copy()))
         self._solve(self.committed)
@@ -115,13 +118,15 @@ class ModalHHT:
         self.passes += 1
 
     def finish(self, F) -> bool:
-        delta = self._delta
-        delta[:] = self.delta_free
-        for k, Fk in enumerate(np.atleast_1d(F)):
-            if Fk != 0.0:
-                delta += Fk * self.W[k]
-        slack = self.model.dropper_slack(self.q_p + delta)
-        if not np.array_equal(slack, self._slack):
+        delta, y, model = self._delta, self._y, self.model
+        F = np.asarray(F, dtype=float).reshape(-1)
+        _k.combine(self.delta_free, self.W, F, self.q_p, delta, y)
+        K = self.K
+        np.dot(model.T_K, y[:K], out=self._e)
+        dr = model.droppers
+        _k.slack_mask(dr.N0, dr.ka, dr.tension_only, self._e, self._slack_buf)
+        if not np.array_equal(self._slack_buf, self._slack):
+            slack = self._slack_buf.copy()
             if self.passes >= MAX_SLACK_PASSES:
                 raise ConvergenceError(
                     f"modal catenary: the slack set does not settle at t = "
@@ -130,16 +135,12 @@ class ModalHHT:
             self._solve(slack)
             return False
         c_a, c_v, c_f = self._coef
-        np.add(self.q_p, delta, out=self.q)
-        np.multiply(delta, c_v, out=self.v)
-        self.v += self.v_p
-        np.multiply(delta, c_a, out=self.a)
-        # f_{n+1} from (3.16): f_inertia + c_f f_{n+1} = alpha f_n
-        self.f *= self.settings.alpha
-        self.f[:self.model.m] -= self.a[:self.model.m]
-        self.f /= c_f
-        self.committed = slack
-        self.model.set_internal_state({"slack": slack})
+        _k.finish_step(self.q_p, self.v_p, delta, c_a, c_v, c_f, self.settings.alpha, model.m,
+                       self.q, self.v, self.a, self.f)
+        slack = self._slack
+        if not np.array_equal(slack, self.committed):
+            self.committed = slack
+            model.set_internal_state({"slack": slack})
         self.t += self._h
         self.n_steps += 1
         self._id = _new_id()
