@@ -107,6 +107,10 @@ class ModalCatenary(SecondOrderModel):
         g.qd, g.qdx = g.Wc[:, m:m + nz], g.Wcx[:, m:m + nz]
         for k in range(self.nx):
             g.Wc[k, m + nz + k] = 1.0
+        flex = self.flex
+        self._sup_rows = (np.ascontiguousarray(flex.Phi_sup / self.omega2),
+                          np.ascontiguousarray(flex.Q_sup[:, :nz] / self.kbar) if nz
+                          else np.zeros((flex.sup.size, 0)))
         dofs = np.arange(N)
         g.points = [SimpleNamespace(dofs=dofs, weights=g.Wc[k], dweights_dx=g.Wcx[k],
                                     offset=0.0, doffset_dx=0.0, element=-1)
@@ -248,9 +252,8 @@ class ModalCatenary(SecondOrderModel):
         if g.sup is None:
             g.sup = np.zeros((flex.sup.size, self.nx))
             if self.nx:
-                _k.support_rows(g.S_idx, g.w, flex.C_sup, flex.Phi_sup,
-                                flex.Q_sup[:, :self.nz], g.phi, self.omega2, g.qd,
-                                self.kbar, g.Ginv, g.sup)
+                _k.support_rows(g.S_idx, g.w, flex.C_sup, self._sup_rows[0],
+                                self._sup_rows[1], g.phi, g.qd, g.Ginv, g.sup)
         return g.sup
 
     def support_uplift(self, q) -> np.ndarray:

@@ -175,12 +175,12 @@ def slack_mask(N0, ka, tension_only, e, out):
 
 
 @njit(cache=True)
-def support_rows(S_idx, w, C_sup, Phi_sup, Q_sup, phi, omega2, qd, kbar, Ginv, out):
+def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
     """psi(t) G^-1 at the supports: out (nsup, np) = [C_sup N - Phi_sup Omega^-2 phi^T
-    - Q_sup qd^T / k] G^-1."""
+    - Q_sup qd^T / k] G^-1 (Phi_sup_w = Phi_sup Omega^-2, Q_sup_k = Q_sup / k)."""
     nsup = C_sup.shape[0]
     npan = S_idx.shape[0]
-    m = omega2.shape[0]
+    m = Phi_sup_w.shape[1]
     nz = qd.shape[1]
     H = np.zeros((nsup, npan))
     for k in range(npan):
@@ -190,9 +190,9 @@ def support_rows(S_idx, w, C_sup, Phi_sup, Q_sup, phi, omega2, qd, kbar, Ginv, o
                 if S_idx[k, i] >= 0:
                     s += C_sup[r, S_idx[k, i]] * w[k, i]
             for j in range(m):
-                s -= Phi_sup[r, j] * phi[k, j] / omega2[j]
+                s -= Phi_sup_w[r, j] * phi[k, j]
             for j in range(nz):
-                s -= Q_sup[r, j] * qd[k, j] / kbar
+                s -= Q_sup_k[r, j] * qd[k, j]
             H[r, k] = s
     for r in range(nsup):
         for k in range(npan):
