@@ -108,10 +108,12 @@ class ModalCatenary(SecondOrderModel):
         for k in range(self.nx):
             g.Wc[k, m + nz + k] = 1.0
         flex = self.flex
+        self._Q_S = np.ascontiguousarray(flex.Q_S[:, :nz])
+        self._inv_omega2 = 1.0 / self.omega2
         self._sup_rows = (np.ascontiguousarray(flex.Phi_sup / self.omega2),
                           np.ascontiguousarray(flex.Q_sup[:, :nz] / self.kbar) if nz
                           else np.zeros((flex.sup.size, 0)))
-        dofs = np.arange(N)
+        dofs = self.contact_dofs = np.arange(N)
         g.points = [SimpleNamespace(dofs=dofs, weights=g.Wc[k], dweights_dx=g.Wcx[k],
                                     offset=0.0, doffset_dx=0.0, element=-1)
                     for k in range(npan)]
@@ -124,20 +126,19 @@ class ModalCatenary(SecondOrderModel):
         g = self._g
         if g.t == t:
             return g
-        xs = self.positions(t)
-        if np.any(xs < self._loc[0][0] - 1e-9) or np.any(xs > self._loc[1][-1] + 1e-9):
-            self.linear.locator.locate(float(xs.min() if xs.min() < self._loc[0][0]
-                                             else xs.max()))      # raises the ParameterError
+        xs = self.linear.x0 + self.speed * t
+        lo, hi = self._loc[0][0], self._loc[1][-1]
+        for x in xs:
+            if not lo - 1e-9 <= x <= hi + 1e-9:
+                self.linear.locator.locate(float(x))      # raises the ParameterError
         e = _k.locate_points(xs, *self._loc, g.S_idx, g.w, g.dw, g.offset, g.doffset)
         flex = self.flex
-        _k.point_rows(g.S_idx, g.w, g.dw, flex.Phi_S, flex.Q_S[:, :self.nz], g.phi, g.phix,
-                      g.qd, g.qdx)
-        if self.nx:
-            if not _k.residual_flexibility(g.S_idx, g.w, flex.C_band, flex.band, g.phi,
-                                           self.omega2, g.qd, self.kbar, g.G):
-                raise ValueError("modal catenary: pantographs farther apart than the "
-                                 "residual tables cover")
-            g.Ginv[...] = np.linalg.inv(g.G)
+        _k.point_rows(g.S_idx, g.w, g.dw, flex.Phi_S, self._Q_S, g.phi, g.phix, g.qd, g.qdx)
+        if self.nx and not _k.residual_flexibility(g.S_idx, g.w, flex.C_band, flex.band,
+                                                   g.phi, self._inv_omega2, g.qd, self.kbar,
+                                                   g.G, g.Ginv):
+            raise ValueError("modal catenary: pantographs farther apart than the residual "
+                             "tables cover")
         for k, p in enumerate(g.points):
             p.offset, p.doffset_dx = float(g.offset[k]), float(g.doffset[k])
             p.element = int(self.linear.locator.elems[e[k]])
@@ -189,9 +190,9 @@ class ModalCatenary(SecondOrderModel):
     def step_solve(self, c_a, c_v, c_f, slack, committed):
         """The solve with the Newton matrix of (c_a, c_v, c_f) and the slack sets (kept
         while they last)."""
-        rows, s = self.droppers.removed_stiffness(slack, committed, c_v, c_f)
-        key = (c_a, c_v, c_f, rows.tobytes(), s.tobytes())
+        key = (c_a, c_v, c_f, slack.tobytes(), committed.tobytes())
         if getattr(self, "_solve_key", None) != key:
+            rows, s = self.droppers.removed_stiffness(slack, committed, c_v, c_f)
             self._solve_key, self._solve_obj = key, _ModalSolve(self, c_a, c_v, c_f, rows, s)
         return self._solve_obj
 

@@ -72,11 +72,11 @@ def point_rows(S_idx, w, dw, Phi_S, Q_S, phi, phix, qd, qdx):
 
 
 @njit(cache=True)
-def residual_flexibility(S_idx, w, C_band, band, phi, omega2, qd, kbar, G):
+def residual_flexibility(S_idx, w, C_band, band, phi, inv_omega2, qd, kbar, G, Ginv):
     """G_jk = N_j^T K0^-1 N_k - phi_j Omega^-2 phi_k^T - qd_j qd_k / k: the contact points'
-    residual flexibility. Returns False if a pair lies outside the tabulated band."""
+    residual flexibility, and its inverse. False if a pair lies outside the tabulated band."""
     npan = S_idx.shape[0]
-    m = omega2.shape[0]
+    m = inv_omega2.shape[0]
     nz = qd.shape[1]
     for j in range(npan):
         for k in range(npan):
@@ -94,7 +94,7 @@ def residual_flexibility(S_idx, w, C_band, band, phi, omega2, qd, kbar, G):
                         return False
                     g += w[j, a] * C_band[sa, off] * w[k, b]
             for i in range(m):
-                g -= phi[j, i] * phi[k, i] / omega2[i]
+                g -= phi[j, i] * phi[k, i] * inv_omega2[i]
             if nz:
                 for i in range(nz):
                     g -= qd[j, i] * qd[k, i] / kbar
@@ -104,6 +104,10 @@ def residual_flexibility(S_idx, w, C_band, band, phi, omega2, qd, kbar, G):
             s = 0.5 * (G[j, k] + G[k, j])
             G[j, k] = s
             G[k, j] = s
+    if npan == 1:
+        Ginv[0, 0] = 1.0 / G[0, 0]
+    else:
+        Ginv[...] = np.linalg.inv(G)
     return True
 
 

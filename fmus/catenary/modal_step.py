@@ -109,9 +109,11 @@ class ModalHHT:
             self.W = np.zeros((m, self.N))
         n = self._zero
         for k, (dofs, w) in enumerate(self._loads):
-            n[:] = 0.0
-            n[dofs] = w
-            n *= c_f
+            if dofs is self.model.contact_dofs:   # the model's own points: every y, in order
+                np.multiply(w, c_f, out=n)
+            else:
+                n[:] = 0.0
+                n[dofs] = c_f * np.asarray(w, dtype=float)
             solve(n, out=self.W[k])
         n[:] = 0.0
         self._slack = slack
