@@ -5,7 +5,8 @@
 - :class:`AssembledStepper`: Newton-Raphson on catenary + pantographs + contacts assembled
   (:class:`~pantocosim.core.coupled.CoupledSystem`), for every catenary model;
 - :class:`CondensedRunStepper`: a catenary with an affine form (constant matrices, e.g. the
-  linear model) in closed form, condensed on the contact points
+  linear model) or its own closed-form stepper (``closed_form``, the modal model) in closed
+  form, condensed on the contact points
   (:mod:`pantocosim.core.condensed`): the same solution, one solve per step.
 """
 
@@ -47,7 +48,8 @@ class CondensedRunStepper:
         from pantocosim.core.condensed import CondensedStepper
 
         cat = self.catenary = prep.catenary
-        self.structure = AffineHHT(cat.affine_form(), settings)
+        self.structure = (cat.closed_form(settings) if hasattr(cat, "closed_form")
+                          else AffineHHT(cat.affine_form(), settings))
         self.stepper = CondensedStepper(self.structure, cat.contact_points, prep.pantographs,
                                         prep.contact, settings, speed=cat.speed)
         self.stepper.initialize(0.0, prep.q_cat0, prep.q_pan0)
@@ -67,6 +69,6 @@ class CondensedRunStepper:
 
 def make_stepper(prep, settings):
     """The monolithic integrator for ``prep``'s catenary model."""
-    if hasattr(prep.catenary, "affine_form"):
+    if hasattr(prep.catenary, "affine_form") or hasattr(prep.catenary, "closed_form"):
         return CondensedRunStepper(prep, settings)
     return AssembledStepper(prep, settings)

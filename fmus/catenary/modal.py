@@ -1,23 +1,26 @@
-"""The linear catenary on its modes below a cutoff, with a moving static correction.
+"""The linear catenary on its modes below a cutoff, with static corrections at its interfaces.
 
-Coordinates y = [eta (m modal), xi (one per pantograph)]:
+Coordinates y = [eta (m modal), zeta (one per dropper), xi (one per pantograph)]:
 
-    q - q_static = Phi eta + Psi(t) G(t)^-1 xi,
-    Psi = (K0^-1 - Phi Omega^-2 Phi^T) N(t),   G = N^T Psi   (residual flexibility),
+    q - q_static = Phi eta + Q zeta + psi(t) G(t)^-1 xi
 
-N(t) the contact-wire interpolation (3.13) at the pantographs. Psi is K0- and M-orthogonal
-to the modes, so the modal equations stay diagonal,
+(:mod:`.modal_residual`): Phi the modes below the cutoff (thesis 3.3, K0 phi = omega^2 M phi),
+Q the droppers' residual shapes, psi(t) = R_perp N(t) the residual shapes of the contact
+points (N(t) the interpolation (3.13) at the pantographs), G = N^T psi. All three are K0- and
+M-orthogonal, so the stiffness stays diagonal:
 
-    eta'' + (alpha + beta omega^2) eta' + omega^2 eta = Phi^T (N F - dropper correction),
+    eta'' + (alpha + beta omega^2) eta' + omega^2 eta = Phi^T f,
+    k (zeta + beta zeta') = Q^T f,        G^-1 xi = N^T f,
 
-and xi, the contact-point height the truncated modes miss, is quasi-static: G^-1 xi = F.
-The contact point's static flexibility N^T K0^-1 N is exact at every position. K0^-1 N comes
-from the kept banded factorization of K0 through its cached unit-vector solves (one solve per
-contact-wire DOF a pantograph meets: the part that still scales with the DOFs, with the set-up
-and the modes). Droppers (:mod:`.linear_droppers`) slacken through a corrective force on the
-reduced coordinates, their elongation b . (Phi eta + Psi G^-1 xi); its rank-one tangents
-enter the diagonal Newton matrix by Woodbury. Per step the cost is O(modes x (pantographs +
-droppers)).
+f = sum_k N_k F_k + sum_{d slack} b_d N_d (the contact forces and the forces the slack
+droppers no longer carry, :mod:`.linear_droppers`). zeta and xi are quasi-static (the
+residual's inertia is left out); zeta keeps the stiffness-proportional Rayleigh damping
+(3.1), so that a slack dropper's damping share leaves consistently. The static response is exact: for any pantograph position
+and any set of slack droppers it equals the linear model's; a slack dropper's force
+N_d = N0_d + k_a,d b_d . q is exactly zero. The droppers' elongations T y (T = [B Phi, B Q,
+0]) are constant rows, and xi leaves them alone; the contact height is
+z_w = phi(x) eta + (Q^T N) zeta + xi. Per step the cost is O((modes + droppers) x
+(pantographs + droppers)), independent of the number of finite-element DOFs.
 """
 
 from __future__ import annotations
@@ -29,7 +32,9 @@ import numpy as np
 from ..core.errors import ConvergenceError
 from ..core.model import Evaluation, SecondOrderModel
 from .linear import LinearCatenary
+from . import modal_kernels as _k
 from .modal_basis import modes_below
+from .modal_residual import InterfaceFlexibility
 from .model import CatenaryModel
 
 
@@ -43,29 +48,35 @@ class ModalCatenary(SecondOrderModel):
         lin = self.linear = linear or LinearCatenary(catenary, x0, speed,
                                                       element_size=element_size)
         self.cutoff_hz = float(cutoff_hz)
-        self.frequencies, self.Phi = modes_below(lin.K0, lin.M, self.cutoff_hz)
+        S = lin.structure
+        self.frequencies, self.Phi = modes_below(
+            lin.K0, lin.M, self.cutoff_hz, bands=(S.lower_band(lin.K0_data), S.lower_band(S.M_data)))
         self.omega2 = (2.0 * np.pi * self.frequencies) ** 2
-        self.m = self.Phi.shape[1]
+        self.m = m = self.Phi.shape[1]
         self.n_p = len(lin.x0)
-        self.n_dofs = self.m + self.n_p
-        #: a complete basis leaves no residual flexibility: xi is then unused (held at 0)
-        self.corrected = self.m < lin.n_dofs
         self.x0, self.speed = lin.x0, lin.speed
         self.definition, self.mesh, self.structure = lin.definition, lin.mesh, lin.structure
-        self.zeta_c = lin.alpha_r + lin.beta_r * self.omega2       # Phi^T C Phi (diagonal)
-        self.r0 = self.Phi.T @ lin.r0
         dr = self.droppers = lin.droppers
-        vec = dr.vectors
-        self.B_phi = np.einsum("dk,dkm->dm", vec.val, np.vstack([self.Phi, np.zeros(
-            (1, self.m))])[vec._pad_idx])                          # b_d . phi_j
-        self.K0_solve = lin._factor_cache(0.0, 0.0, 1.0).solve     # cached columns K0^-1 e_j
-        self._b_cols: dict[int, np.ndarray] = {}                   # b_d . K0^-1 e_j by j
-        dz = self.mesh.node_dofs[self.mesh.support_contact_nodes, 2]
-        self._sup = self.structure.fmap[dz]
-        self.Phi_sup = np.where((self._sup >= 0)[:, None], self.Phi[self._sup], 0.0)
+        #: a complete basis leaves no residual: no zeta, no xi
+        self.corrected = m < lin.n_dofs
+        seps = [a - b for a in self.x0 for b in self.x0]
+        flex = self.flex = InterfaceFlexibility(lin, self.Phi, self.omega2, seps,
+                                                residual=self.corrected)
+        self.nz = len(dr) if self.corrected else 0
+        self.nx = self.n_p if self.corrected else 0
+        self.n_dofs = m + self.nz + self.nx
+        self.kbar = flex.kbar
+        self.zeta_c = lin.alpha_r + lin.beta_r * self.omega2       # Phi^T C Phi (diagonal)
+        self.r0 = np.concatenate([self.Phi.T @ lin.r0, flex.Q_r0[:self.nz],
+                                  np.zeros(self.nx)])
+        #: dropper elongations b_d . (q - q_static) = T @ y (constant rows; xi: zero)
+        self.T = np.zeros((len(dr), self.n_dofs))
+        self.T[:, :m] = flex.B_phi
+        self.T[:, m:m + self.nz] = flex.B_Q[:, :self.nz]
+        self.T_K = np.ascontiguousarray(self.T[:, :m + self.nz])
         self.q_static = np.zeros(self.n_dofs)
         self._slack_committed = np.zeros(len(dr), dtype=bool)
-        self._geo = None
+        self._init_geometry()
 
     # ------------------------------------------------------------------ delegated geometry
     def positions(self, t):
@@ -79,49 +90,60 @@ class ModalCatenary(SecondOrderModel):
     wire_velocity = CatenaryModel.wire_velocity
 
     # ------------------------------------------------------------------ moving correction
+    def _init_geometry(self):
+        """Persistent buffers of the contact points (refilled for each new time)."""
+        npan, N, m, nz = self.n_p, self.n_dofs, self.m, self.nz
+        loc = self.linear.locator
+        self._loc = (np.ascontiguousarray(loc.x_start), np.ascontiguousarray(loc.x_end),
+                     np.ascontiguousarray(loc.E_x), np.ascontiguousarray(loc.Le),
+                     np.ascontiguousarray(self.flex.elem_s),
+                     np.ascontiguousarray(loc.x_full_ref[loc.z_full_dofs]))
+        g = self._g = SimpleNamespace(
+            t=None, S_idx=np.zeros((npan, 4), np.int64), w=np.zeros((npan, 4)),
+            dw=np.zeros((npan, 4)), offset=np.zeros(npan), doffset=np.zeros(npan),
+            Wc=np.zeros((npan, N)), Wcx=np.zeros((npan, N)), G=np.zeros((self.nx, self.nx)),
+            Ginv=np.zeros((self.nx, self.nx)), sup=None)
+        g.phi, g.phix = g.Wc[:, :m], g.Wcx[:, :m]
+        g.qd, g.qdx = g.Wc[:, m:m + nz], g.Wcx[:, m:m + nz]
+        for k in range(self.nx):
+            g.Wc[k, m + nz + k] = 1.0
+        flex = self.flex
+        self._Q_S = np.ascontiguousarray(flex.Q_S[:, :nz])
+        self._inv_omega2 = 1.0 / self.omega2
+        self._sup_rows = (np.ascontiguousarray(flex.Phi_sup / self.omega2),
+                          np.ascontiguousarray(flex.Q_sup[:, :nz] / self.kbar) if nz
+                          else np.zeros((flex.sup.size, 0)))
+        dofs = self.contact_dofs = np.arange(N)
+        g.points = [SimpleNamespace(dofs=dofs, weights=g.Wc[k], dweights_dx=g.Wcx[k],
+                                    offset=0.0, doffset_dx=0.0, element=-1)
+                    for k in range(npan)]
+
     def geometry(self, t: float):
-        """Contact points in y, G^-1, the droppers' and supports' rows of Psi G^-1 at t."""
+        """The contact points in y (weights [phi(x), Q^T N, e_k]) and G(t), G(t)^-1 of the
+        contact residual at time t. The buffers are the model's: valid until another time
+        is asked for."""
         t = float(t)
-        if self._geo is not None and self._geo.t == t:
-            return self._geo
-        cps = self.linear.contact_points(t)
-        m, npan = self.m, self.n_p
-        phi = np.array([cp.weights @ self.Phi[cp.dofs] for cp in cps])         # (np, m)
-        flex = np.zeros((npan, npan))
-        Hb = np.zeros((len(self.droppers), npan))
-        Hs = np.zeros((self._sup.size, npan))
-        for k, cp in enumerate(cps):
-            cols = self.K0_solve._cached(cp.dofs)
-            col = sum(w * c for w, c in zip(cp.weights, cols))               # K0^-1 N_k
-            for j, cj in enumerate(cps):
-                flex[j, k] = cj.weights @ col[cj.dofs]
-            Hb[:, k] = self.droppers.vectors.dots(col)
-            Hs[:, k] = np.where(self._sup >= 0, col[self._sup], 0.0)
-        inv_w2 = phi / self.omega2                                            # (np, m)
-        if self.corrected:
-            G = flex - phi @ inv_w2.T
-            G = 0.5 * (G + G.T)
-            Ginv = np.linalg.inv(G)
-            Hb = (Hb - self.B_phi @ inv_w2.T) @ Ginv
-            Hs = (Hs - self.Phi_sup @ inv_w2.T) @ Ginv
-        else:
-            G = Ginv = np.eye(npan)
-            Hb, Hs = 0.0 * Hb, 0.0 * Hs
-        wxi = 1.0 if self.corrected else 0.0
-        points = []
-        for k, cp in enumerate(cps):
-            e = np.zeros(1)
-            points.append(SimpleNamespace(
-                dofs=np.concatenate([np.arange(m), [m + k]]),
-                weights=np.concatenate([phi[k], [wxi]]),
-                offset=float(cp.weights @ self.linear.q_static[cp.dofs] + cp.offset),
-                dweights_dx=np.concatenate([cp.dweights_dx @ self.Phi[cp.dofs], e]),
-                doffset_dx=float(cp.dweights_dx @ self.linear.q_static[cp.dofs]
-                                 + cp.doffset_dx),
-                element=cp.element, xi=cp.xi))
-        T = np.hstack([self.B_phi, Hb])           # dropper elongation = T @ y
-        self._geo = SimpleNamespace(t=t, phi=phi, G=G, Ginv=Ginv, T=T, Hs=Hs, points=points)
-        return self._geo
+        g = self._g
+        if g.t == t:
+            return g
+        xs = self.linear.x0 + self.speed * t
+        lo, hi = self._loc[0][0], self._loc[1][-1]
+        for x in xs:
+            if not lo - 1e-9 <= x <= hi + 1e-9:
+                self.linear.locator.locate(float(x))      # raises the ParameterError
+        e = _k.locate_points(xs, *self._loc, g.S_idx, g.w, g.dw, g.offset, g.doffset)
+        flex = self.flex
+        _k.point_rows(g.S_idx, g.w, g.dw, flex.Phi_S, self._Q_S, g.phi, g.phix, g.qd, g.qdx)
+        if self.nx and not _k.residual_flexibility(g.S_idx, g.w, flex.C_band, flex.band,
+                                                   g.phi, self._inv_omega2, g.qd, self.kbar,
+                                                   g.G, g.Ginv):
+            raise ValueError("modal catenary: pantographs farther apart than the residual "
+                             "tables cover")
+        for k, p in enumerate(g.points):
+            p.offset, p.doffset_dx = float(g.offset[k]), float(g.doffset[k])
+            p.element = int(self.linear.locator.elems[e[k]])
+        g.t, g.sup = t, None
+        return g
 
     def contact_points(self, t: float):
         return self.geometry(t).points
@@ -129,26 +151,66 @@ class ModalCatenary(SecondOrderModel):
     # ------------------------------------------------------------------ model interface
     def input_vector(self, t, inputs) -> np.ndarray:
         F = np.atleast_1d(np.asarray(inputs, dtype=float))
-        g = self.geometry(t)
-        return np.concatenate([g.phi.T @ F, F if self.corrected else 0.0 * F])
+        return self.geometry(t).Wc.T @ F
 
-    def _dropper_forces(self, g, y, v):
+    def _dropper_forces(self, y, v):
         dr = self.droppers
-        N = dr.N0 + dr.ka * (g.T @ y)
+        N = dr.N0 + dr.ka * (self.T @ y)
         slack = dr.slack(N)
-        removed = g.T[slack].T @ N[slack]
-        c = self._slack_committed
-        if c.any():
-            removed += g.T[c].T @ (dr.beta * dr.ka[c] * (g.T[c] @ v))
-        return removed, slack, N
+        return self.slack_forces(y, v, slack, self._slack_committed), slack, N
+
+    def dropper_slack(self, y) -> np.ndarray:
+        """The droppers slack at y."""
+        k = self.m + self.nz
+        return self.droppers.slack(self.droppers.N0 + self.droppers.ka * (
+            self.T[:, :k] @ y[:k]))
+
+    def slack_forces(self, y, v, slack, committed) -> np.ndarray:
+        """The forces the droppers no longer carry: sum_{slack} N_d t_d (N_d at y) and the
+        committed ones' damping share sum beta k_a (t_d . v) t_d, on y."""
+        dr, T = self.droppers, self.T
+        out = np.zeros(self.n_dofs)
+        if slack.any():
+            Ts = T[slack]
+            out += Ts.T @ (dr.N0[slack] + dr.ka[slack] * (Ts @ y))
+        if committed.any():
+            Tc = T[committed]
+            out += Tc.T @ (dr.beta * dr.ka[committed] * (Tc @ v))
+        return out
+
+    def free_forces(self, g, y, v, out) -> np.ndarray:
+        """f_rest at (y, v) without the loads and the slack droppers' terms (into out)."""
+        m, nz = self.m, self.nz
+        out[:m] = self.zeta_c * v[:m] + self.omega2 * y[:m]
+        out[m:m + nz] = self.kbar * (y[m:m + nz] + self.linear.beta_r * v[m:m + nz])
+        out[m + nz:] = g.Ginv @ y[m + nz:]
+        out += self.r0
+        return out
+
+    def step_solve(self, c_a, c_v, c_f, slack, committed):
+        """The solve with the Newton matrix of (c_a, c_v, c_f) and the slack sets (kept
+        while they last)."""
+        key = (c_a, c_v, c_f, slack.tobytes(), committed.tobytes())
+        if getattr(self, "_solve_key", None) != key:
+            rows, s = self.droppers.removed_stiffness(slack, committed, c_v, c_f)
+            self._solve_key, self._solve_obj = key, _ModalSolve(self, c_a, c_v, c_f, rows, s)
+        return self._solve_obj
+
+    def closed_form(self, settings, keep_free_response: bool = False):
+        """The closed-form HHT stepper of this model (:mod:`.modal_step`)."""
+        from .modal_step import ModalHHT
+
+        return ModalHHT(self, settings, keep_free_response)
 
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         g = self.geometry(t)
-        m = self.m
-        removed, slack, _ = self._dropper_forces(g, q, v)
+        m, nz = self.m, self.nz
+        removed, slack, _ = self._dropper_forces(q, v)
         f_rest = np.empty(self.n_dofs)
-        f_rest[:m] = self.zeta_c * v[:m] + self.omega2 * q[:m] + self.r0
-        f_rest[m:] = g.Ginv @ q[m:]
+        f_rest[:m] = self.zeta_c * v[:m] + self.omega2 * q[:m]
+        f_rest[m:m + nz] = self.kbar * (q[m:m + nz] + self.linear.beta_r * v[m:m + nz])
+        f_rest[m + nz:] = g.Ginv @ q[m + nz:]
+        f_rest += self.r0
         f_rest -= removed
         if inputs is not None:
             f_rest -= self.input_vector(t, inputs)
@@ -164,12 +226,13 @@ class ModalCatenary(SecondOrderModel):
         return SimpleNamespace(c=(c_a, c_v, c_f), rows=rows, s=s)
 
     def factorize(self, S):
-        """Solve with diag(c_a + c_f (c_v zeta + omega^2)) on eta, c_f G^-1 on xi (G at the
-        latest evaluated time), minus the slack droppers' rank-one terms (Woodbury)."""
+        """Solve with diag(c_a + c_f (c_v zeta + omega^2)) on eta, c_f k on zeta, c_f G^-1
+        on xi (G at the latest evaluated time), minus the slack droppers' rank-one terms
+        (Woodbury)."""
         return _ModalSolve(self, *S.c, S.rows, S.s)
 
     def commit(self, t, q, v, a, inputs) -> None:
-        self._slack_committed = self._dropper_forces(self.geometry(t), q, v)[1]
+        self._slack_committed = self._dropper_forces(q, v)[1]
 
     def get_internal_state(self):
         return {"slack": self._slack_committed.copy()}
@@ -181,23 +244,48 @@ class ModalCatenary(SecondOrderModel):
 
     # ------------------------------------------------------------------ results
     def dropper_forces(self, q) -> np.ndarray:
-        g = self._geo or self.geometry(0.0)
-        N = self.droppers.N0 + self.droppers.ka * (g.T @ q)
+        N = self.droppers.N0 + self.droppers.ka * (self.T @ q)
         return np.where(self.droppers.slack(N), 0.0, N)
 
+    def _support_rows(self, g):
+        """psi(t) G^-1 at the supports (nsup, np), kept with the time's geometry."""
+        flex = self.flex
+        if g.sup is None:
+            g.sup = np.zeros((flex.sup.size, self.nx))
+            if self.nx:
+                _k.support_rows(g.S_idx, g.w, flex.C_sup, self._sup_rows[0],
+                                self._sup_rows[1], g.phi, g.qd, g.Ginv, g.sup)
+        return g.sup
+
     def support_uplift(self, q) -> np.ndarray:
-        """Uplift at the supports (Phi eta + the static correction at the latest time)."""
-        g = self._geo or self.geometry(0.0)
-        return self.Phi_sup @ q[:self.m] + g.Hs @ q[self.m:]
+        """Uplift at the supports (modes, droppers' residual, contact residual at the
+        latest evaluated time)."""
+        g = self._g if self._g.t is not None else self.geometry(0.0)
+        m, nz = self.m, self.nz
+        out = self.flex.Phi_sup @ q[:m]
+        if nz:
+            out += self.flex.Q_sup[:, :nz] @ q[m:m + nz]
+        if self.nx:
+            out += self._support_rows(g) @ q[m + nz:]
+        return out
 
     def full_displacement(self, t, q) -> np.ndarray:
         """q_full - q_static on the linear model's DOFs (for checks; O(DOFs))."""
-        g = self.geometry(t)
-        out = self.Phi @ q[:self.m]
-        for k, cp in enumerate(self.linear.contact_points(t)):
-            col = sum(w * c for w, c in zip(cp.weights, self.K0_solve._cached(cp.dofs)))
-            psi = col - self.Phi @ (g.phi[k] / self.omega2)
-            out += psi * (g.Ginv[k] @ q[self.m:])
+        lin, m, nz = self.linear, self.m, self.nz
+        out = self.Phi @ q[:m]
+        if nz:
+            Q = self.flex.Q_full(lin, self.Phi)
+            out += Q @ q[m:m + nz]
+        if self.nx:
+            g = self.geometry(t)
+            solve = lin._factor_cache(0.0, 0.0, 1.0).solve
+            for k, cp in enumerate(list(lin.contact_points(t))):
+                Nk = np.zeros(lin.n_dofs)
+                Nk[cp.dofs] = cp.weights
+                psi = np.asarray(solve(Nk)).ravel() - self.Phi @ (g.phi[k] / self.omega2)
+                if nz:
+                    psi -= Q @ g.qd[k] / self.kbar
+                out += psi * (g.Ginv[k] @ q[m + nz:])
         return out
 
     def static_state(self, forces=None, t: float = 0.0, max_iter: int = 50) -> np.ndarray:
@@ -222,33 +310,26 @@ class ModalCatenary(SecondOrderModel):
 
 
 class _ModalSolve:
-    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta (+) c_f G^-1 on xi."""
+    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi (G at
+    the latest geometry)."""
 
     def __init__(self, model: ModalCatenary, c_a, c_v, c_f, rows, s):
         self.model, self.c, self.rows, self.s = model, (c_a, c_v, c_f), rows, s
-        self.diag = c_a + c_f * (c_v * model.zeta_c + model.omega2)
-        self._memo = None
+        m, nz = model.m, model.nz
+        self.K = k = m + nz
+        d = np.empty(k)
+        d[:m] = c_a + c_f * (c_v * model.zeta_c + model.omega2)
+        d[m:] = c_f * model.kbar * (1.0 + c_v * model.linear.beta_r) if c_f else 1.0
+        self.inv_diag = 1.0 / d
+        self.Ts = np.ascontiguousarray(model.T[rows, :k])        # (ns, K); xi: zero
+        self.U = np.ascontiguousarray((self.Ts * self.inv_diag).T)  # A0^-1 Ts^T
+        self.small_inv = (np.linalg.inv(np.eye(rows.size) - s[:, None] * (self.Ts @ self.U))
+                          if rows.size else np.zeros((0, 0)))
+        self.s = np.ascontiguousarray(s, dtype=float)
 
-    def _a0_solve(self, g, r):
-        m, c_f = self.model.m, self.c[2]
-        x = np.empty_like(r)
-        x[:m] = (r[:m].T / self.diag).T
-        x[m:] = g.G @ r[m:] / c_f if c_f else r[m:]
-        return x
-
-    def _update(self, g):
-        if self._memo is None or self._memo[0] is not g:
-            Ts = g.T[self.rows]                                  # (ns, m + np)
-            U = self._a0_solve(g, Ts.T.copy())
-            small = np.eye(self.rows.size) - self.s[:, None] * (Ts @ U)
-            self._memo = (g, Ts, U, small)
-        return self._memo
-
-    def __call__(self, r):
-        g = self.model._geo
-        r = np.asarray(r, dtype=float)
-        x = self._a0_solve(g, r)
-        if not self.rows.size:
-            return x
-        _, Ts, U, small = self._update(g)
-        return x + U @ np.linalg.solve(small, self.s * (Ts @ x))
+    def __call__(self, r, out=None):
+        r = np.ascontiguousarray(r, dtype=float)
+        out = np.empty_like(r) if out is None else out
+        _k.diag_woodbury(r, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
+                         self.Ts, self.small_inv, self.s, out)
+        return out

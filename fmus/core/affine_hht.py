@@ -294,8 +294,10 @@ class ForcedAffineIntegrator:
 
     closed_form = True
 
-    def __init__(self, form: AffineForm, points, settings):
-        self.structure = AffineHHT(form, settings, keep_free_response=True)
+    def __init__(self, form: AffineForm | None, points, settings, structure=None):
+        #: ``structure``: a stepper with the :class:`AffineHHT` interface (default: one of
+        #: ``form``), e.g. the modal catenary's
+        self.structure = structure or AffineHHT(form, settings, keep_free_response=True)
         self.points = points
         self.settings = settings
 

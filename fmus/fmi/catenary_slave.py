@@ -491,7 +491,12 @@ class CatenarySlave(IntegratorSlave):
 
 def _forced_integrator(model, settings):
     """The integrator of the catenary under force inputs: closed-form steps for a model with
-    an affine form (constant matrices), else Newton-Raphson."""
+    an affine form (constant matrices) or its own closed-form stepper, else Newton-Raphson."""
+    if hasattr(model, "closed_form"):
+        from pantocosim.core.affine_hht import ForcedAffineIntegrator
+
+        return ForcedAffineIntegrator(None, model.contact_points, settings,
+                                      structure=model.closed_form(settings, True))
     if hasattr(model, "affine_form"):
         from pantocosim.core.affine_hht import ForcedAffineIntegrator
 
