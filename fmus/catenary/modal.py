@@ -79,6 +79,11 @@ class ModalCatenary(SecondOrderModel):
         self._init_geometry()
 
     # ------------------------------------------------------------------ delegated geometry
+    @property
+    def n_modes(self) -> int:
+        """Number of modes kept (the run summary's ``catenary_modes``)."""
+        return self.m
+
     def positions(self, t):
         return self.linear.positions(t)
 
