@@ -12,8 +12,14 @@ from collections import OrderedDict
 
 import numpy as np
 from numba import njit
-from scipy.linalg.blas import daxpy
 from scipy.linalg.lapack import dpbtrf, dpbtrs
+
+
+#: solution entries below this are set to zero in :func:`band_solve`: the solve of a unit
+#: vector decays geometrically away from its entry and would otherwise run into subnormal
+#: numbers, which x86 processors handle a hundred times slower (1e-250 is far below any
+#: physical value of this project)
+TINY = 1e-250
 
 
 @njit(cache=True, fastmath=True)
@@ -29,6 +35,8 @@ def band_solve(LT, b, x):
     full = max(n - w + 1, 0)
     for j in range(full):
         xj = x[j] * LT[j, 0]
+        if abs(xj) < TINY:
+            xj = 0.0
         x[j] = xj
         for k in range(1, w):
             x[j + k] -= LT[j, k] * xj
@@ -46,7 +54,15 @@ def band_solve(LT, b, x):
         s = x[j]
         for k in range(1, w):
             s -= LT[j, k] * x[j + k]
-        x[j] = s * LT[j, 0]
+        s *= LT[j, 0]
+        x[j] = s if abs(s) >= TINY else 0.0
+
+
+@njit(cache=True)
+def axpy(a, x, y):
+    """y += a x in place."""
+    for i in range(y.shape[0]):
+        y[i] += a * x[i]
 
 
 class BandedCholesky:
@@ -108,5 +124,5 @@ class BandedCholesky:
         x = np.zeros(self.n) if out is None else out
         x[:] = 0.0
         for j, w in zip(np.asarray(dofs).tolist(), np.asarray(values, dtype=float).tolist()):
-            daxpy(self._column(j), x, a=w)
+            axpy(w, self._column(j), x)
         return x
