@@ -162,7 +162,7 @@ def slack_mask(N0, ka, tension_only, e, out):
     return anyslack
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
     """psi(t) G^-1 at the supports: out (nsup, np) = [C_sup N - Phi_sup Omega^-2 phi^T
     - Q_sup qd^T / k] G^-1 (Phi_sup_w = Phi_sup Omega^-2, Q_sup_k = Q_sup / k)."""
@@ -172,16 +172,21 @@ def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
     nz = qd.shape[1]
     H = np.zeros((nsup, npan))
     for k in range(npan):
+        pk = phi[k]
+        qk = qd[k]
         for r in range(nsup):
             s = 0.0
             for i in range(4):
                 if S_idx[k, i] >= 0:
                     s += C_sup[r, S_idx[k, i]] * w[k, i]
+            acc = 0.0
+            pr = Phi_sup_w[r]
             for j in range(m):
-                s -= Phi_sup_w[r, j] * phi[k, j]
+                acc += pr[j] * pk[j]
+            qr = Q_sup_k[r]
             for j in range(nz):
-                s -= Q_sup_k[r, j] * qd[k, j]
-            H[r, k] = s
+                acc += qr[j] * qk[j]
+            H[r, k] = s - acc
     for r in range(nsup):
         for k in range(npan):
             s = 0.0
