@@ -34,7 +34,7 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
     duration_s = 5.0               # optional; default: until the last pantograph leaves the
                                    # analysis window
     catenary_model = "nonlinear"   # "nonlinear" (reference), "linear" or "modal"
-    modal_cutoff_hz = 20.0         # modal model: modes below this frequency
+    modal_cutoff_hz = 100.0        # modal model: modes below it (docs/modal-cutoff.md)
 
     [contact]
     stiffness = 50000.0            # k_H [N/m]

@@ -77,6 +77,7 @@ class ModalCatenary(SecondOrderModel):
         self.q_static = np.zeros(self.n_dofs)
         self._slack_committed = np.zeros(len(dr), dtype=bool)
         self._init_geometry()
+        _k.warm_up()
 
     # ------------------------------------------------------------------ delegated geometry
     @property
@@ -114,6 +115,7 @@ class ModalCatenary(SecondOrderModel):
             g.Wc[k, m + nz + k] = 1.0
         flex = self.flex
         self._Q_S = np.ascontiguousarray(flex.Q_S[:, :nz])
+        self._Q_sup = np.ascontiguousarray(flex.Q_sup[:, :nz])
         self._inv_omega2 = 1.0 / self.omega2
         self._sup_rows = (np.ascontiguousarray(flex.Phi_sup / self.omega2),
                           np.ascontiguousarray(flex.Q_sup[:, :nz] / self.kbar) if nz
@@ -173,14 +175,12 @@ class ModalCatenary(SecondOrderModel):
     def slack_forces(self, y, v, slack, committed) -> np.ndarray:
         """The forces the droppers no longer carry: sum_{slack} N_d t_d (N_d at y) and the
         committed ones' damping share sum beta k_a (t_d . v) t_d, on y."""
-        dr, T = self.droppers, self.T
+        dr = self.droppers
         out = np.zeros(self.n_dofs)
-        if slack.any():
-            Ts = T[slack]
-            out += Ts.T @ (dr.N0[slack] + dr.ka[slack] * (Ts @ y))
-        if committed.any():
-            Tc = T[committed]
-            out += Tc.T @ (dr.beta * dr.ka[committed] * (Tc @ v))
+        if slack.any() or committed.any():
+            _k.slack_forces(self.T_K, dr.N0, dr.ka, dr.beta, slack, committed,
+                            np.ascontiguousarray(y, dtype=float),
+                            np.ascontiguousarray(v, dtype=float), out)
         return out
 
     def free_forces(self, g, y, v, out) -> np.ndarray:
@@ -266,12 +266,9 @@ class ModalCatenary(SecondOrderModel):
         """Uplift at the supports (modes, droppers' residual, contact residual at the
         latest evaluated time)."""
         g = self._g if self._g.t is not None else self.geometry(0.0)
-        m, nz = self.m, self.nz
-        out = self.flex.Phi_sup @ q[:m]
-        if nz:
-            out += self.flex.Q_sup[:, :nz] @ q[m:m + nz]
-        if self.nx:
-            out += self._support_rows(g) @ q[m + nz:]
+        out = np.empty(self.flex.sup.size)
+        _k.support_uplift(self.flex.Phi_sup, self._Q_sup, self._support_rows(g),
+                          np.ascontiguousarray(q, dtype=float), self.m, self.nz, out)
         return out
 
     def full_displacement(self, t, q) -> np.ndarray:

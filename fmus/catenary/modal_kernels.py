@@ -136,22 +136,6 @@ def predict_rhs(q, v, a, f, h, alpha, beta, gamma, c_f, zeta_c, omega2, r0, kbar
 
 
 @njit(cache=True, fastmath=True)
-def combine(delta_free, W, F, q_p, delta, y):
-    """delta = delta_free + sum_k F_k W_k and y = q_p + delta."""
-    n = delta.shape[0]
-    for i in range(n):
-        delta[i] = delta_free[i]
-    for k in range(F.shape[0]):
-        Fk = F[k]
-        if Fk != 0.0:
-            Wk = W[k]
-            for i in range(n):
-                delta[i] += Fk * Wk[i]
-    for i in range(n):
-        y[i] = q_p[i] + delta[i]
-
-
-@njit(cache=True, fastmath=True)
 def finish_step(q_p, v_p, delta, c_a, c_v, c_f, alpha, m, q, v, a, f):
     """q, v, a at t + h and f_{n+1} = (alpha f_n - f_inertia(a_{n+1})) / c_f, (3.16)."""
     n = q.shape[0]
@@ -178,7 +162,7 @@ def slack_mask(N0, ka, tension_only, e, out):
     return anyslack
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
     """psi(t) G^-1 at the supports: out (nsup, np) = [C_sup N - Phi_sup Omega^-2 phi^T
     - Q_sup qd^T / k] G^-1 (Phi_sup_w = Phi_sup Omega^-2, Q_sup_k = Q_sup / k)."""
@@ -188,16 +172,21 @@ def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
     nz = qd.shape[1]
     H = np.zeros((nsup, npan))
     for k in range(npan):
+        pk = phi[k]
+        qk = qd[k]
         for r in range(nsup):
             s = 0.0
             for i in range(4):
                 if S_idx[k, i] >= 0:
                     s += C_sup[r, S_idx[k, i]] * w[k, i]
+            acc = 0.0
+            pr = Phi_sup_w[r]
             for j in range(m):
-                s -= Phi_sup_w[r, j] * phi[k, j]
+                acc += pr[j] * pk[j]
+            qr = Q_sup_k[r]
             for j in range(nz):
-                s -= Q_sup_k[r, j] * qd[k, j]
-            H[r, k] = s
+                acc += qr[j] * qk[j]
+            H[r, k] = s - acc
     for r in range(nsup):
         for k in range(npan):
             s = 0.0
@@ -239,3 +228,98 @@ def diag_woodbury(r, inv_diag, K, G, c_f, U, Ts, small_inv, s, out):
             for a in range(ns):
                 acc += U[i, a] * z[a]
             out[i] += acc
+
+
+@njit(cache=True, fastmath=True)
+def step_and_check(delta_free, W, F, q_p, T_K, N0, ka, tension_only, delta, y, e, slack,
+                   previous):
+    """delta = delta_free + sum_k F_k W_k, y = q_p + delta, the droppers' elongations
+    e = T_K y[:K] and their slack set at y; returns True when it differs from
+    ``previous``."""
+    n = delta.shape[0]
+    for i in range(n):
+        delta[i] = delta_free[i]
+    for k in range(F.shape[0]):
+        Fk = F[k]
+        if Fk != 0.0:
+            for i in range(n):
+                delta[i] += Fk * W[k, i]
+    for i in range(n):
+        y[i] = q_p[i] + delta[i]
+    nd, K = T_K.shape
+    changed = False
+    for d in range(nd):
+        acc = 0.0
+        for j in range(K):
+            acc += T_K[d, j] * y[j]
+        e[d] = acc
+        s = tension_only[d] and (N0[d] + ka[d] * acc < 0.0)
+        slack[d] = s
+        if s != previous[d]:
+            changed = True
+    return changed
+
+
+@njit(cache=True)
+def slack_forces(T_K, N0, ka, beta, slack, committed, y, v, out):
+    """out[:K] = sum_{d slack} (N0_d + k_a t_d . y) t_d + sum_{d committed} beta k_a
+    (t_d . v) t_d: the forces the slack droppers no longer carry."""
+    nd, K = T_K.shape
+    for i in range(out.shape[0]):
+        out[i] = 0.0
+    for d in range(nd):
+        c = 0.0
+        if slack[d]:
+            acc = 0.0
+            for j in range(K):
+                acc += T_K[d, j] * y[j]
+            c += N0[d] + ka[d] * acc
+        if committed[d]:
+            acc = 0.0
+            for j in range(K):
+                acc += T_K[d, j] * v[j]
+            c += beta * ka[d] * acc
+        if c != 0.0:
+            for j in range(K):
+                out[j] += c * T_K[d, j]
+
+
+@njit(cache=True, fastmath=True)
+def support_uplift(Phi_sup, Q_sup, rows, y, m, nz, out):
+    """Uplift at the supports: Phi_sup eta + Q_sup zeta + rows xi."""
+    nsup = Phi_sup.shape[0]
+    nx = rows.shape[1]
+    for r in range(nsup):
+        acc = 0.0
+        for j in range(m):
+            acc += Phi_sup[r, j] * y[j]
+        for j in range(nz):
+            acc += Q_sup[r, j] * y[m + j]
+        for j in range(nx):
+            acc += rows[r, j] * y[m + nz + j]
+        out[r] = acc
+
+
+def warm_up() -> None:
+    """Compile (or load from numba's cache) every kernel at set-up, not in the first step."""
+    f1, f2 = np.zeros(2), np.zeros((1, 2))
+    i4 = -np.ones((1, 4), dtype=np.int64)
+    b = np.zeros(1, dtype=np.bool_)
+    w4, z4 = np.zeros((1, 4)), np.zeros((1, 4))
+    locate_points(np.zeros(1), np.zeros(1), np.ones(1), np.ones((1, 4)), np.ones(1), i4, z4,
+                  i4.copy(), w4, w4.copy(), np.zeros(1), np.zeros(1))
+    point_rows(i4, w4, w4, f2, f2, f2.copy(), f2.copy(), f2.copy(), f2.copy())
+    residual_flexibility(np.zeros((1, 4), dtype=np.int64), np.ones((1, 4)), np.ones((1, 1)), 0,
+                         f2, np.ones(2), f2, 1.0, np.ones((1, 1)), np.ones((1, 1)))
+    predict_rhs(f1, f1, f1, f1, 1.0, 0.0, 0.25, 0.5, 1.0, np.zeros(1), np.ones(1), f1, 1.0,
+                0.0, 1, 1, np.zeros((0, 0)), f1.copy(), f1.copy(), f1.copy())
+    finish_step(f1, f1, f1, 1.0, 1.0, 1.0, 0.0, 1, f1.copy(), f1.copy(), f1.copy(), f1.copy())
+    slack_mask(np.ones(1), np.ones(1), b, np.zeros(1), b.copy())
+    support_rows(i4, w4, np.zeros((1, 1)), f2, np.zeros((1, 1)), f2, np.zeros((1, 1)),
+                 np.ones((1, 1)), np.zeros((1, 1)))
+    diag_woodbury(f1, np.ones(1), 1, np.ones((1, 1)), 1.0, np.zeros((1, 1)), np.zeros((1, 1)),
+                  np.zeros((1, 1)), np.zeros(1), f1.copy())
+    step_and_check(f1, f2, np.zeros(1), f1, np.zeros((1, 2)), np.ones(1), np.ones(1), b, f1.copy(),
+                   f1.copy(), np.zeros(1), b.copy(), b.copy())
+    slack_forces(np.zeros((1, 2)), np.ones(1), np.ones(1), 0.0, b, b, f1, f1, f1.copy())
+    support_uplift(f2, np.zeros((1, 0)), np.zeros((1, 0)), f1, 2, 0, np.zeros(1))

@@ -40,12 +40,14 @@ class ModalHHT:
         self.q, self.v, self.a, self.f = (np.zeros(N) for _ in range(4))
         self.q_p, self.v_p, self._zero = (np.zeros(N) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(N) for _ in range(3))
+        self._rhs2, self._sf = np.zeros(N), np.zeros(N)
         self.committed = np.zeros(len(model.droppers), dtype=bool)
         self._y, self._e = np.zeros(N), np.zeros(len(model.droppers))
         self._slack_buf = np.zeros(len(model.droppers), dtype=bool)
+        self._slack = np.zeros(len(model.droppers), dtype=bool)
         self._F = np.zeros(0)
         self.W = np.zeros((0, N))
-        self._h, self._coef, self._slack = None, None, None
+        self._h, self._coef = None, None
         self._loads = []
         self.passes = 0
         self._id = _new_id()
@@ -101,7 +103,12 @@ class ModalHHT:
         c_a, c_v, c_f = self._coef
         rhs = self._rhs
         if slack.any() or self.committed.any():
-            rhs = rhs + c_f * model.slack_forces(self.q_p, self.v_p, slack, self.committed)
+            dr = model.droppers
+            _k.slack_forces(model.T_K, dr.N0, dr.ka, dr.beta, slack, self.committed, self.q_p,
+                            self.v_p, self._sf)
+            rhs = self._rhs2
+            np.multiply(self._sf, c_f, out=rhs)
+            rhs += self._rhs
         solve = model.step_solve(c_a, c_v, c_f, slack, self.committed)
         solve(rhs, out=self.delta_free)
         m = len(self._loads)
@@ -120,14 +127,11 @@ class ModalHHT:
         self.passes += 1
 
     def finish(self, F) -> bool:
-        delta, y, model = self._delta, self._y, self.model
-        F = np.asarray(F, dtype=float).reshape(-1)
-        _k.combine(self.delta_free, self.W, F, self.q_p, delta, y)
-        K = self.K
-        np.dot(model.T_K, y[:K], out=self._e)
-        dr = model.droppers
-        _k.slack_mask(dr.N0, dr.ka, dr.tension_only, self._e, self._slack_buf)
-        if not np.array_equal(self._slack_buf, self._slack):
+        model, dr = self.model, self.model.droppers
+        F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
+        if _k.step_and_check(self.delta_free, self.W, F.reshape(-1), self.q_p, model.T_K,
+                             dr.N0, dr.ka, dr.tension_only, self._delta, self._y, self._e,
+                             self._slack_buf, self._slack):
             slack = self._slack_buf.copy()
             if self.passes >= MAX_SLACK_PASSES:
                 raise ConvergenceError(
@@ -136,6 +140,7 @@ class ModalHHT:
                     time=self.t + self._h, step=self.n_steps + 1)
             self._solve(slack)
             return False
+        delta = self._delta
         c_a, c_v, c_f = self._coef
         _k.finish_step(self.q_p, self.v_p, delta, c_a, c_v, c_f, self.settings.alpha, model.m,
                        self.q, self.v, self.a, self.f)

@@ -87,7 +87,7 @@ class CatenarySlave(IntegratorSlave):
         self.integer("catenary_model", 0, "catenary model: 0 = nonlinear (finite elements, "
                      "the reference), 1 = linear (about the static equilibrium, droppers "
                      "slacken), 2 = modal (the linear model on its modes below "
-                     "modal_cutoff_hz, static correction at the contact points)")
+                     "modal_cutoff_hz, static corrections at the droppers and contact points)")
         self.real("modal_cutoff_hz", 0.0, "parameter", "Hz", "catenary_model 2: modes below "
                   "this frequency; 0 = the default cutoff")
         self.real("element_size", 0.0, "parameter", "m",
