@@ -50,7 +50,8 @@ from pathlib import Path
 
 from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ, MODEL_NAMES
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.hht import RUN_RTOL, RUN_RTOL_MAX
+from pantocosim.core.contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.core.hht import DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -87,13 +88,13 @@ class Scenario:
     window_supports: tuple[int, int] | None
     window_m: tuple[float, float] | None
     dt: float = 1e-3
-    alpha: float = -0.05
+    alpha: float = DEFAULT_ALPHA
     newton_rtol: float = RUN_RTOL
     #: implicit co-simulation: interface residual tolerance relative to the pantographs'
     #: mean contact force (the Newton tolerance's counterpart at the ports)
     coupling_rtol: float = RUN_RTOL
     duration_s: float | None = None
-    contact_stiffness: float = 50_000.0
+    contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
     contact_damping: float = 0.0
     spans: int | None = None
     description: str = ""
@@ -212,7 +213,7 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> S
         speed_kmh=root.number("speed_kmh", positive=True),
         pantographs=specs, window_supports=window_supports, window_m=window_m,
         dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
-        alpha=sim.number("alpha", -0.05, minimum=-1.0 / 3.0, maximum=0.0),
+        alpha=sim.number("alpha", DEFAULT_ALPHA, minimum=-1.0 / 3.0, maximum=0.0),
         newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True,
                                maximum=RUN_RTOL_MAX),
         coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True,
@@ -220,7 +221,7 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> S
         duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
         catenary_model=sim.string("catenary_model", "nonlinear", choices=MODEL_NAMES),
         modal_cutoff_hz=sim.number("modal_cutoff_hz", DEFAULT_MODAL_CUTOFF_HZ, positive=True),
-        contact_stiffness=contact.number("stiffness", 50_000.0, positive=True),
+        contact_stiffness=contact.number("stiffness", DEFAULT_CONTACT_STIFFNESS, positive=True),
         contact_damping=contact.number("damping", 0.0, nonnegative=True))
     return sc
 
