@@ -1,5 +1,6 @@
-"""The catenary FMU with catenary_model = 1 (linear) equals the in-process linear model
-(issue 14); the FMU runs in a subprocess (tests/fmu_catenary_probe.py)."""
+"""The catenary FMU with catenary_model = 1 (linear) equals the in-process linear model under
+the same closed-form steps (issue 14; tests/test_affine_step.py checks those against
+Newton-Raphson); the FMU runs in a subprocess (tests/fmu_catenary_probe.py)."""
 
 import numpy as np
 import pytest
@@ -12,7 +13,8 @@ pytestmark = pytest.mark.slow
 def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.linear import LinearCatenary
-    from pantocosim.core.hht import HHTIntegrator, HHTSettings
+    from pantocosim.core.affine_hht import ForcedAffineIntegrator
+    from pantocosim.core.hht import HHTSettings
 
     x0, F0 = [30.0], [120.0]
     steps = 150
@@ -23,13 +25,14 @@ def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):
     res = probe("catenary_trace", fmus["catenary"], params=params, forces=forces.tolist(),
                 n_uplift=5)
     m = LinearCatenary(with_spans(load_catenary("en50318"), 4), x0=x0, speed=300.0 / 3.6)
-    integ = HHTIntegrator(m, HHTSettings.for_runs(-0.05, 1e-6))
+    integ = ForcedAffineIntegrator(m.affine_form(), m.contact_points,
+                                   HHTSettings.for_runs(-0.05, 1e-6))
     integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
     ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
     slack_seen = False
     for F in forces:
         integ.step(H, F.copy())
-        slack_seen |= bool(m._slack_committed.any())
+        slack_seen |= bool(integ.structure.committed.any())
         ref.append(list(m.wire_height(integ.t, integ.q))
                    + list(m.wire_velocity(integ.t, integ.q, integ.v)))
     ref = np.array(ref)
