@@ -44,7 +44,8 @@ class ModalCatenary(SecondOrderModel):
     name = "modal"
 
     def __init__(self, catenary=None, x0=(0.0,), speed: float = 0.0, *, cutoff_hz: float = 20.0,
-                 element_size=None, linear: LinearCatenary | None = None):
+                 element_size=None, linear: LinearCatenary | None = None,
+                 keep_basis: bool = False):
         lin = self.linear = linear or LinearCatenary(catenary, x0, speed,
                                                       element_size=element_size)
         self.cutoff_hz = float(cutoff_hz)
@@ -69,6 +70,8 @@ class ModalCatenary(SecondOrderModel):
         self.zeta_c = lin.alpha_r + lin.beta_r * self.omega2       # Phi^T C Phi (diagonal)
         self.r0 = np.concatenate([self.Phi.T @ lin.r0, flex.Q_r0[:self.nz],
                                   np.zeros(self.nx)])
+        if not keep_basis:          # the modes on every DOF: only checks need them
+            self.Phi = None
         #: dropper elongations b_d . (q - q_static) = T @ y (constant rows; xi: zero)
         self.T = np.zeros((len(dr), self.n_dofs))
         self.T[:, :m] = flex.B_phi
@@ -267,7 +270,10 @@ class ModalCatenary(SecondOrderModel):
         return out
 
     def full_displacement(self, t, q) -> np.ndarray:
-        """q_full - q_static on the linear model's DOFs (for checks; O(DOFs))."""
+        """q_full - q_static on the linear model's DOFs (for checks; O(DOFs); a model built
+        with ``keep_basis=True``)."""
+        if self.Phi is None:
+            raise ValueError("full_displacement needs ModalCatenary(..., keep_basis=True)")
         lin, m, nz = self.linear, self.m, self.nz
         out = self.Phi @ q[:m]
         if nz:
