@@ -15,12 +15,13 @@ M-orthogonal, so the stiffness stays diagonal:
 f = sum_k N_k F_k + sum_{d slack} b_d N_d (the contact forces and the forces the slack
 droppers no longer carry, :mod:`.linear_droppers`). zeta and xi are quasi-static (the
 residual's inertia is left out); zeta keeps the stiffness-proportional Rayleigh damping
-(3.1), so that a slack dropper's damping share leaves consistently. The static response is exact: for any pantograph position
-and any set of slack droppers it equals the linear model's; a slack dropper's force
-N_d = N0_d + k_a,d b_d . q is exactly zero. The droppers' elongations T y (T = [B Phi, B Q,
-0]) are constant rows, and xi leaves them alone; the contact height is
-z_w = phi(x) eta + (Q^T N) zeta + xi. Per step the cost is O((modes + droppers) x
-(pantographs + droppers)), independent of the number of finite-element DOFs.
+(3.1), so that a slack dropper's damping share leaves consistently. The static response is
+exact: for any pantograph position and any set of slack droppers it equals the linear
+model's; a slack dropper's force N_d = N0_d + k_a,d b_d . q is exactly zero. The droppers'
+elongations T y (T = [B Phi, B Q, 0]) are constant rows, and xi leaves them alone; the
+contact height is z_w = phi(x) eta + (Q^T N) zeta + xi. Per step the cost is
+O((modes + droppers) x (pantographs + droppers)), independent of the finite-element DOFs;
+the closed-form step is :mod:`.modal_step`, the cutoff study docs/modal-cutoff.md.
 """
 
 from __future__ import annotations
@@ -44,13 +45,14 @@ class ModalCatenary(SecondOrderModel):
     name = "modal"
 
     def __init__(self, catenary=None, x0=(0.0,), speed: float = 0.0, *, cutoff_hz: float = 20.0,
-                 element_size=None, linear: LinearCatenary | None = None):
+                 element_size=None, linear: LinearCatenary | None = None,
+                 keep_basis: bool = False):
         lin = self.linear = linear or LinearCatenary(catenary, x0, speed,
                                                       element_size=element_size)
         self.cutoff_hz = float(cutoff_hz)
         S = lin.structure
-        self.frequencies, self.Phi = modes_below(
-            lin.K0, lin.M, self.cutoff_hz, bands=(S.lower_band(lin.K0_data), S.lower_band(S.M_data)))
+        bands = (S.lower_band(lin.K0_data), S.lower_band(S.M_data))
+        self.frequencies, self.Phi = modes_below(lin.K0, lin.M, self.cutoff_hz, bands=bands)
         self.omega2 = (2.0 * np.pi * self.frequencies) ** 2
         self.m = m = self.Phi.shape[1]
         self.n_p = len(lin.x0)
@@ -69,6 +71,8 @@ class ModalCatenary(SecondOrderModel):
         self.zeta_c = lin.alpha_r + lin.beta_r * self.omega2       # Phi^T C Phi (diagonal)
         self.r0 = np.concatenate([self.Phi.T @ lin.r0, flex.Q_r0[:self.nz],
                                   np.zeros(self.nx)])
+        if not keep_basis:          # the modes on every DOF: only checks need them
+            self.Phi = None
         #: dropper elongations b_d . (q - q_static) = T @ y (constant rows; xi: zero)
         self.T = np.zeros((len(dr), self.n_dofs))
         self.T[:, :m] = flex.B_phi
@@ -272,7 +276,10 @@ class ModalCatenary(SecondOrderModel):
         return out
 
     def full_displacement(self, t, q) -> np.ndarray:
-        """q_full - q_static on the linear model's DOFs (for checks; O(DOFs))."""
+        """q_full - q_static on the linear model's DOFs (for checks; O(DOFs); a model built
+        with ``keep_basis=True``)."""
+        if self.Phi is None:
+            raise ValueError("full_displacement needs ModalCatenary(..., keep_basis=True)")
         lin, m, nz = self.linear, self.m, self.nz
         out = self.Phi @ q[:m]
         if nz:

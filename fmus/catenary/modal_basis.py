@@ -7,8 +7,8 @@ dense matrix: LAPACK's split Cholesky of M and Crawford's reduction (dpbstf, dsb
 band, dsbtrd makes it tridiagonal and dsterf gives every eigenvalue. Each mode below the
 cutoff then comes from inverse iteration on K0 - lambda M with its eigenvalue as shift (a band
 LU, dgbtrf, per mode; within a cluster of close eigenvalues the vectors are kept
-M-orthogonal and Rayleigh-Ritz-rotated). Cost O(n kd^2) per mode and O(n^2 kd) for the eigenvalues; memory
-O(n (kd + modes)).
+M-orthogonal and Rayleigh-Ritz-rotated). Cost O(n kd^2) per mode and O(n^2 kd) for the
+eigenvalues; memory O(n (kd + modes)).
 """
 
 from __future__ import annotations
