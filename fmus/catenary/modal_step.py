@@ -20,8 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.affine_hht import MAX_SLACK_PASSES, _new_id
-from ..core.errors import ConvergenceError
+from ..core.affine_hht import _new_id, check_slack_passes
 from . import modal_kernels as _k
 
 
@@ -133,11 +132,8 @@ class ModalHHT:
                              dr.N0, dr.ka, dr.tension_only, self._delta, self._y, self._e,
                              self._slack_buf, self._slack):
             slack = self._slack_buf.copy()
-            if self.passes >= MAX_SLACK_PASSES:
-                raise ConvergenceError(
-                    f"modal catenary: the slack set does not settle at t = "
-                    f"{self.t + self._h:.6g} s after {self.passes} passes",
-                    time=self.t + self._h, step=self.n_steps + 1)
+            check_slack_passes("modal catenary", self.passes, self.t + self._h,
+                               self.n_steps + 1)
             self._solve(slack)
             return False
         delta = self._delta

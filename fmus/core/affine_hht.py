@@ -46,6 +46,13 @@ _TOKEN = secrets.randbits(64)
 _COUNTER = itertools.count()
 
 
+def check_slack_passes(what: str, passes: int, t: float, step: int) -> None:
+    """Refuse another re-solve of a step whose slack set keeps changing."""
+    if passes >= MAX_SLACK_PASSES:
+        raise ConvergenceError(f"{what}: the slack set does not settle at t = {t:.6g} s after "
+                               f"{passes} passes", time=t, step=step)
+
+
 def _new_id() -> tuple[int, int]:
     return _TOKEN, next(_COUNTER)
 
@@ -254,11 +261,8 @@ class AffineHHT:
         un = self.form.unilateral
         slack = un.slack(un.axial(self.d_p + delta))
         if not np.array_equal(slack, self._slack):
-            if self.passes >= MAX_SLACK_PASSES:
-                raise ConvergenceError(
-                    f"linear structure: the slack set does not settle at t = "
-                    f"{self.t + self._h:.6g} s after {self.passes} passes",
-                    time=self.t + self._h, step=self.n_steps + 1)
+            check_slack_passes("linear structure", self.passes, self.t + self._h,
+                               self.n_steps + 1)
             self._solve(slack)
             return False
         c_a, c_v, c_f = self._coef
