@@ -59,8 +59,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     prefix = f"pantocosim {args.command}"
+    from pantocosim.master.interrupt import remember_interrupts
+
     try:
-        return int(args._run(args) or 0)
+        with remember_interrupts():
+            return int(args._run(args) or 0)
     except Interrupted as exc:
         print(f"{prefix}: {one_line(exc)}", file=sys.stderr)
         return EXIT_INTERRUPTED

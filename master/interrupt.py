@@ -6,6 +6,11 @@ Python code runs in this interpreter and would turn a KeyboardInterrupt into fmi
 completes, the results so far are written and the summary says where the run stopped. A
 second SIGINT raises KeyboardInterrupt at once (for a set-up that takes long). Outside it,
 Ctrl-C raises KeyboardInterrupt as usual; the command line turns both into exit status 130.
+
+Python drops an exception raised inside a finaliser (``__del__``), and numba's compiler runs
+finalisers often (llvmlite objects), so a Ctrl-C during a set-up can be lost. The command line
+therefore installs :func:`remember_interrupts`: a Ctrl-C still raises at once, and is also
+remembered, so that the next :func:`stop_on_interrupt` starts with its stop requested.
 """
 
 from __future__ import annotations
@@ -36,11 +41,46 @@ def interrupted_at(t: float, step: int, n_steps: int) -> Interrupted:
     return exc
 
 
+_unseen = False
+
+
+def _raise_and_remember(signum, frame):
+    global _unseen
+    _unseen = True
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def remember_interrupts():
+    """Within it, Ctrl-C raises KeyboardInterrupt and is remembered for the next
+    :func:`stop_on_interrupt` (main thread only)."""
+    global _unseen
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _unseen = False
+    previous = signal.signal(signal.SIGINT, _raise_and_remember)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _unseen = False
+
+
+def _take_unseen() -> bool:
+    """True once if a Ctrl-C raised by :func:`remember_interrupts` may have been lost."""
+    global _unseen
+    seen, _unseen = _unseen, False
+    return seen
+
+
 @contextmanager
 def stop_on_interrupt():
     """Yield a :class:`StopRequest` that the first SIGINT sets (main thread only; elsewhere
-    nothing changes and the request is never set)."""
+    nothing changes and the request is never set). It starts set if a Ctrl-C that
+    :func:`remember_interrupts` raised was swallowed on the way."""
     stop = StopRequest()
+    stop.requested = _take_unseen()
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return

@@ -300,6 +300,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     clock = StepClock(sc.dt, realtime=realtime)
     with stop_on_interrupt() as stop:
         try:
+            stop.check(stepper.t, 0, prep.n_steps)   # a Ctrl-C during the set-up
             for k in clock.steps(prep.n_steps):
                 record(stepper.step(sc.dt))
                 bar.update(1)

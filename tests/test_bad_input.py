@@ -704,3 +704,26 @@ def test_ecos_test_skips_without_its_native_library(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_tbb)
     with pytest.raises(pytest.skip.Exception, match="libtbb.so.12"):
         require_ecospy()
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_ctrl_c_lost_in_a_finaliser_still_stops_the_run():
+    """Python drops a KeyboardInterrupt raised inside ``__del__`` (numba's compiler runs
+    llvmlite finalisers during a set-up); the next stop request must still see it."""
+    import gc
+    import os
+
+    from pantocosim.master.interrupt import remember_interrupts, stop_on_interrupt
+
+    class Finaliser:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)    # the handler runs here, inside __del__, and is dropped
+
+    with remember_interrupts():
+        Finaliser()
+        gc.collect()
+        with stop_on_interrupt() as stop:
+            assert stop.requested
+        with stop_on_interrupt() as stop:   # remembered once
+            assert not stop.requested
