@@ -52,12 +52,14 @@ class LinearDroppers:
         """The droppers that carry no force at axial force N."""
         return self.tension_only & (N < 0.0)
 
-    def force(self, coef: np.ndarray, mask: np.ndarray) -> np.ndarray:
-        """sum over the ``mask`` droppers of coef_d b_d (free DOFs)."""
+    def force(self, coef: np.ndarray, mask: np.ndarray, out=None) -> np.ndarray:
+        """sum over the ``mask`` droppers of coef_d b_d (free DOFs), added to ``out`` if
+        given."""
         rows = np.flatnonzero(mask)
-        if not rows.size:
-            return np.zeros(self.vectors.n)
-        return self.vectors.combine(coef[rows], rows)
+        out = np.zeros(self.vectors.n) if out is None else out
+        if rows.size:
+            self.vectors.combine(coef[rows], rows, out=out)
+        return out
 
     def removed_stiffness(self, slack: np.ndarray, damped_slack: np.ndarray, c_v: float,
                           c_f: float) -> tuple[np.ndarray, np.ndarray]:

@@ -89,31 +89,35 @@ def _predict(q, v, a, q_ref, h, beta, gamma, q_p, v_p, d_p):
 
 
 @njit(cache=True, fastmath=True)
-def _free_rhs(Mb, Kb, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, out):
+def _free_rhs(Mb, Kb, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, yb, zb,
+              out):
     """One pass over the symmetric bands: y = C v_p + K d_p (C = ar M + br K) and, when
     ``pending``, f <- (alpha f - M a) / c_f (f_n of the step just taken, from (3.16));
-    then out = alpha f_n - c_f (y + r0). Each band diagonal is two streaming loops (they
-    vectorize)."""
+    then out = alpha f_n - c_f (y + r0). Each band diagonal is read once, in one streaming
+    loop that adds it above (y, z) and below (yb, zb) the main diagonal (apart, so the
+    loop vectorizes)."""
     w, n = Mb.shape
     for j in range(n):
         x1[j] = ar * v_p[j]
         x2[j] = br * v_p[j] + d_p[j]
         y[j] = Mb[0, j] * x1[j] + Kb[0, j] * x2[j]
         z[j] = Mb[0, j] * a[j]
+        yb[j] = 0.0
+        zb[j] = 0.0
     for k in range(1, w):
         m_, k_ = Mb[k], Kb[k]
-        y_, z_ = y[k:], z[k:]
-        for j in range(n - k):                      # below the diagonal
-            y_[j] += m_[j] * x1[j] + k_[j] * x2[j]
-            z_[j] += m_[j] * a[j]
+        yb_, zb_ = yb[k:], zb[k:]
         x1_, x2_, a_ = x1[k:], x2[k:], a[k:]
-        for j in range(n - k):                      # above it
-            y[j] += m_[j] * x1_[j] + k_[j] * x2_[j]
-            z[j] += m_[j] * a_[j]
+        for j in range(n - k):
+            mj, kj = m_[j], k_[j]
+            yb_[j] += mj * x1[j] + kj * x2[j]        # below the diagonal
+            zb_[j] += mj * a[j]
+            y[j] += mj * x1_[j] + kj * x2_[j]        # above it
+            z[j] += mj * a_[j]
     for j in range(n):
         if pending:
-            f[j] = (alpha * f[j] - z[j]) / c_f
-        out[j] = alpha * f[j] - c_f * (y[j] + r0[j])
+            f[j] = (alpha * f[j] - z[j] - zb[j]) / c_f
+        out[j] = alpha * f[j] - c_f * (y[j] + yb[j] + r0[j])
 
 
 @njit(cache=True)
@@ -142,7 +146,7 @@ class AffineHHT:
         self.q, self.v, self.a, self.f = (np.zeros(n) for _ in range(4))
         self.q_p, self.v_p, self.d_p = (np.zeros(n) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(n) for _ in range(3))
-        self._work = np.zeros((4, n))             # x1, x2, y, z of _free_rhs
+        self._work = np.zeros((6, n))             # x1, x2, y, z, yb, zb of _free_rhs
         #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
         #: formed in the next step's pass over the bands
         self._pending = False
@@ -231,14 +235,15 @@ class AffineHHT:
         if slack.any() or self.committed.any():
             rows, s = un.removed_stiffness(slack, self.committed, c_v, c_f)
         if len(rows):
-            rhs = self._rhs.copy()
+            rhs = self.delta_free                   # solved in place
+            rhs[:] = self._rhs
             if slack.any():
-                rhs += c_f * un.force(un.axial(self.d_p), slack)
+                un.force(c_f * un.axial(self.d_p), slack, out=rhs)
             if self.committed.any():
-                rhs += c_f * un.force(un.beta * un.ka * un.vectors.dots(self.v_p),
-                                      self.committed)
+                un.force(c_f * un.beta * un.ka * un.vectors.dots(self.v_p), self.committed,
+                         out=rhs)
             solve = self._lowrank(rows, s)
-            self.delta_free[:] = solve(rhs)
+            solve.solve_into(rhs, rhs)
         else:
             solve = self._cache.solve
             solve.solve_into(self._rhs, self.delta_free)

@@ -26,36 +26,61 @@ TINY = 1e-250
 def band_solve(LT, b, x):
     """x = (L L^T)^-1 b with ``LT[j, 0] = 1 / L[j, j]``, ``LT[j, k] = L[j + k, j]`` (the
     factor's columns as rows): forward and back substitution in place of x (b may be x).
-    The loops over the full band width are split from the short ones at the end, so they
-    vectorize."""
+    Rows are taken two at a time (half the passes over x, whose dependency chain bounds the
+    speed); the loops over the band width vectorize."""
     n, w = LT.shape
+    if w == 1:
+        for i in range(n):
+            x[i] = b[i] * LT[i, 0] * LT[i, 0]
+        return
     if x is not b:
         for i in range(n):
             x[i] = b[i]
-    full = max(n - w + 1, 0)
-    for j in range(full):
+    full = max(n - w, 0)          # rows j, j + 1 both with their whole band inside
+    j = 0
+    while j + 1 < full:
+        x0 = _flush(x[j] * LT[j, 0])
+        x1 = _flush((x[j + 1] - LT[j, 1] * x0) * LT[j + 1, 0])
+        x[j], x[j + 1] = x0, x1
+        for k in range(2, w):
+            x[j + k] -= LT[j, k] * x0 + LT[j + 1, k - 1] * x1
+        x[j + w] -= LT[j + 1, w - 1] * x1
+        j += 2
+    for j in range(j, n):
         xj = x[j] * LT[j, 0]
-        if abs(xj) < TINY:
-            xj = 0.0
         x[j] = xj
-        for k in range(1, w):
+        for k in range(1, min(w, n - j)):
             x[j + k] -= LT[j, k] * xj
-    for j in range(full, n):
-        xj = x[j] * LT[j, 0]
-        x[j] = xj
-        for k in range(1, n - j):
-            x[j + k] -= LT[j, k] * xj
-    for j in range(n - 1, full - 1, -1):
+    j = n - 1
+    while j > full:
         s = x[j]
-        for k in range(1, n - j):
+        for k in range(1, min(w, n - j)):
             s -= LT[j, k] * x[j + k]
         x[j] = s * LT[j, 0]
-    for j in range(full - 1, -1, -1):
-        s = x[j]
-        for k in range(1, w):
-            s -= LT[j, k] * x[j + k]
-        s *= LT[j, 0]
-        x[j] = s if abs(s) >= TINY else 0.0
+        j -= 1
+    while j >= 1:                 # rows j - 1, j: x[j + 1 .. j + w - 1] known
+        s1 = 0.0
+        s0 = 0.0
+        for k in range(1, w - 1):
+            xk = x[j + k]
+            s1 += LT[j, k] * xk
+            s0 += LT[j - 1, k + 1] * xk
+        s1 += LT[j, w - 1] * x[j + w - 1]
+        x1 = _flush((x[j] - s1) * LT[j, 0])
+        x[j] = x1
+        x[j - 1] = _flush((x[j - 1] - s0 - LT[j - 1, 1] * x1) * LT[j - 1, 0])
+        j -= 2
+    if j == 0:
+        s = x[0]
+        for k in range(1, min(w, n)):
+            s -= LT[0, k] * x[k]
+        x[0] = _flush(s * LT[0, 0])
+
+
+@njit(cache=True, inline="always")
+def _flush(v):
+    """v, or 0 when |v| < TINY (no subnormal numbers in a solve)."""
+    return v if abs(v) >= TINY else 0.0
 
 
 @njit(cache=True)

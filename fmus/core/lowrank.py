@@ -38,6 +38,17 @@ def _combine(idx, val, coef, rows, out):
                 out[j] += coef[r] * val[i, k]
 
 
+@njit(cache=True)
+def _add_columns(U, c, out):
+    """out += U c (U: n x r, r small)."""
+    n, r = U.shape
+    for i in range(n):
+        s = 0.0
+        for j in range(r):
+            s += U[i, j] * c[j]
+        out[i] += s
+
+
 class SparseVectors:
     """m sparse vectors of length n: ``idx`` (m, k) indices (-1 = absent), ``val`` (m, k)."""
 
@@ -55,9 +66,9 @@ class SparseVectors:
         _dots(self.idx, self.val, np.asarray(x, dtype=float), rows, out)
         return out
 
-    def combine(self, coef: np.ndarray, rows) -> np.ndarray:
-        """sum_j coef_j b_j over ``rows`` as a dense vector."""
-        out = np.zeros(self.n)
+    def combine(self, coef: np.ndarray, rows, out=None) -> np.ndarray:
+        """sum_j coef_j b_j over ``rows`` as a dense vector (added to ``out`` if given)."""
+        out = np.zeros(self.n) if out is None else out
         _combine(self.idx, self.val, np.asarray(coef, dtype=float),
                  np.asarray(rows, dtype=np.int64), out)
         return out
@@ -99,23 +110,31 @@ class LowRankSolve:
             self.small = np.eye(self.rows.size) - self.s[:, None] * BtU
 
     def _correct(self, x: np.ndarray) -> np.ndarray:
-        if not self.rows.size:
-            return x
-        y = self.s * self.vectors.dots(x, self.rows)
-        return x + self.U @ np.linalg.solve(self.small, y)
+        """x <- x + U (I - S B^T U)^-1 S B^T x, in place."""
+        if self.rows.size:
+            y = self.s * self.vectors.dots(x, self.rows)
+            _add_columns(self.U, np.linalg.solve(self.small, y), x)
+        return x
 
     def __call__(self, r: np.ndarray) -> np.ndarray:
-        return self._correct(np.asarray(self.base(r), dtype=float))
+        return self._correct(np.array(self.base(r), dtype=float))
+
+    def solve_into(self, rhs: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out`` = solve of ``rhs`` without an n-length temporary (``out`` may be ``rhs``)."""
+        if hasattr(self.base, "solve_into"):
+            self.base.solve_into(rhs, out)
+        else:
+            out[:] = self.base(rhs)
+        return self._correct(out)
 
     def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
         if hasattr(self.base, "solve_sparse"):
-            x = self.base.solve_sparse(dofs, values)
+            x = self.base.solve_sparse(dofs, values, out=out)
         else:
             b = np.zeros(self.vectors.n)
             np.add.at(b, dofs, values)
             x = np.asarray(self.base(b), dtype=float)
-        x = self._correct(x)
-        if out is not None:
-            out[:] = x
-            return out
-        return x
+            if out is not None:
+                out[:] = x
+                x = out
+        return self._correct(x)
