@@ -19,10 +19,39 @@ from __future__ import annotations
 from typing import Sequence
 
 import numpy as np
+from numba import njit
 
 from .affine_hht import AffineHHT
 from .hht import HHTIntegrator
 from .model import Evaluation, SecondOrderModel
+
+
+@njit(cache=True)
+def _point_free(dofs, w, dw, q_p, v_p, delta_free, c_v):
+    """(w . q, w . v, dw . q) at the free response q = q_p + delta_free,
+    v = v_p + c_v delta_free."""
+    z = 0.0
+    v = 0.0
+    slope = 0.0
+    for i in range(dofs.shape[0]):
+        j = dofs[i]
+        qj = q_p[j] + delta_free[j]
+        z += w[i] * qj
+        v += w[i] * (v_p[j] + c_v * delta_free[j])
+        slope += dw[i] * qj
+    return z, v, slope
+
+
+@njit(cache=True)
+def _point_response(dofs, w, dw, x):
+    """(w . x[dofs], dw . x[dofs])."""
+    g = 0.0
+    h = 0.0
+    for i in range(dofs.shape[0]):
+        xj = x[dofs[i]]
+        g += w[i] * xj
+        h += dw[i] * xj
+    return g, h
 
 
 class InterfaceContacts(SecondOrderModel):
@@ -267,15 +296,14 @@ class CondensedStepper:
         G = x[2 * m:2 * m + m * m].reshape(m, m)
         H = x[2 * m + m * m:].reshape(m, m)
         for k, cp in enumerate(cps):
-            d = cp.dofs
-            qk = st.q_p[d] + st.delta_free[d]
-            x[k] = cp.weights @ qk + cp.offset
-            x[m + k] = (cp.weights @ (st.v_p[d] + c_v * st.delta_free[d])
-                        + V * (cp.dweights_dx @ qk + cp.doffset_dx))
+            z, v, slope = _point_free(cp.dofs, cp.weights, cp.dweights_dx, st.q_p, st.v_p,
+                                      st.delta_free, c_v)
+            x[k] = z + cp.offset
+            x[m + k] = v + V * (slope + cp.doffset_dx)
             for j in range(m):
-                wj = st.W[j, d]
-                G[k, j] = cp.weights @ wj
-                H[k, j] = c_v * G[k, j] + V * (cp.dweights_dx @ wj)
+                g, dg = _point_response(cp.dofs, cp.weights, cp.dweights_dx, st.W[j])
+                G[k, j] = g
+                H[k, j] = c_v * g + V * dg
         return x
 
     def step(self, h: float) -> int:
