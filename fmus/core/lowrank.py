@@ -49,6 +49,23 @@ def _add_columns(U, c, out):
         out[i] += s
 
 
+@njit(cache=True)
+def _woodbury(idx, val, rows, s, small_inv, U, x):
+    """x <- x + U small_inv (s * B_rows^T x), in place (:class:`LowRankSolve`)."""
+    r = rows.shape[0]
+    y = np.empty(r)
+    for a in range(r):
+        i = rows[a]
+        acc = 0.0
+        for k in range(idx.shape[1]):
+            j = idx[i, k]
+            if j >= 0:
+                acc += val[i, k] * x[j]
+        y[a] = s[a] * acc
+    z = small_inv @ y
+    _add_columns(U, z, x)
+
+
 class SparseVectors:
     """m sparse vectors of length n: ``idx`` (m, k) indices (-1 = absent), ``val`` (m, k)."""
 
@@ -108,12 +125,13 @@ class LowRankSolve:
             BtU = np.column_stack([self.vectors.dots(self.U[:, i], self.rows)
                                    for i in range(self.rows.size)])
             self.small = np.eye(self.rows.size) - self.s[:, None] * BtU
+            self._small_inv = np.linalg.inv(self.small)
 
     def _correct(self, x: np.ndarray) -> np.ndarray:
         """x <- x + U (I - S B^T U)^-1 S B^T x, in place."""
         if self.rows.size:
-            y = self.s * self.vectors.dots(x, self.rows)
-            _add_columns(self.U, np.linalg.solve(self.small, y), x)
+            v = self.vectors
+            _woodbury(v.idx, v.val, self.rows, self.s, self._small_inv, self.U, x)
         return x
 
     def __call__(self, r: np.ndarray) -> np.ndarray:
