@@ -35,6 +35,7 @@ from typing import Any, Callable
 import numpy as np
 from numba import njit
 
+from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
 
@@ -89,35 +90,54 @@ def _predict(q, v, a, q_ref, h, beta, gamma, q_p, v_p, d_p):
 
 
 @njit(cache=True, fastmath=True)
-def _free_rhs(Mb, Kb, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, yb, zb,
+def _free_rhs(M, K, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, yb, zb,
               out):
-    """One pass over the symmetric bands: y = C v_p + K d_p (C = ar M + br K) and, when
-    ``pending``, f <- (alpha f - M a) / c_f (f_n of the step just taken, from (3.16));
-    then out = alpha f_n - c_f (y + r0). Each band diagonal is read once, in one streaming
-    loop that adds it above (y, z) and below (yb, zb) the main diagonal (apart, so the
-    loop vectorizes)."""
-    w, n = Mb.shape
+    """One pass over the symmetric matrices M and K (:class:`~.banded.SparseBand` parts):
+    y = C v_p + K d_p (C = ar M + br K) and, when ``pending``, f <- (alpha f - M a) / c_f
+    (f_n of the step just taken, from (3.16)); then out = alpha f_n - c_f (y + r0)."""
+    Mm, Mo, Md, Mi, Mj, Mv = M
+    Km, Ko, Kd, Ki, Kj, Kv = K
+    n = Mm.shape[0]
     for j in range(n):
         x1[j] = ar * v_p[j]
         x2[j] = br * v_p[j] + d_p[j]
-        y[j] = Mb[0, j] * x1[j] + Kb[0, j] * x2[j]
-        z[j] = Mb[0, j] * a[j]
+        y[j] = Mm[j] * x1[j] + Km[j] * x2[j]
+        z[j] = Mm[j] * a[j]
         yb[j] = 0.0
         zb[j] = 0.0
-    for k in range(1, w):
-        m_, k_ = Mb[k], Kb[k]
-        yb_, zb_ = yb[k:], zb[k:]
-        x1_, x2_, a_ = x1[k:], x2[k:], a[k:]
-        for j in range(n - k):
-            mj, kj = m_[j], k_[j]
-            yb_[j] += mj * x1[j] + kj * x2[j]        # below the diagonal
-            zb_[j] += mj * a[j]
-            y[j] += mj * x1_[j] + kj * x2_[j]        # above it
-            z[j] += mj * a_[j]
+    _band_terms(Ko, Kd, x2, y, yb)
+    _band_terms(Mo, Md, x1, y, yb)
+    _band_terms(Mo, Md, a, z, zb)
+    _coordinate_terms(Ki, Kj, Kv, x2, y)
+    _coordinate_terms(Mi, Mj, Mv, x1, y)
+    _coordinate_terms(Mi, Mj, Mv, a, z)
     for j in range(n):
         if pending:
             f[j] = (alpha * f[j] - z[j] - zb[j]) / c_f
         out[j] = alpha * f[j] - c_f * (y[j] + yb[j] + r0[j])
+
+
+@njit(cache=True, fastmath=True, inline="always")
+def _band_terms(offsets, diags, x, above, below):
+    """The dense off-diagonals of a symmetric product: above[j] += d_j x[j + k],
+    below[j + k] += d_j x[j] (apart, so each streaming loop vectorizes)."""
+    n = x.shape[0]
+    for r in range(offsets.shape[0]):
+        k = offsets[r]
+        d = diags[r]
+        x_, b_ = x[k:], below[k:]
+        for j in range(n - k):
+            above[j] += d[j] * x_[j]
+            b_[j] += d[j] * x[j]
+
+
+@njit(cache=True, inline="always")
+def _coordinate_terms(ci, cj, cv, x, out):
+    """The off-diagonal entries kept as coordinates, both triangles."""
+    for e in range(ci.shape[0]):
+        i, j, v = ci[e], cj[e], cv[e]
+        out[i] += v * x[j]
+        out[j] += v * x[i]
 
 
 @njit(cache=True)
@@ -146,6 +166,8 @@ class AffineHHT:
         self.q, self.v, self.a, self.f = (np.zeros(n) for _ in range(4))
         self.q_p, self.v_p, self.d_p = (np.zeros(n) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(n) for _ in range(3))
+        #: M and K for the free-response products (empty band diagonals skipped)
+        self._M, self._K = (SparseBand.from_band(b).parts for b in (form.M_band, form.K_band))
         self._work = np.zeros((6, n))             # x1, x2, y, z, yb, zb of _free_rhs
         #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
         #: formed in the next step's pass over the bands
@@ -206,7 +228,7 @@ class AffineHHT:
             return
         _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
                  self.d_p)
-        _free_rhs(fm.M_band, fm.K_band, fm.alpha_r, fm.beta_r, self.v_p, self.d_p, self.a,
+        _free_rhs(self._M, self._K, fm.alpha_r, fm.beta_r, self.v_p, self.d_p, self.a,
                   fm.r0, self.f, s.alpha, c_f, self._pending, *self._work, self._rhs)
         self._pending = False
         un = fm.unilateral

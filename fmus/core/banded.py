@@ -9,6 +9,7 @@ least-recently-used cache, so a pantograph pays one solve per DOF it meets, not 
 from __future__ import annotations
 
 from collections import OrderedDict
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -88,6 +89,45 @@ def axpy(a, x, y):
     """y += a x in place."""
     for i in range(y.shape[0]):
         y[i] += a * x[i]
+
+
+@dataclass
+class SparseBand:
+    """A symmetric band matrix (lower band storage) for products: the diagonals below the
+    main one that are filled more than ``min_fill`` kept as rows of ``diags`` (their
+    ``offsets``), the entries of the sparser ones as coordinates (i > j) ``ci``, ``cj``,
+    ``cv``. The catenary's mass couples only equal coordinates of nearby nodes, so most of
+    its band diagonals are empty and a product skips them."""
+
+    main: np.ndarray
+    offsets: np.ndarray
+    diags: np.ndarray
+    ci: np.ndarray
+    cj: np.ndarray
+    cv: np.ndarray
+
+    @classmethod
+    def from_band(cls, band: np.ndarray, min_fill: float = 0.1) -> "SparseBand":
+        w, n = band.shape
+        dense = [k for k in range(1, w) if np.count_nonzero(band[k, :n - k]) > min_fill * n]
+        ci, cj, cv = [], [], []
+        for k in range(1, w):
+            if k not in dense:
+                j = np.flatnonzero(band[k, :n - k])
+                ci.append(j + k)
+                cj.append(j)
+                cv.append(band[k, j])
+        cat = (lambda parts, dt: np.concatenate(parts).astype(dt) if parts
+               else np.zeros(0, dt))
+        return cls(main=np.ascontiguousarray(band[0], dtype=float),
+                   offsets=np.array(dense, dtype=np.int64),
+                   diags=np.ascontiguousarray(band[dense], dtype=float).reshape(len(dense), n),
+                   ci=cat(ci, np.int64), cj=cat(cj, np.int64), cv=cat(cv, float))
+
+    @property
+    def parts(self) -> tuple:
+        """The arrays a numba kernel takes."""
+        return self.main, self.offsets, self.diags, self.ci, self.cj, self.cv
 
 
 class BandedCholesky:
