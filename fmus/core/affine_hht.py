@@ -141,6 +141,20 @@ def _coordinate_terms(ci, cj, cv, x, out):
 
 
 @njit(cache=True)
+def _loaded(delta_free, W, F, d_p, delta, d_new):
+    """delta = delta_free + sum_k F_k W_k and d_new = d_p + delta."""
+    for i in range(delta.shape[0]):
+        delta[i] = delta_free[i]
+    for k in range(F.shape[0]):
+        Fk = F[k]
+        if Fk != 0.0:
+            for i in range(delta.shape[0]):
+                delta[i] += Fk * W[k, i]
+    for i in range(delta.shape[0]):
+        d_new[i] = d_p[i] + delta[i]
+
+
+@njit(cache=True)
 def _finish(q_p, v_p, delta, c_a, c_v, q, v, a):
     for i in range(q.shape[0]):
         d = delta[i]
@@ -280,13 +294,11 @@ class AffineHHT:
     def finish(self, F) -> bool:
         """Take the step with the loads F (one per load vector), or re-solve for the slack
         set at the resulting q_{n+1} and return False."""
-        delta = self._delta
-        delta[:] = self.delta_free
-        for k, Fk in enumerate(np.atleast_1d(F)):
-            if Fk != 0.0:
-                delta += Fk * self.W[k]
+        delta, d_new = self._delta, self._work[0]
+        F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
+        _loaded(self.delta_free, self.W, F.reshape(-1), self.d_p, delta, d_new)
         un = self.form.unilateral
-        slack = un.slack(un.axial(self.d_p + delta))
+        slack = un.slack(un.axial(d_new))
         if not np.array_equal(slack, self._slack):
             check_slack_passes("linear structure", self.passes, self.t + self._h,
                                self.n_steps + 1)

@@ -227,6 +227,7 @@ class LinearBodies:
                 dq, dv = self._units[k][:2]
                 P[k] = b.contact_height(dq) - b.contact_height(np.zeros_like(dq))
                 Pv[k] = b.contact_velocity(dq, dv)
+            self._own = (np.diag(P), np.diag(Pv))     # the bodies' compliance on the diagonal
         for k, integ in enumerate(self.integs):
             self._u[0] = self._applied[k] = self.forces[k]
             integ.step(h, self._u)
@@ -242,7 +243,7 @@ class LinearBodies:
         z0, v0 = x[:m], x[m:2 * m]
         G = x[2 * m:2 * m + m * m].reshape(m, m)
         H = x[2 * m + m * m:].reshape(m, m)
-        F, _, _ = self.contact.condensed(zf, vf, z0, v0, G - np.diag(P), H - np.diag(Pv))
+        F, _, _ = self.contact.condensed(zf, vf, z0, v0, G - self._own[0], H - self._own[1])
         for k, integ in enumerate(self.integs):
             if F[k] != self._applied[k]:
                 self._u[0] = F[k]
