@@ -59,3 +59,36 @@ def test_band_solve_every_shape_against_lapack():
             x = r.copy()
             solve.solve_into(x, x)                  # in place
             assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13), (n, kd)
+
+
+def test_local_solves_equal_full_solves_on_a_long_band():
+    """A unit vector's solve decays away from its entry; the local solve stops where it is
+    below 1e-20 of its peak and must agree with the full solve to round-off."""
+    n, kd = 3000, 7
+    A, ab = _spd_band(n, kd, seed=4)
+    ab[0] += 40.0                       # a mass-dominated step matrix: fast decay
+    A += 40.0 * np.eye(n)
+    solve = BandedCholesky.factor(ab.copy())
+    for j in (0, 1, 1500, n - 2, n - 1):
+        e = np.zeros(n)
+        e[j] = 1.0
+        full = sla.solve_banded((kd, kd), _general_band(A, kd), e)
+        local = solve.solve_local(j, j)
+        assert np.abs(local - full).max() <= 1e-15 * np.abs(full).max(), j
+        assert np.count_nonzero(local) < n / 3          # it did stop early
+    b = np.zeros(n)
+    b[[700, 703, 709]] = [1.0, -2.0, 0.5]
+    x = solve.solve_local(700, 709, b)
+    assert np.allclose(x, sla.solve(A, b), rtol=0, atol=1e-15 * np.abs(x).max())
+
+
+def _general_band(A, kd):
+    n = A.shape[0]
+    out = np.zeros((2 * kd + 1, n))
+    for k in range(-kd, kd + 1):
+        d = np.diag(A, k)
+        if k >= 0:
+            out[kd - k, k:] = d
+        else:
+            out[kd - k, :n + k] = d
+    return out

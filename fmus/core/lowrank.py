@@ -104,12 +104,23 @@ class ColumnCache:
 
     def columns(self, rows) -> np.ndarray:
         missing = [int(j) for j in rows if int(j) not in self._cols]
-        if missing:
+        local = getattr(self.solve, "solve_local", None)
+        if missing and local is not None:     # each vector is short: a local solve
+            for j in missing:
+                idx = self.vectors.idx[j]
+                idx = idx[idx >= 0]
+                self._cols[j] = local(int(idx.min()), int(idx.max()), self.vectors.dense(j))
+        elif missing:
             B = np.column_stack([self.vectors.dense(j) for j in missing])
             X = np.asarray(self.solve(B)).reshape(self.vectors.n, len(missing))
             for i, j in enumerate(missing):
                 self._cols[j] = np.ascontiguousarray(X[:, i])
         return np.column_stack([self._cols[int(j)] for j in rows])
+
+    def prefill(self, rows=None) -> None:
+        """Solve the columns of ``rows`` (default: every vector) now, e.g. at set-up, so
+        that no step pays for them."""
+        self.columns(np.arange(self.vectors.idx.shape[0]) if rows is None else rows)
 
 
 class LowRankSolve:
