@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import DEFAULT_ALPHA
 
 from .slave_base import IntegratorSlave
@@ -244,7 +244,7 @@ class CatenarySlave(IntegratorSlave):
             raise exc.renamed(FIELD_NAMES) from None
 
     def _contact(self):
-        from pantocosim.core.contact import PenaltyContact
+        from pantocosim.core.penalty_contact import PenaltyContact
         from pantocosim.core.errors import ParameterError
 
         try:
