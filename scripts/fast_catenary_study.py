@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _tables import put_between
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- study:start -->", "<!-- study:end -->"
@@ -132,11 +133,6 @@ def static_uplift_table(catenary: str = "en50318", spans: int = 4,
     return "\n".join(rows) + "\n"
 
 
-def put(doc: str, markers, text: str) -> str:
-    i, j = doc.index(markers[0]) + len(markers[0]), doc.index(markers[1])
-    return doc[:i] + "\n" + text + doc[j:]
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenarios", nargs="+", default=list(SCENARIOS))
@@ -153,12 +149,13 @@ def main(argv=None) -> int:
                 continue
             print(f"running {key} ...", flush=True)
             cache[key] = run(sc, model)
+            a.cache.parent.mkdir(parents=True, exist_ok=True)
             a.cache.write_text(json.dumps(cache))
     text = table(cache, a.scenarios, a.models)
     statics = static_uplift_table()
     print(text + "\n" + statics)
     doc = a.docs.read_text()
-    a.docs.write_text(put(put(doc, (START, END), text), STATICS, statics))
+    a.docs.write_text(put_between(put_between(doc, (START, END), text), STATICS, statics))
     return 0
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
+from _tables import write_between  # noqa: E402
 from fast_catenary_study import QUANTITIES, TARGETS  # noqa: E402  (the issue's targets)
 
 START, END = "<!-- cutoff:start -->", "<!-- cutoff:end -->"
@@ -139,9 +140,7 @@ def main(argv=None) -> int:
     text = table(cache, a.scenarios, a.cutoffs)
     print(text)
     if a.docs.exists():
-        doc = a.docs.read_text()
-        i, j = doc.index(START) + len(START), doc.index(END)
-        a.docs.write_text(doc[:i] + "\n" + text + doc[j:])
+        write_between(a.docs, (START, END), text)
     return 0
 
 
