@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _tables import put_between
+from _tables import markdown_table, put_between
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- study:start -->", "<!-- study:end -->"
@@ -94,9 +94,9 @@ def compare(ref: dict, other: dict, model: str) -> list[dict]:
 
 
 def table(cache: dict, scenarios, models) -> str:
-    head = ("| scenario | model | pant. | mean [N] (Δ) | σ [N] (Δ) | max [N] (Δ) | min [N] (Δ) "
-            "| max uplift [mm] (Δ) | max abs dF [N] | ms/step | targets |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = markdown_table(("scenario", "model", "pant.", "mean [N] (Δ)", "σ [N] (Δ)",
+                           "max [N] (Δ)", "min [N] (Δ)", "max uplift [mm] (Δ)",
+                           "max abs dF [N]", "ms/step", "targets"), [])
     lines = []
     for sc in scenarios:
         ref = cache.get(f"{sc}/nonlinear")

@@ -28,7 +28,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
-from _tables import write_between  # noqa: E402
+from _tables import markdown_table, write_between  # noqa: E402
 from fast_catenary_study import errors, max_force_difference, within_targets  # noqa: E402
 
 START, END = "<!-- cutoff:start -->", "<!-- cutoff:end -->"
@@ -80,9 +80,9 @@ def compare(ref: dict, r: dict) -> dict:
 
 
 def table(cache: dict, scenarios, cutoffs) -> str:
-    head = ("| scenario | cutoff [Hz] | modes | Δσ | Δmean | Δmax | Δmin | Δuplift "
-            "| max abs dF [N] | set-up [s] | ms/step p50 (p99) | targets |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = markdown_table(("scenario", "cutoff [Hz]", "modes", "Δσ", "Δmean", "Δmax", "Δmin",
+                           "Δuplift", "max abs dF [N]", "set-up [s]", "ms/step p50 (p99)",
+                           "targets"), [])
     lines = []
     for sc in scenarios:
         ref = cache.get(f"{sc}/linear")
