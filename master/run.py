@@ -20,7 +20,7 @@ import numpy as np
 
 from pantocosim.core.errors import Interrupted, ParameterError, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.master.contact import PenaltyContact
+from pantocosim.core.penalty_contact import PenaltyContact
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.output_folder import writing
 from pantocosim.master.recorder import Recorder

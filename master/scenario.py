@@ -50,8 +50,8 @@ from pathlib import Path
 
 from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ, MODEL_NAMES
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.contact import DEFAULT_CONTACT_STIFFNESS
-from pantocosim.core.hht import DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.core.hht import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
@@ -213,7 +213,7 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> S
         speed_kmh=root.number("speed_kmh", positive=True),
         pantographs=specs, window_supports=window_supports, window_m=window_m,
         dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
-        alpha=sim.number("alpha", DEFAULT_ALPHA, minimum=-1.0 / 3.0, maximum=0.0),
+        alpha=sim.number("alpha", DEFAULT_ALPHA, minimum=ALPHA_MIN, maximum=ALPHA_MAX),
         newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True,
                                maximum=RUN_RTOL_MAX),
         coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True,

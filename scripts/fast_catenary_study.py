@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _tables import markdown_table, put_between
 
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- study:start -->", "<!-- study:end -->"
@@ -55,33 +56,47 @@ def run(scenario: str, model: str) -> dict:
             "dofs": int(prep.catenary.n_dofs), "modes": getattr(prep.catenary, "m", None)}
 
 
+def errors(s_ref: dict, s: dict) -> dict:
+    """Relative errors [%] of the statistics ``s`` against ``s_ref``."""
+    return {q: 100.0 * (s[q] - s_ref[q]) / abs(s_ref[q]) for q in QUANTITIES}
+
+
+def within_targets(err: dict, model: str) -> bool | None:
+    """Whether the errors meet the issue's targets of ``model`` (None: it has none)."""
+    limits = TARGETS.get(model)
+    if not limits:
+        return None
+    worst = (abs(err["mean_n"]), abs(err["std_n"]), max(abs(err["max_n"]), abs(err["min_n"])),
+             abs(err["max_uplift_at_support_m"]))
+    return all(w <= t for w, t in zip(worst, limits))
+
+
+def max_force_difference(x, window, force, force_ref) -> float:
+    """max |F - F_ref| [N] while the pantograph at ``x`` is inside the analysis window."""
+    x = np.asarray(x)
+    inside = (x >= window[0]) & (x <= window[1])
+    return float(np.max(np.abs(np.asarray(force) - np.asarray(force_ref))[inside]))
+
+
 def compare(ref: dict, other: dict, model: str) -> list[dict]:
     """Rows (one per pantograph) of ``other`` against the reference run."""
     rows = []
     for k, (s_ref, s) in enumerate(zip(ref["statistics"], other["statistics"])):
-        lo, hi = ref["window_m"]
-        x = np.asarray(ref["positions"][k])
-        inside = (x >= lo) & (x <= hi)
-        dF = np.abs(np.asarray(other["forces"][k]) - np.asarray(ref["forces"][k]))[inside]
-        err = {q: 100.0 * (s[q] - s_ref[q]) / abs(s_ref[q]) for q in QUANTITIES}
-        limits = TARGETS.get(model)
-        ok = None
-        if limits:
-            worst = (abs(err["mean_n"]), abs(err["std_n"]),
-                     max(abs(err["max_n"]), abs(err["min_n"])),
-                     abs(err["max_uplift_at_support_m"]))
-            ok = all(w <= t for w, t in zip(worst, limits))
+        dF = max_force_difference(ref["positions"][k], ref["window_m"], other["forces"][k],
+                                  ref["forces"][k])
+        err = errors(s_ref, s)
+        ok = within_targets(err, model)
         rows.append({"pantograph": k + 1, **{q: s[q] for q in QUANTITIES},
                      **{f"err_{q}": err[q] for q in QUANTITIES},
-                     "max_dF": float(dF.max()), "ms_per_step": other["ms_per_step"],
+                     "max_dF": dF, "ms_per_step": other["ms_per_step"],
                      "modes": other.get("modes"), "within_targets": ok})
     return rows
 
 
 def table(cache: dict, scenarios, models) -> str:
-    head = ("| scenario | model | pant. | mean [N] (Δ) | σ [N] (Δ) | max [N] (Δ) | min [N] (Δ) "
-            "| max uplift [mm] (Δ) | max abs dF [N] | ms/step | targets |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = markdown_table(("scenario", "model", "pant.", "mean [N] (Δ)", "σ [N] (Δ)",
+                           "max [N] (Δ)", "min [N] (Δ)", "max uplift [mm] (Δ)",
+                           "max abs dF [N]", "ms/step", "targets"), [])
     lines = []
     for sc in scenarios:
         ref = cache.get(f"{sc}/nonlinear")
@@ -132,11 +147,6 @@ def static_uplift_table(catenary: str = "en50318", spans: int = 4,
     return "\n".join(rows) + "\n"
 
 
-def put(doc: str, markers, text: str) -> str:
-    i, j = doc.index(markers[0]) + len(markers[0]), doc.index(markers[1])
-    return doc[:i] + "\n" + text + doc[j:]
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenarios", nargs="+", default=list(SCENARIOS))
@@ -153,12 +163,13 @@ def main(argv=None) -> int:
                 continue
             print(f"running {key} ...", flush=True)
             cache[key] = run(sc, model)
+            a.cache.parent.mkdir(parents=True, exist_ok=True)
             a.cache.write_text(json.dumps(cache))
     text = table(cache, a.scenarios, a.models)
     statics = static_uplift_table()
     print(text + "\n" + statics)
     doc = a.docs.read_text()
-    a.docs.write_text(put(put(doc, (START, END), text), STATICS, statics))
+    a.docs.write_text(put_between(put_between(doc, (START, END), text), STATICS, statics))
     return 0
 
 

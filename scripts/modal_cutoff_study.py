@@ -28,7 +28,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
-from fast_catenary_study import QUANTITIES, TARGETS  # noqa: E402  (the issue's targets)
+from _tables import markdown_table, write_between  # noqa: E402
+from fast_catenary_study import errors, max_force_difference, within_targets  # noqa: E402
 
 START, END = "<!-- cutoff:start -->", "<!-- cutoff:end -->"
 SCENARIOS = ("en50318-300", "dsa380-ave-300")
@@ -73,22 +74,15 @@ def run(scenario: str, model: str, cutoff: float | None = None) -> dict:
 
 def compare(ref: dict, r: dict) -> dict:
     """Errors of run ``r`` against the linear reference (first pantograph)."""
-    s_ref, s = ref["statistics"], r["statistics"]
-    err = {q: 100.0 * (s[q] - s_ref[q]) / abs(s_ref[q]) for q in QUANTITIES}
-    x = np.asarray(ref["x"])
-    lo, hi = ref["window_m"]
-    inside = (x >= lo) & (x <= hi)
-    dF = float(np.max(np.abs(np.asarray(r["force"]) - np.asarray(ref["force"]))[inside]))
-    lim = TARGETS["modal"]
-    worst = (abs(err["mean_n"]), abs(err["std_n"]), max(abs(err["max_n"]), abs(err["min_n"])),
-             abs(err["max_uplift_at_support_m"]))
-    return {**err, "max_dF": dF, "ok": all(w <= t for w, t in zip(worst, lim))}
+    err = errors(ref["statistics"], r["statistics"])
+    dF = max_force_difference(ref["x"], ref["window_m"], r["force"], ref["force"])
+    return {**err, "max_dF": dF, "ok": within_targets(err, "modal")}
 
 
 def table(cache: dict, scenarios, cutoffs) -> str:
-    head = ("| scenario | cutoff [Hz] | modes | Δσ | Δmean | Δmax | Δmin | Δuplift "
-            "| max abs dF [N] | set-up [s] | ms/step p50 (p99) | targets |\n"
-            "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    head = markdown_table(("scenario", "cutoff [Hz]", "modes", "Δσ", "Δmean", "Δmax", "Δmin",
+                           "Δuplift", "max abs dF [N]", "set-up [s]", "ms/step p50 (p99)",
+                           "targets"), [])
     lines = []
     for sc in scenarios:
         ref = cache.get(f"{sc}/linear")
@@ -139,9 +133,7 @@ def main(argv=None) -> int:
     text = table(cache, a.scenarios, a.cutoffs)
     print(text)
     if a.docs.exists():
-        doc = a.docs.read_text()
-        i, j = doc.index(START) + len(START), doc.index(END)
-        a.docs.write_text(doc[:i] + "\n" + text + doc[j:])
+        write_between(a.docs, (START, END), text)
     return 0
 
 

@@ -3,9 +3,9 @@
 Times, in one process and interleaved, the floor solve (the banded Cholesky solve with the
 run's Newton matrix factorised) and the parts of a residual evaluation no iteration strategy
 can avoid: the ANCF and bar kernels with their scatter, C v and M a. Prints a Markdown table
-of the median and best of 30 rounds of 100 calls, in microseconds.
+of the median and best of 30 rounds (or ``rounds``) of 100 calls, in microseconds.
 
-    python scripts/step_lower_bound.py [scenario]
+    python scripts/step_lower_bound.py [scenario] [rounds]
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import sys
 import time
 
 import numpy as np
+from _tables import markdown_table
 
 from pantocosim.master.bench import factorised_newton_matrix
 from pantocosim.master.run import prepare
@@ -22,6 +23,7 @@ from pantocosim.master.scenario import load_scenario
 
 def main(argv: list[str]) -> None:
     sc = load_scenario(argv[0] if argv else "en50318-300")
+    rounds = int(argv[1]) if len(argv) > 1 else 30
     cat = prepare(sc).catenary
     S = cat.structure
     rng = np.random.default_rng(0)
@@ -44,16 +46,16 @@ def main(argv: list[str]) -> None:
     times = {k: [] for k in parts}
     for f in parts.values():
         f()
-    for _ in range(30):
+    for _ in range(rounds):
         for k, f in parts.items():
             t = time.perf_counter()
             for _ in range(100):
                 f()
             times[k].append((time.perf_counter() - t) / 100 * 1e6)
     print(f"## One step's unavoidable parts ({sc.name}, {cat.n_dofs} DOFs)\n")
-    print("| part | median [us] | best [us] |\n|---|---|---|")
-    for k, t in times.items():
-        print(f"| {k} | {np.median(t):.0f} | {np.min(t):.0f} |")
+    print(markdown_table(("part", "median [us]", "best [us]"),
+                         [(k, f"{np.median(t):.0f}", f"{np.min(t):.0f}")
+                          for k, t in times.items()]), end="")
 
 
 if __name__ == "__main__":

@@ -21,6 +21,8 @@ import sys
 import time
 from pathlib import Path
 
+from _tables import put_between
+
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- figures:start -->", "<!-- figures:end -->"
 MASTERS = {"libcosim": "libcosim", "ecos": "ecos", "fmpy": "fmpy_ssp",
@@ -124,9 +126,7 @@ def main(argv=None) -> int:
     print(text)
     page = a.docs.read_text()
     if START in page and END in page:
-        head, rest = page.split(START, 1)
-        page = head + START + "\n" + text + "\n" + END + rest.split(END, 1)[1]
-        a.docs.write_text(page)
+        a.docs.write_text(put_between(page, (START, END), text))
     (a.work / "figures.json").write_text(json.dumps(rows, indent=2) + "\n")
     return 0
 

@@ -15,6 +15,7 @@ import dataclasses
 import sys
 
 import numpy as np
+from _tables import markdown_table
 
 from pantocosim.master.cosim import run_cosim
 from pantocosim.master.run import prepare, run_monolithic
@@ -56,12 +57,11 @@ def main(argv: list[str]) -> None:
     else:
         print(f"## Newton tolerance ({sc.name}, monolithic, dt = {sc.dt * 1e3:g} ms)\n")
         head = "newton_rtol", "Newton iterations per step"
-    print(f"| {head[0]} | mean [N] | sigma [N] | max [N] | min [N] | max abs(F - F_ref) [N] "
-          f"| {head[1]} | wall [s] |")
-    print("|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print(f"| {r[0]:g} | {r[1]:.4f} | {r[2]:.4f} | {r[3]:.3f} | {r[4]:.3f} | {r[5]:.2e} "
-              f"| {r[6]:.2f} | {r[7]:.1f} |")
+    print(markdown_table(
+        (head[0], "mean [N]", "sigma [N]", "max [N]", "min [N]", "max abs(F - F_ref) [N]",
+         head[1], "wall [s]"),
+        [(f"{r[0]:g}", f"{r[1]:.4f}", f"{r[2]:.4f}", f"{r[3]:.3f}", f"{r[4]:.3f}",
+          f"{r[5]:.2e}", f"{r[6]:.2f}", f"{r[7]:.1f}") for r in rows]), end="")
 
 
 if __name__ == "__main__":

@@ -145,6 +145,8 @@ def catenary_bad_input(fmu, args):
         "negative_static_force": ({"static_force_1": -10.0}, None),
         "bad_alpha": ({"hht_alpha": 0.5}, None),
         "bad_factorization": ({"factorization": 5}, None),
+        "bad_rtol": ({"newton_rtol": 0.5}, None),
+        "bad_stiffness": ({"contact_stiffness": -1.0}, None),
         "nan_height_mode1": ({"contact_mode": 1}, ("pantograph_height_1", float("nan"))),
     }
     out = {}

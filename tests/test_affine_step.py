@@ -9,7 +9,7 @@ import pytest
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.linear import LinearCatenary
 from pantocosim.core.affine_hht import AffineHHT
-from pantocosim.core.contact import PenaltyContact
+from pantocosim.core.penalty_contact import PenaltyContact
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
 V = 300 / 3.6

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pantocosim.core.coupled import CoupledSystem, RigidWire
-from pantocosim.core.contact import PenaltyContact
+from pantocosim.core.penalty_contact import PenaltyContact
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.master.cli import main

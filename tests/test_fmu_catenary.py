@@ -132,8 +132,9 @@ def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
     expect = {"unknown_catenary": "catenary", "nan_force": "contact_force_1 = nan",
               "negative_force": "contact_force_1 = -5.0",
               "bad_n_pantographs": "n_pantographs", "position_off_line": "position_1",
-              "negative_static_force": "static_force_1", "bad_alpha": "hht_alpha",
-              "bad_factorization": "factorization",
+              "negative_static_force": "static_force_1", "bad_alpha": "hht_alpha = 0.5",
+              "bad_factorization": "factorization", "bad_rtol": "newton_rtol = 0.5",
+              "bad_stiffness": "contact_stiffness = -1.0",
               "nan_height_mode1": "pantograph_height_1 = nan"}
     for case, text in expect.items():
         r = res[case]
@@ -148,7 +149,7 @@ def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
 def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0):
     """In-process monolithic run of a pantograph on the short catenary (static start at the
     static handshake of the SSP)."""
-    from pantocosim.core.contact import PenaltyContact
+    from pantocosim.core.penalty_contact import PenaltyContact
     from pantocosim.core.coupled import CoupledSystem
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
     from pantocosim.pantograph.presets import load_pantograph

@@ -35,6 +35,8 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
     from fmpy import read_model_description
     from fmpy.validation import validate_fmu
 
+    from pantocosim.pantograph.presets import preset_defaults
+
     ports = None
     for name, path in fmus.items():
         assert validate_fmu(str(path)) == [], name
@@ -47,6 +49,11 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
         assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
         timing = next(v for v in md.modelVariables if v.name == "contact_force").description
         assert "t + h" in timing
+        start = {v.name: v.start for v in md.modelVariables}
+        d = preset_defaults(name)      # the start values are the preset's
+        assert float(start["static_force"]) == d.options.static_force
+        assert float(start["aero_c2"]) == d.options.aero_c2
+        assert float(start["initial_height"]) == d.working_height
     assert ports == [("contact_force", "input", "N"), ("contact_height", "output", "m"),
                      ("contact_velocity", "output", "m/s"),
                      ("operating_height", "input", "m"),

@@ -10,7 +10,7 @@ from pantocosim.master.cli import main
 from pantocosim.master.standalone import force_expression, simulate_pantograph
 from pantocosim.pantograph.base import PantographOptions, Ramp
 from pantocosim.pantograph.modal import frf_direct, frf_modal, modal_analysis
-from pantocosim.pantograph.presets import load_pantograph
+from pantocosim.pantograph.presets import load_pantograph, preset_defaults
 
 
 def _fd_tangents(model, t, q, v, a, F, eps=1e-6):
@@ -123,6 +123,35 @@ def test_bad_inputs_name_the_parameter(tmp_path):
         force_expression("120/(t-t)")
     with pytest.raises(ParameterError, match="contact_force = nan"):
         load_pantograph("en50318-2mass").static_equilibrium(float("nan"))
+
+
+@pytest.mark.parametrize("name", ["dsa380-rigid", "dsa380-flexible", "dsa380-lumped3",
+                                  "en50318-2mass"])
+def test_preset_defaults_are_the_built_models(name):
+    """The FMU's start values (preset_defaults, no model built) are the options and working
+    height of the model the preset builds."""
+    d = preset_defaults(name)
+    if name != "dsa380-flexible":   # the flexible model's build is slow; same frame file
+        model = load_pantograph(name)
+        assert d.options == model.options
+        q0 = model.static_equilibrium()
+        assert model.contact_height(q0) == pytest.approx(d.working_height, abs=1e-9)
+    assert d.options.static_force == (115.0 if name == "en50318-2mass" else 70.0)
+
+
+def test_preset_defaults_of_a_broken_file_name_the_field(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[chain]\nmasses = [7.2, 15.0]\nstiffness = [4200.0, 50.0]\n"
+                   "damping = [10.0, 90.0]\nworking_height = -5.3\n[options]\n"
+                   "static_force = 70.0\n")
+    with pytest.raises(ParameterError, match=r"chain.working_height = -5.3"):
+        preset_defaults(bad)
+    bad.write_text(bad.read_text().replace("working_height = -5.3", "working_height = 5.3")
+                   .replace("static_force = 70.0", "static_force = -1.0"))
+    with pytest.raises(ParameterError, match=r"static_force = -1.0"):
+        preset_defaults(bad)
+    bad.write_text(bad.read_text().replace("-1.0", "90.0"))
+    assert preset_defaults(bad).options.static_force == 90.0
 
 
 def test_cli_modal_json_and_pantograph_outputs(tmp_path, capsys):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pantocosim.multibody.beam3d import Section, straight_beam
-from pantocosim.multibody.contact import GroundContact
+from pantocosim.multibody.ground_contact import GroundContact
 from pantocosim.multibody.joints import Clamp, Revolute, Universal
 from pantocosim.multibody.linearize import natural_frequencies
 from pantocosim.multibody.loads import Gravity, NodalForce, NodalMoment

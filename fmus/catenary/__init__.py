@@ -8,7 +8,7 @@
   DOF numbering, elements and supports (see ``docs/architecture.md``)
 - :mod:`.statics`: static equilibrium and the initial-configuration problem (3.1.3)
 - :mod:`.model`: :class:`CatenaryModel`, the model the HHT-alpha integrator drives
-- :mod:`.contact`: contact-wire points under the pantographs (3.12)-(3.13)
+- :mod:`.contact_point`: contact-wire points under the pantographs (3.12)-(3.13)
 """
 
 from .definition import CatenaryDefinition, load_catenary, preset_names

@@ -8,14 +8,21 @@ import numpy as np
 from .statics import group_horizontal_tensions
 
 
-def central_span(model) -> int:
-    """Index of the span analysed (the middle one; EN 50318 analyses central spans)."""
-    return (len(model.support_x) - 1) // 2
+def central_span(support_x) -> int:
+    """Index of the span analysed by default (the middle one; EN 50318 analyses central
+    spans) of a line with supports at ``support_x``."""
+    return (len(support_x) - 1) // 2
+
+
+def central_window(support_x) -> tuple[float, float]:
+    """The central span [m]: the default analysis window (catenary FMU, third-party runs)."""
+    s = central_span(support_x)
+    return float(support_x[s]), float(support_x[s + 1])
 
 
 def elasticity_positions(model, span: int | None = None, step: float = 2.0) -> np.ndarray:
     """Supports, droppers and points about every ``step`` m along one span."""
-    s = central_span(model) if span is None else span
+    s = central_span(model.support_x) if span is None else span
     a, b = model.support_x[s], model.support_x[s + 1]
     n = max(2, int(round((b - a) / step)))
     xs = set(np.round(np.linspace(a, b, n + 1), 6))
@@ -58,6 +65,6 @@ def static_report(model, elasticity_force: float = 100.0, step: float = 2.0) -> 
         "messenger_tension_max_rel_error": (float(np.max(np.abs(Hm / Tm - 1)))
                                             if Hm.size else float("nan")),
         "elasticity_force_n": elasticity_force,
-        "span": central_span(model),
+        "span": central_span(model.support_x),
     }
     return report, extra

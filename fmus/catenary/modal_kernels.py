@@ -7,7 +7,7 @@ import numpy as np
 from numba import njit
 
 from .ancf_cable import shape, shape_dxi
-from .contact import _local_coordinate
+from .contact_point import _local_coordinate
 
 
 @njit(cache=True)

@@ -31,7 +31,7 @@ import scipy.sparse.linalg as spla
 from ..core.banded import BandedCholesky
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
-from .contact import ContactLocator, ContactPoint
+from .contact_point import ContactLocator, ContactPoint
 from .definition import CatenaryDefinition, load_catenary
 from .mesh import CatenaryMesh, build_mesh
 from .statics import (InitialConfiguration, point_load_vector, solve_initial_configuration,

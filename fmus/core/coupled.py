@@ -2,9 +2,10 @@
 
 The catenary and any number of pantographs are assembled into one
 :class:`~pantocosim.core.model.SecondOrderModel` coupled by penalty contact elements
-(:mod:`pantocosim.core.contact`). The monolithic reference solver (``master/run.py``)
-advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once. Contact is lost and recovered through the penalty
-law; droppers slacken inside the catenary model.
+(:mod:`pantocosim.core.penalty_contact`). The monolithic reference solver
+(``master/run.py``) advances it with the one HHT-alpha integrator, Newton-Raphson on all
+coordinates at once. Contact is lost and recovered through the penalty law; droppers
+slacken inside the catenary model.
 
 DOF layout: ``[catenary | pantograph 1 | pantograph 2 | ...]``.
 
@@ -22,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .model import Evaluation, SecondOrderModel
-from .contact import PenaltyContact
+from .penalty_contact import PenaltyContact
 
 
 

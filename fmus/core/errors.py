@@ -22,6 +22,12 @@ class ParameterError(PantocosimError, ValueError):
         where = f"{source}: " if source else ""
         super().__init__(f"{where}{field} = {value!r}: {reason}")
 
+    def renamed(self, names: dict[str, str]) -> "ParameterError":
+        """The same error under the caller's name of the field (e.g. an FMU parameter's
+        name for a model field); fields not in ``names`` keep theirs."""
+        return ParameterError(names.get(self.field, self.field), self.value, self.reason,
+                              self.source)
+
 
 class ConvergenceError(PantocosimError, RuntimeError):
     """Newton-Raphson did not converge; names time, step and residual."""

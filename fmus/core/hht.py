@@ -36,6 +36,8 @@ DEFAULT_ALPHA = -0.05
 RUN_RTOL = 1e-4
 #: the loosest tolerance a run may set (scenario newton_rtol / coupling_rtol, catenary FMU)
 RUN_RTOL_MAX = 1e-2
+#: the HHT alpha range (unconditional stability, second order): alpha in [ALPHA_MIN, 0]
+ALPHA_MIN, ALPHA_MAX = -1.0 / 3.0, 0.0
 
 
 @dataclass
@@ -71,12 +73,17 @@ class HHTSettings:
         catenary FMU): one factorization kept across steps and refreshed after a step that
         needed more than two iterations, the linear predictor, and the residual tolerance
         ``rtol`` (default :data:`RUN_RTOL`; docs/performance.md shows its effect on the
-        contact force is far below the time-discretization error)."""
-        return cls(alpha=alpha, rtol=RUN_RTOL if rtol is None else float(rtol),
-                   reuse_factorization=True, refresh_after=2, predictor="linear")
+        contact force is far below the time-discretization error). Checked: ``alpha`` in
+        [-1/3, 0] and ``rtol`` in (0, :data:`RUN_RTOL_MAX`]."""
+        out = cls(alpha=alpha, rtol=RUN_RTOL if rtol is None else float(rtol),
+                  reuse_factorization=True, refresh_after=2, predictor="linear")
+        out.validate()
+        if not out.rtol <= RUN_RTOL_MAX:
+            raise ParameterError("rtol", out.rtol, f"must lie in (0, {RUN_RTOL_MAX:g}]")
+        return out
 
     def validate(self, source: str | None = None) -> None:
-        if not np.isfinite(self.alpha) or not (-1.0 / 3.0 <= self.alpha <= 0.0):
+        if not np.isfinite(self.alpha) or not (ALPHA_MIN <= self.alpha <= ALPHA_MAX):
             raise ParameterError("alpha", self.alpha, "HHT alpha must lie in [-1/3, 0]", source)
         if self.reuse_factorization not in (False, True, "step"):
             raise ParameterError("reuse_factorization", self.reuse_factorization,

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import DEFAULT_ALPHA
 
 from .slave_base import IntegratorSlave
@@ -49,7 +49,11 @@ from .slave_base import IntegratorSlave
 MAX_PANTOGRAPHS = 4
 #: a pantograph height at t0 that differs from the settled one by more settles it again [m]
 HEIGHT_TOL_M = 1e-9
+#: support_uplift_j outputs: the FMU's port limit (a longer line reports the first ones)
 MAX_SUPPORTS = 64
+#: model field -> this FMU's parameter, for errors raised by the model side
+FIELD_NAMES = {"alpha": "hht_alpha", "rtol": "newton_rtol",
+               "contact.stiffness": "contact_stiffness", "contact.damping": "contact_damping"}
 
 #: the start laws offered to pantograph FMUs in start_mode 2 (operating_height.py)
 LAW_OUTPUTS = (
@@ -227,35 +231,44 @@ class CatenarySlave(IntegratorSlave):
                 modal_cutoff_hz=cutoff if cutoff > 0 else None)}
         return self._cache[key]
 
+    def _run_settings(self):
+        """The HHT settings of runs (:meth:`HHTSettings.for_runs`, which checks hht_alpha and
+        newton_rtol)."""
+        from pantocosim.core.errors import ParameterError
+        from pantocosim.core.hht import HHTSettings
+
+        try:
+            return HHTSettings.for_runs(self.finite("hht_alpha", self.hht_alpha),
+                                        self.finite("newton_rtol", self.newton_rtol))
+        except ParameterError as exc:
+            raise exc.renamed(FIELD_NAMES) from None
+
     def _contact(self):
-        from pantocosim.core.contact import PenaltyContact
+        from pantocosim.core.penalty_contact import PenaltyContact
         from pantocosim.core.errors import ParameterError
 
-        k_h = self.finite("contact_stiffness", self.contact_stiffness)
-        if not k_h > 0:
-            raise ParameterError("contact_stiffness", k_h, "must be > 0")
-        c_h = self.finite("contact_damping", self.contact_damping)
-        if c_h < 0:
-            raise ParameterError("contact_damping", c_h, "must be >= 0")
-        return PenaltyContact(k_h, c_h)
+        try:
+            return PenaltyContact(self.finite("contact_stiffness", self.contact_stiffness),
+                                  self.finite("contact_damping", self.contact_damping))
+        except ParameterError as exc:
+            raise exc.renamed(FIELD_NAMES) from None
 
     def _laws(self, model):
         """The start laws (operating_height.ContactHeightLaws) of the current parameters."""
+        from pantocosim.catenary.analysis import central_window
         from pantocosim.catenary.operating_height import contact_height_laws, passage_duration
         from pantocosim.core.errors import ParameterError
 
-        x = model.support_x
         window = (self.finite("window_start", self.window_start),
                   self.finite("window_end", self.window_end))
         if window[1] <= window[0]:
-            mid = (len(x) - 1) // 2
-            window = (float(x[mid]), float(x[mid + 1]))
+            window = central_window(model.support_x)
         dt = self.finite("averaging_step", self.averaging_step)
         if not dt > 0:
             raise ParameterError("averaging_step", dt, "must be > 0")
         duration = passage_duration(window[1], model.x0, model.speed if model.speed > 0
                                     else 1.0)
-        alpha = self.finite("hht_alpha", self.hht_alpha)
+        alpha = self._run_settings().alpha
         key = ("laws", window, dt, alpha, self._contact().stiffness)
         if key not in self._cache:
             from pantocosim.catenary.models import law_model
@@ -299,7 +312,6 @@ class CatenarySlave(IntegratorSlave):
 
     def initialise(self):
         from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import RUN_RTOL_MAX, HHTSettings
 
         self.check_build_stamp()
         if self._error:
@@ -310,9 +322,7 @@ class CatenarySlave(IntegratorSlave):
                                  "(built-in penalty)")
         if int(self.n_substeps) < 1:
             raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
-        alpha = self.finite("hht_alpha", self.hht_alpha)
-        if not -1.0 / 3.0 <= alpha <= 0.0:
-            raise ParameterError("hht_alpha", alpha, "must lie in [-1/3, 0]")
+        self._settings = self._run_settings()
         model = self._model = self._build_model()
         n = len(model.x0)
         contact = self._contact()
@@ -321,10 +331,6 @@ class CatenarySlave(IntegratorSlave):
         if policy not in (0, 1, 2):
             raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
                                  "per step) or 2 (reuse across steps)")
-        rtol = self.finite("newton_rtol", self.newton_rtol)
-        if not 0.0 < rtol <= RUN_RTOL_MAX:
-            raise ParameterError("newton_rtol", rtol, f"must lie in (0, {RUN_RTOL_MAX:g}]")
-        self._settings = HHTSettings.for_runs(alpha, rtol)
         self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
         self._mode, self._n = mode, n
         if mode == 0:

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.pantograph.base import Ramp
+from pantocosim.pantograph.presets import load_pantograph, preset_defaults
 
 from .slave_base import IntegratorSlave
 
@@ -52,23 +54,26 @@ class PantographSlave(IntegratorSlave):
                   "the rail")
         self.real("contact_velocity", 0.0, "output", "m/s", "vertical velocity of the contact "
                   "point")
-        # common parameters (defaults from the preset where one exists)
-        defaults = _preset_defaults(self.preset)
-        self.real("static_force", defaults["static_force"], "parameter", "N",
+        # common parameters: start values are the preset's (a broken bundled preset fails
+        # the build with the file, field and value)
+        defaults = preset_defaults(self.preset)
+        opts = defaults.options
+        ramp = opts.ramp or Ramp()
+        self.real("static_force", opts.static_force, "parameter", "N",
                   "static uplift force")
-        self.real("aero_c1", defaults["aero_c1"], "parameter", "N.h/km",
+        self.real("aero_c1", opts.aero_c1, "parameter", "N.h/km",
                   "aerodynamic uplift, linear coefficient: F = c1 v + c2 v^2, v in km/h")
-        self.real("aero_c2", defaults["aero_c2"], "parameter", "N.h2/km2",
+        self.real("aero_c2", opts.aero_c2, "parameter", "N.h2/km2",
                   "aerodynamic uplift, quadratic coefficient")
-        self.real("speed_kmh", 0.0, "parameter", "km/h", "train speed (aerodynamic law)")
-        self.real("friction_force", defaults["friction_force"], "parameter", "N",
+        self.real("speed_kmh", opts.speed_kmh, "parameter", "km/h", "train speed (aerodynamic law)")
+        self.real("friction_force", opts.friction_force, "parameter", "N",
                   "collector friction amplitude f_r (thesis 2.16)")
-        self.real("friction_smoothing", defaults["friction_smoothing"], "parameter", "m/s",
+        self.real("friction_smoothing", opts.friction_smoothing, "parameter", "m/s",
                   "friction smoothing k_t (thesis 2.16)")
-        self.boolean("one_way_damper", defaults["one_way_damper"],
+        self.boolean("one_way_damper", opts.one_way_damper,
                      "the damper acts only while the mechanism moves down")
         self.real("hht_alpha", DEFAULT_ALPHA, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
-        self.real("initial_height", defaults["working_height"], "parameter", "m",
+        self.real("initial_height", defaults.working_height, "parameter", "m",
                   "contact height at t0 (static start: equilibrium at this height)")
         self.real("initial_contact_force", -1.0, "parameter", "N",
                   "contact force at t0 for a static start; < 0 means static + aerodynamic "
@@ -77,9 +82,9 @@ class PantographSlave(IntegratorSlave):
                      "initial_contact_force, 1 = ramp raising (thesis 3.3.1), 2 = static start "
                      "on the catenary's start laws (inputs operating_height.., connected to the "
                      "catenary FMU's outputs of the same names)")
-        self.real("ramp_start_time", 0.0, "parameter", "s", "ramp raising: start time")
-        self.real("ramp_duration", 1.0, "parameter", "s", "ramp raising: duration")
-        self.real("lowered_height", 5.0, "parameter", "m",
+        self.real("ramp_start_time", ramp.start, "parameter", "s", "ramp raising: start time")
+        self.real("ramp_duration", ramp.duration, "parameter", "s", "ramp raising: duration")
+        self.real("lowered_height", ramp.lowered_height, "parameter", "m",
                   "ramp raising: contact height of the lowered pantograph at t0")
         self.integer("n_substeps", 1, "integration steps per communication step")
         self.boolean("force_extrapolation", False,
@@ -111,8 +116,6 @@ class PantographSlave(IntegratorSlave):
     # ------------------------------------------------------------------ lifecycle
     def _load_model(self):
         from pantocosim.core.errors import ParameterError
-        from pantocosim.pantograph.base import Ramp
-        from pantocosim.pantograph.presets import load_pantograph
 
         source = self.preset
         if self.parameter_file:
@@ -182,15 +185,20 @@ class PantographSlave(IntegratorSlave):
         self.contact_velocity = 0.0
 
     def initialise(self):
+        from pantocosim.core.errors import ParameterError
         from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
         self.check_build_stamp()
         if self._error:
             return
         model = self._load_model()
-        alpha = self.finite("hht_alpha", self.hht_alpha)
+        settings = HHTSettings(alpha=self.finite("hht_alpha", self.hht_alpha))
+        try:
+            settings.validate()
+        except ParameterError as exc:
+            raise exc.renamed({"alpha": "hht_alpha"}) from None
         q0, F0 = self._start(model)
-        integ = HHTIntegrator(model, HHTSettings(alpha=alpha))
+        integ = HHTIntegrator(model, settings)
         integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
         self._model, self._integ = model, integ
         self._force_prev = F0
@@ -249,25 +257,3 @@ def Fmi2StatusDiscard():
     from pythonfmu.enums import Fmi2Status
 
     return Fmi2Status.discard
-
-
-def _preset_defaults(preset: str) -> dict:
-    """Parameter defaults read from the preset's file (cheap: no model is built)."""
-    out = {"static_force": 70.0, "aero_c1": 0.0, "aero_c2": 0.00097, "friction_force": 0.0,
-           "friction_smoothing": 1e-4, "one_way_damper": False, "working_height": 5.3}
-    try:
-        from pantocosim.core.params import load_toml
-        from pantocosim.pantograph.presets import preset_path
-
-        data = load_toml(preset_path(preset))
-        for k, v in data.get("options", {}).items():
-            if k in out:
-                out[k] = v
-        for table in ("chain", "frame"):
-            if isinstance(data.get(table), dict) and "working_height" in data[table]:
-                out["working_height"] = data[table]["working_height"]
-        if "working_height" in data:
-            out["working_height"] = data["working_height"]
-    except Exception:  # noqa: BLE001 - defaults only; errors surface at initialisation
-        pass
-    return out

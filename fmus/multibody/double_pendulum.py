@@ -30,7 +30,7 @@ from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
 from .beam3d import Section, straight_beam
 from ..core.hht import DEFAULT_ALPHA
-from .contact import GroundContact
+from .ground_contact import GroundContact
 from .joints import Revolute, Universal
 from .loads import Gravity, NodalMoment, triangular_pulse
 from .system import System

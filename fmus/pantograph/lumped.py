@@ -214,9 +214,8 @@ def _chain_matrix(k: np.ndarray) -> np.ndarray:
     return K
 
 
-def load_chain(path: str | Path, options: PantographOptions | None = None
-               ) -> LumpedPantograph:
-    """Read a lumped-mass parameter file (``[chain]`` and ``[options]`` tables)."""
+def read_chain(path: str | Path) -> tuple[ChainParameters, Table]:
+    """Read and validate a lumped-mass parameter file; returns (ChainParameters, root Table)."""
     source = str(path)
     data = load_toml(path)
     root = Table(data, source)
@@ -239,6 +238,13 @@ def load_chain(path: str | Path, options: PantographOptions | None = None
         names=tuple(names), uplift_mass=uplift - 1,
         working_height=chain.number("working_height", positive=True))
     params.validate(source)
+    return params, root
+
+
+def load_chain(path: str | Path, options: PantographOptions | None = None
+               ) -> LumpedPantograph:
+    """Load a lumped-mass parameter file (``[chain]`` and ``[options]`` tables)."""
+    params, root = read_chain(path)
     if options is None:
         options = PantographOptions.from_table(root.sub("options", required=False))
     name = root.string("name", Path(path).stem)

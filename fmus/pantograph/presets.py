@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..core.errors import ParameterError
@@ -36,6 +37,44 @@ def preset_path(name_or_path: str | Path) -> Path:
                          f"unknown preset (known: {', '.join(sorted(PRESETS))}) and not a file")
 
 
+@dataclass(frozen=True)
+class PresetDefaults:
+    """What a preset or parameter file sets before any override: its ``[options]`` over the
+    :class:`PantographOptions` defaults, and the working height of its default static start."""
+
+    options: PantographOptions
+    working_height: float
+
+
+def _file_options(path: Path, data: dict) -> PantographOptions:
+    return PantographOptions.from_table(Table(data.get("options", {}), str(path), "options"))
+
+
+def _model_kind(data: dict):
+    """(loader, reader of the working height) of a parameter file, told by its tables
+    (imported on demand: the flexible model brings numba kernels)."""
+    if "chain" in data:
+        from .lumped import load_chain, read_chain
+
+        return load_chain, lambda path: read_chain(path)[0].working_height
+    if "rigid_model" in data:
+        from .dsa380_flexible import load_dsa380_flexible, read_flexible
+
+        return load_dsa380_flexible, lambda path: read_flexible(path)[0].rigid.working_height
+    from .dsa380 import load_dsa380, read_parameters
+
+    return load_dsa380, lambda path: read_parameters(path)[0].working_height
+
+
+def preset_defaults(name_or_path: str | Path) -> PresetDefaults:
+    """The defaults of a preset or parameter file, read and validated by the model's own
+    readers without building the model (the pantograph FMU's parameter start values)."""
+    path = preset_path(name_or_path)
+    data = load_toml(path)
+    _, working_height = _model_kind(data)
+    return PresetDefaults(_file_options(path, data), working_height(path))
+
+
 def load_pantograph(name_or_path: str | Path, options: PantographOptions | None = None,
                     **option_overrides) -> PantographModel:
     """Build a pantograph model from a preset name or a parameter file.
@@ -46,17 +85,7 @@ def load_pantograph(name_or_path: str | Path, options: PantographOptions | None 
     path = preset_path(name_or_path)
     data = load_toml(path)
     if options is None:
-        options = PantographOptions.from_table(Table(data.get("options", {}), str(path),
-                                                     "options"))
+        options = _file_options(path, data)
     options = options.replaced(source=str(path), **option_overrides)
-    if "chain" in data:
-        from .lumped import load_chain
-
-        return load_chain(path, options)
-    if "rigid_model" in data:
-        from .dsa380_flexible import load_dsa380_flexible
-
-        return load_dsa380_flexible(path, options)
-    from .dsa380 import load_dsa380
-
-    return load_dsa380(path, options)
+    load, _ = _model_kind(data)
+    return load(path, options)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pantocosim.core.contact import PenaltyContact
+from pantocosim.core.penalty_contact import PenaltyContact
 from pantocosim.core.coupled import CoupledSystem, RigidWire
 from pantocosim.core.errors import ParameterError
 

@@ -98,7 +98,7 @@ def plot_static(model, report, path) -> None:
     ax[0].legend(loc="lower right", fontsize=8)
     from pantocosim.catenary.analysis import central_span
 
-    s = central_span(model)
+    s = central_span(model.support_x)
     a, b = model.support_x[s], model.support_x[s + 1]
     xs = np.linspace(a, b, 601)
     z = model.contact_wire_height(model.q_static, xs)

@@ -156,7 +156,9 @@ def ssp_parser(doc: str, tool: str) -> argparse.ArgumentParser:
 def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     """What a recipe needs of the SSP named by its arguments: ``ssd`` (:func:`read_ssd`),
     ``cat`` (the catenary component's parameters), ``support_x``, ``stop``, ``window``,
-    ``out``, ``n_sup`` (support uplift columns written, at most 64) and ``tool``."""
+    ``out``, ``n_sup`` (support uplift columns written, at most the FMU's MAX_SUPPORTS) and ``tool``."""
+    from pantocosim.fmi.catenary_slave import MAX_SUPPORTS
+
     ssd = read_ssd(a.ssp)
     cat = ssd["parameters"]["catenary"]
     support_x = catenary_layout(cat)
@@ -165,7 +167,7 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
         stop=a.stop if a.stop is not None else ssd["stop_time"],
         window=a.window or ssp_window(cat, support_x),
         out=a.out or Path("results") / f"{a.ssp.stem}-{tool}.csv",
-        n_sup=min(len(support_x), 64))
+        n_sup=min(len(support_x), MAX_SUPPORTS))
 
 
 def run_ssp_child(module: str, a: argparse.Namespace, r: SimpleNamespace,
@@ -182,8 +184,9 @@ def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
     the middle span of the line (the FMU's own default)."""
     if cat.get("window_end", 0.0) > cat.get("window_start", 0.0):
         return float(cat["window_start"]), float(cat["window_end"])
-    mid = (len(support_x) - 1) // 2
-    return float(support_x[mid]), float(support_x[mid + 1])
+    from pantocosim.catenary.analysis import central_window
+
+    return central_window(support_x)
 
 
 def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> dict:

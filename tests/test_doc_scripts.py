@@ -1,0 +1,209 @@
+"""The scripts behind docs/ run on short settings, so their tables cannot rot (issue 17).
+
+Each test takes under 20 s on one core except those marked ``slow`` (thesis study: six runs;
+flexible vs rigid: the flexible model's set-up and FRFs).
+
+Each script runs as a user runs it (``python scripts/X.py``, a child process) on the short test
+scenario, writing into ``tmp_path`` (never into docs/), and the figures it prints or writes are
+checked against the physics: the mean contact force is the pantograph's mean uplift, a
+refinement changes little, tables have their rows and finite numbers. The full studies and
+their figures are in the docs pages the scripts name.
+
+Not here: ``third_party_figures.py`` runs the full default scenario in four foreign masters
+(minutes a row); the masters themselves run the short SSP in tests/test_interop.py.
+"""
+
+import json
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTS = ROOT / "scripts"
+SHORT = str(ROOT / "tests" / "data" / "short-en50318.toml")
+
+
+@pytest.fixture(scope="module")
+def short_ref():
+    """EN 50317 statistics of the short scenario run in-process (monolithic, 1 ms): what each
+    script must report for the same run, whatever it does around it."""
+    from pantocosim.master.run import prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    res = run_monolithic(prepare(load_scenario(SHORT)), None, progress=False)
+    st = res.statistics()[0].as_dict()
+    assert 50.0 < st["mean_n"] < 150.0 and 0.0 < st["std_n"] < st["mean_n"]  # physical
+    return st
+
+
+def script(name: str, *args, cwd: Path, timeout: float = 300.0) -> str:
+    """Run ``scripts/<name>`` with ``args``; its standard output (exit 0 required)."""
+    proc = subprocess.run([sys.executable, str(SCRIPTS / name), *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return proc.stdout
+
+
+def rows_of(table: str, first: str) -> list[list[str]]:
+    """Cells of the Markdown rows whose first cell is ``first``."""
+    out = []
+    for line in table.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.startswith("|") and cells[0] == first:
+            out.append(cells)
+    return out
+
+
+def number(cell: str) -> float:
+    """The first number in a table cell."""
+    return float(re.search(r"[-+]?\d[\d,]*\.?\d*(?:e[-+]?\d+)?", cell).group().replace(",", ""))
+
+
+def page_copy(name: str, tmp_path: Path) -> Path:
+    dest = tmp_path / name
+    shutil.copy(ROOT / "docs" / name, dest)
+    return dest
+
+
+def test_tables_module_puts_text_between_markers_only():
+    sys.path.insert(0, str(SCRIPTS))
+    try:
+        from _tables import markdown_table, put_between
+    finally:
+        sys.path.remove(str(SCRIPTS))
+    assert markdown_table(("a", "b"), [(1, "x")]) == "| a | b |\n|---|---|\n| 1 | x |\n"
+    doc = "intro\n<!-- s -->\nold\n<!-- e -->\nrest\n"
+    assert put_between(doc, ("<!-- s -->", "<!-- e -->"), "new\n") == \
+        "intro\n<!-- s -->\nnew\n<!-- e -->\nrest\n"
+    with pytest.raises(ValueError, match="<!-- e -->"):
+        put_between("<!-- s -->", ("<!-- s -->", "<!-- e -->"), "x")
+
+
+def test_tolerance_study(tmp_path, short_ref):
+    out = script("tolerance_study.py", SHORT, 1e-10, 1e-6, cwd=tmp_path)
+    ref, loose = rows_of(out, "1e-10")[0], rows_of(out, "1e-06")[0]
+    assert number(ref[5]) == 0.0                       # the reference against itself
+    assert 0.0 <= number(loose[5]) < 0.05              # 1e-6: far below the step's error
+    assert number(ref[1]) == pytest.approx(short_ref["mean_n"], abs=1e-4)
+    assert number(ref[2]) == pytest.approx(short_ref["std_n"], abs=1e-4)
+    assert abs(number(loose[2]) - number(ref[2])) < 0.01
+    assert number(loose[6]) <= number(ref[6])          # fewer Newton iterations
+
+
+def test_timestep_study(tmp_path, short_ref):
+    script("timestep_study.py", "--quick", "--docs", tmp_path, cwd=tmp_path)
+    page = (tmp_path / "timestep-study.md").read_text()
+    diff = float(re.search(r"Relative difference of sigma: ([\d.]+) %", page).group(1))
+    assert diff < 2.0                                  # the page's acceptance
+    at_1ms = rows_of(page, "1")[0]
+    assert number(at_1ms[1]) == pytest.approx(short_ref["mean_n"], abs=1e-3)
+    assert number(at_1ms[2]) == pytest.approx(short_ref["std_n"], abs=1e-3)
+    e4, e2 = (number(rows_of(page, h)[0][1]) for h in ("4", "2"))
+    assert 0.0 < e2 < e4                               # the error falls as the step halves
+
+
+def test_fast_catenary_study(tmp_path, short_ref):
+    page = page_copy("fast-catenary.md", tmp_path)
+    before = page.read_text()
+    cache = tmp_path / "study.json"
+    out = script("fast_catenary_study.py", "--scenarios", SHORT, "--models", "linear",
+                 "--cache", cache, "--docs", page, cwd=tmp_path)
+    runs = json.loads(cache.read_text())
+    ref, lin = (runs[f"{SHORT}/{m}"]["statistics"][0] for m in ("nonlinear", "linear"))
+    assert ref["mean_n"] == pytest.approx(short_ref["mean_n"], abs=1e-9)
+    assert lin["mean_n"] == pytest.approx(ref["mean_n"], rel=0.005)
+    assert lin["std_n"] == pytest.approx(ref["std_n"], rel=0.03)
+    assert len(rows_of(out, SHORT)) == 2
+    statics = [r for r in (l.split("|") for l in out.splitlines())
+               if len(r) == 7 and r[2].strip() in ("support 2", "midspan 2-3")]
+    assert len(statics) == 6
+    for r in statics:                                  # linear vs nonlinear static uplift
+        assert 0.0 < number(r[3]) and abs(number(r[5])) < 5.0
+    after = page.read_text()
+    assert after != before
+    assert after.split("<!-- study:start -->")[0] == before.split("<!-- study:start -->")[0]
+
+
+def test_modal_cutoff_study(tmp_path):
+    page = page_copy("modal-cutoff.md", tmp_path)
+    cache = tmp_path / "cutoff.json"
+    out = script("modal_cutoff_study.py", "--scenarios", SHORT, "--cutoffs", 100,
+                 "--cache", cache, "--docs", page, cwd=tmp_path)
+    runs = json.loads(cache.read_text())
+    lin, modal = runs[f"{SHORT}/linear"], runs[f"{SHORT}/modal/100"]
+    assert 0 < modal["modes"] < lin["dofs"]
+    assert modal["statistics"]["std_n"] == pytest.approx(lin["statistics"]["std_n"], rel=0.03)
+    assert modal["statistics"]["mean_n"] == pytest.approx(lin["statistics"]["mean_n"],
+                                                          rel=0.005)
+    row = rows_of(out, SHORT)[1]
+    assert row[1] == "100" and all(math.isfinite(number(c)) for c in row[3:9])
+    assert "<!-- cutoff:start -->" in page.read_text() and SHORT in page.read_text()
+
+
+def test_en50318_sensitivity(tmp_path, short_ref):
+    script("en50318_sensitivity.py", "--scenario", SHORT, "--only", "base", "elem-2",
+           "--out", tmp_path, cwd=tmp_path)
+    rows = {r["name"]: r for r in json.loads((tmp_path / "sensitivity-250.json").read_text())}
+    base, coarse = rows["base"], rows["elem-2"]
+    # the base variation is the preset rewritten: the same run
+    assert base["statistics"]["std_n"] == pytest.approx(short_ref["std_n"], rel=1e-6)
+    # a wire is softer at mid-span than at a support (EN 50318 reference: ~0.3-0.6 mm/N)
+    assert 0.1 < base["elasticity_support_mm_per_n"] < base["elasticity_mid_mm_per_n"] < 1.5
+    assert coarse["statistics"]["std_n"] == pytest.approx(base["statistics"]["std_n"], rel=0.1)
+    md = (tmp_path / "sensitivity-250.md").read_text()
+    assert len(rows_of(md, "base")[0]) == 11
+
+
+@pytest.mark.slow
+def test_thesis_study(tmp_path):
+    script("thesis_study.py", "--scenario", SHORT, "--out", tmp_path / "out", "--docs",
+           tmp_path, cwd=tmp_path, timeout=600)
+    rows = {r["case"]: r for r in json.loads((tmp_path / "out" / "results.json").read_text())}
+    assert len(rows) == 6
+    base = rows["base: no friction, c = 42 000 two-way"]
+    assert 50.0 < base["mean_n"] < 200.0 and 0.0 < base["std_n"] < base["mean_n"]
+    # a one-way damper pushes the collector up: the mean force rises (docs/thesis-study.md)
+    for c in ("42 000", "500 000"):
+        two = rows["base: no friction, c = 42 000 two-way" if c == "42 000"
+                   else "c = 500 000, two-way"]
+        assert rows[f"c = {c}, one-way"]["mean_n"] > two["mean_n"]
+    assert (tmp_path / "thesis-study.md").exists()
+    assert (tmp_path / "figures" / "thesis-study.png").stat().st_size > 10_000
+
+
+def test_step_lower_bound_table(tmp_path):
+    out = script("step_lower_bound.py", SHORT, 2, cwd=tmp_path)
+    rows = [r for r in (l.split("|") for l in out.splitlines()) if len(r) == 5
+            and r[1].strip() not in ("part", "---")]
+    assert len(rows) == 5
+    for r in rows:
+        assert 0.0 < number(r[3]) <= number(r[2]) < 1e6   # best <= median, in microseconds
+
+
+def test_calibrate_dsa380_reproduces_the_recorded_calibration(tmp_path):
+    out = script("calibrate_dsa380.py", cwd=tmp_path, timeout=600)
+    rec = json.loads((ROOT / "fmus" / "pantograph" / "data"
+                      / "dsa380-calibration.json").read_text())
+    got = json.loads(out[:out.rindex("}") + 1])
+    assert got["mode_labels"] == got["target_labels"]
+    assert got["frequencies_hz"] == pytest.approx(rec["frequencies_hz"], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_compare_flexible_rigid(tmp_path):
+    out = script("compare_flexible_rigid.py", "--quick", "--out", tmp_path, cwd=tmp_path,
+                 timeout=600)
+    assert len(list(tmp_path.glob("flex-*.png"))) >= 4
+    # Table 2.2 as docs/flexible-vs-rigid.md quotes it: rigid and flexible (steel) [Hz]
+    doc = {"1": (0.6551, 0.6551), "2": (1.2439, 1.2380), "3": (5.6231, 5.5984),
+           "4": (7.8705, 7.7347)}
+    for mode, (rigid, flexible) in doc.items():
+        row = rows_of(out, mode)[0]
+        assert number(row[1]) == pytest.approx(rigid, abs=1e-4)
+        assert number(row[2]) == pytest.approx(flexible, rel=1e-3)
+
