@@ -84,6 +84,7 @@ def test_tables_module_puts_text_between_markers_only():
         put_between("<!-- s -->", ("<!-- s -->", "<!-- e -->"), "x")
 
 
+@pytest.mark.slow
 def test_tolerance_study(tmp_path, short_ref):
     out = script("tolerance_study.py", SHORT, 1e-10, 1e-6, cwd=tmp_path)
     ref, loose = rows_of(out, "1e-10")[0], rows_of(out, "1e-06")[0]
@@ -95,6 +96,7 @@ def test_tolerance_study(tmp_path, short_ref):
     assert number(loose[6]) <= number(ref[6])          # fewer Newton iterations
 
 
+@pytest.mark.slow
 def test_timestep_study(tmp_path, short_ref):
     script("timestep_study.py", "--quick", "--docs", tmp_path, cwd=tmp_path)
     page = (tmp_path / "timestep-study.md").read_text()
@@ -129,6 +131,7 @@ def test_fast_catenary_study(tmp_path, short_ref):
     assert after.split("<!-- study:start -->")[0] == before.split("<!-- study:start -->")[0]
 
 
+@pytest.mark.slow
 def test_modal_cutoff_study(tmp_path):
     page = page_copy("modal-cutoff.md", tmp_path)
     cache = tmp_path / "cutoff.json"
