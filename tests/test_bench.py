@@ -55,8 +55,15 @@ def test_step_time_percentiles_reach_the_table():
 
 
 def test_scaling_line_reports_growth_and_modes():
-    sc = {"cost_per_simulated_s": {10: 0.4, 20: 0.8, 40: 1.7},
+    sc = {"spans": [10, 20, 40], "cost_per_simulated_s": {10: 0.4, 20: 0.8, 40: 1.7},
           "catenary_dofs": {10: 9216, 20: 18576, 40: 37296}, "modes": {10: 80, 20: 160, 40: 320},
-          "growth_per_doubling": [2.0, 2.125], "growth_10_to_40": 4.25}
+          "growth_per_doubling": [2.0, 2.125], "growth_first_to_last": 4.25}
     line = bench.scaling_line("modal", sc)
     assert "80, 160, 320 modes" in line and "4.25x" in line and "2.00, 2.12" in line
+    assert "10 -> 40 spans" in line
+    # a model scaled over fewer spans (it does not fit on 40) says so
+    short = {"spans": [10, 20], "cost_per_simulated_s": {10: 0.4, 20: 0.8},
+             "catenary_dofs": {10: 9216, 20: 18576}, "modes": {10: 80, 20: 160},
+             "growth_per_doubling": [2.0], "growth_first_to_last": 2.0}
+    assert "10 -> 20 spans 2.00x" in bench.scaling_line("modal", short)
+    assert bench.SCALING_SPANS_OF["modal"][-1] < bench.SCALING_SPANS[-1]
