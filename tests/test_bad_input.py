@@ -587,6 +587,7 @@ def _check_interrupted(proc, out, err, waited, folder):
     assert not leftovers(folder.parent)
 
 
+@pytest.mark.slow
 def test_ctrl_c_in_a_monolithic_run_keeps_what_was_computed(tmp_path):
     sc = _long_scenario(tmp_path)
     proc = _child(["run", sc, "--quiet", "--no-plots", "--out", "out"], tmp_path)
@@ -628,6 +629,7 @@ def test_ctrl_c_during_the_set_up_keeps_earlier_results(tmp_path, good_run):
     assert not leftovers(tmp_path)
 
 
+@pytest.mark.slow
 def test_ctrl_c_in_other_commands_is_one_line(tmp_path):
     proc = _child(["static", "en50318", "--element-size", "0.3"], tmp_path)
     time.sleep(4.0)

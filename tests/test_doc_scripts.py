@@ -109,6 +109,7 @@ def test_timestep_study(tmp_path, short_ref):
     assert 0.0 < e2 < e4                               # the error falls as the step halves
 
 
+@pytest.mark.slow
 def test_fast_catenary_study(tmp_path, short_ref):
     page = page_copy("fast-catenary.md", tmp_path)
     before = page.read_text()
@@ -148,6 +149,7 @@ def test_modal_cutoff_study(tmp_path):
     assert "<!-- cutoff:start -->" in page.read_text() and SHORT in page.read_text()
 
 
+@pytest.mark.slow
 def test_en50318_sensitivity(tmp_path, short_ref):
     script("en50318_sensitivity.py", "--scenario", SHORT, "--only", "base", "elem-2",
            "--out", tmp_path, cwd=tmp_path)
@@ -179,6 +181,7 @@ def test_thesis_study(tmp_path):
     assert (tmp_path / "figures" / "thesis-study.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_step_lower_bound_table(tmp_path):
     out = script("step_lower_bound.py", SHORT, 2, cwd=tmp_path)
     rows = [r for r in (l.split("|") for l in out.splitlines()) if len(r) == 5

@@ -42,6 +42,7 @@ def _moving_load(model, F, steps=250):
     return np.array(z), integ
 
 
+@pytest.mark.slow
 def test_linear_equals_nonlinear_for_a_small_moving_load(models):
     nl, li = models
     errs = []

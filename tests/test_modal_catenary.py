@@ -124,6 +124,7 @@ def test_a_slack_dropper_carries_no_force_in_the_modal_model(lin4, modal20, F):
     assert np.max(np.abs(mo.full_displacement(0.0, y) - dq)) < 1e-9 * np.max(np.abs(dq))
 
 
+@pytest.mark.slow
 def test_closed_form_step_equals_newton_with_slackening(line4):
     li = LinearCatenary(line4, x0=(60.0,), speed=V)
     newton, closed = (ModalCatenary(linear=li, cutoff_hz=20.0) for _ in range(2))
