@@ -52,18 +52,9 @@ def _add_columns(U, c, out):
 @njit(cache=True)
 def _woodbury(idx, val, rows, s, small_inv, U, x):
     """x <- x + U small_inv (s * B_rows^T x), in place (:class:`LowRankSolve`)."""
-    r = rows.shape[0]
-    y = np.empty(r)
-    for a in range(r):
-        i = rows[a]
-        acc = 0.0
-        for k in range(idx.shape[1]):
-            j = idx[i, k]
-            if j >= 0:
-                acc += val[i, k] * x[j]
-        y[a] = s[a] * acc
-    z = small_inv @ y
-    _add_columns(U, z, x)
+    y = np.empty(rows.shape[0])
+    _dots(idx, val, x, rows, y)
+    _add_columns(U, small_inv @ (s * y), x)
 
 
 class SparseVectors:
