@@ -296,6 +296,8 @@ class AffineHHT:
         set at the resulting q_{n+1} and return False."""
         delta, d_new = self._delta, self._work[0]
         F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
+        if F.size != self.W.shape[0]:
+            raise ValueError(f"{F.size} loads given for {self.W.shape[0]} load vectors")
         _loaded(self.delta_free, self.W, F.reshape(-1), self.d_p, delta, d_new)
         un = self.form.unilateral
         slack = un.slack(un.axial(d_new))
