@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.affine_hht import _new_id, check_slack_passes
+from ..core.affine_hht import _new_id, check_slack_passes, restore_step_state, step_state
 from . import modal_kernels as _k
 
 
@@ -151,14 +151,8 @@ class ModalHHT:
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        return {"t": self.t, "n_steps": self.n_steps, "q": self.q.copy(), "v": self.v.copy(),
-                "a": self.a.copy(), "f": self.f.copy(), "id": self._id,
-                "committed": self.committed.copy()}
+        return step_state(self)
 
     def set_state(self, state: dict) -> None:
-        self.t, self.n_steps = float(state["t"]), int(state["n_steps"])
-        for name in ("q", "v", "a", "f"):
-            getattr(self, name)[:] = state[name]
-        self.committed = np.array(state["committed"], dtype=bool)
+        restore_step_state(self, state)
         self.model.set_internal_state({"slack": self.committed})
-        self._id = state["id"]

@@ -58,6 +58,23 @@ def _new_id() -> tuple[int, int]:
     return _TOKEN, next(_COUNTER)
 
 
+def step_state(st) -> dict:
+    """The state of a closed-form HHT stepper (:class:`AffineHHT`, the modal catenary's):
+    time, step count, q, v, a, f_n, state label and committed slack set."""
+    return {"t": st.t, "n_steps": st.n_steps, "q": st.q.copy(), "v": st.v.copy(),
+            "a": st.a.copy(), "f": st.f.copy(), "id": st._id,
+            "committed": st.committed.copy()}
+
+
+def restore_step_state(st, state: dict) -> None:
+    """Put back a :func:`step_state`."""
+    st.t, st.n_steps = float(state["t"]), int(state["n_steps"])
+    for name in ("q", "v", "a", "f"):
+        getattr(st, name)[:] = state[name]
+    st.committed = np.array(state["committed"], dtype=bool)
+    st._id = state["id"]
+
+
 @dataclass
 class AffineForm:
     """What :class:`AffineHHT` needs of a linear structure."""
@@ -317,18 +334,11 @@ class AffineHHT:
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        return {"t": self.t, "n_steps": self.n_steps, "q": self.q.copy(),
-                "v": self.v.copy(), "a": self.a.copy(), "f": self.f.copy(),
-                "pending": self._pending, "id": self._id,
-                "committed": self.committed.copy()}
+        return {**step_state(self), "pending": self._pending}
 
     def set_state(self, state: dict) -> None:
-        self.t, self.n_steps = float(state["t"]), int(state["n_steps"])
-        for name in ("q", "v", "a", "f"):
-            getattr(self, name)[:] = state[name]
-        self.committed = np.array(state["committed"], dtype=bool)
+        restore_step_state(self, state)
         self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
-        self._id = state["id"]
 
 
 class ForcedAffineIntegrator:
