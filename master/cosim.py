@@ -64,16 +64,35 @@ class ModelSubsystem:
 
 
 class _FmuState:
-    """FMU state save/restore/free of an adapter holding ``self.fmu``."""
+    """FMU state save/restore/free of an adapter holding ``self.fmu``; the outputs read
+    after a step are kept until the FMU's state or inputs change (one fmi2GetReal per step
+    for everything the master reads)."""
+
+    _read = None
 
     def get_state(self):
         return self.fmu.get_state()
 
     def set_state(self, s):
         self.fmu.set_state(s)
+        self._read = None
 
     def free_state(self, s):
         self.fmu.free_state(s)
+
+    def set_forces(self, forces):
+        self.fmu.set_real(self.r_in, forces)
+        self._read = None
+
+    def step(self, t, h):
+        self._read = None
+        self.fmu.do_step(t, h)
+
+    def _values(self) -> list:
+        """The values of :attr:`r_read`, read once per change."""
+        if self._read is None:
+            self._read = self.fmu.get_real(self.r_read)
+        return self._read
 
 
 class FmuPantograph(_FmuState):
@@ -82,16 +101,10 @@ class FmuPantograph(_FmuState):
     def __init__(self, fmu):
         self.fmu = fmu
         self.r_in = fmu.refs(["contact_force"])
-        self.r_out = fmu.refs(["contact_height", "contact_velocity"])
-
-    def set_forces(self, forces):
-        self.fmu.set_real(self.r_in, forces)
-
-    def step(self, t, h):
-        self.fmu.do_step(t, h)
+        self.r_read = fmu.refs(["contact_height", "contact_velocity"])
 
     def outputs(self):
-        z, v = self.fmu.get_real(self.r_out)
+        z, v = self._values()
         return np.array([z]), np.array([v])
 
 
@@ -102,26 +115,22 @@ class FmuCatenary(_FmuState):
         self.fmu = fmu
         k = range(1, n_pantographs + 1)
         self.r_in = fmu.refs([f"contact_force_{i}" for i in k])
-        self.r_out = fmu.refs([f"wire_height_{i}" for i in k] + [f"wire_velocity_{i}" for i in k])
-        self.n = n_pantographs
-        self.r_uplift = fmu.refs([f"support_uplift_{j}" for j in range(n_supports)])
-        self.r_newton = fmu.refs(["newton_iterations"])
-
-    def set_forces(self, forces):
-        self.fmu.set_real(self.r_in, forces)
-
-    def step(self, t, h):
-        self.fmu.do_step(t, h)
+        self.n, self.n_supports = n_pantographs, n_supports
+        #: wire heights, wire velocities, support uplifts, Newton iterations
+        self.r_read = fmu.refs([f"wire_height_{i}" for i in k]
+                               + [f"wire_velocity_{i}" for i in k]
+                               + [f"support_uplift_{j}" for j in range(n_supports)]
+                               + ["newton_iterations"])
 
     def newton_iterations(self) -> float:
-        return float(self.fmu.get_real(self.r_newton)[0])
+        return float(self._values()[-1])
 
     def outputs(self):
-        y = self.fmu.get_real(self.r_out)
+        y = np.asarray(self._values()[:2 * self.n])
         return y[:self.n], y[self.n:]
 
     def uplift(self):
-        return self.fmu.get_real(self.r_uplift)
+        return self._values()[2 * self.n:2 * self.n + self.n_supports]
 
 
 # ---------------------------------------------------------------------- set-up

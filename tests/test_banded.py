@@ -35,7 +35,7 @@ def test_solves_and_cached_columns_match_a_dense_solve():
     solve.cache_size = 4
     for j in range(10):
         solve.solve_sparse([j], [1.0])
-    assert len(solve._columns) == 4 and list(solve._columns) == [6, 7, 8, 9]
+    assert len(solve._slots) == 4 and list(solve._slots) == [6, 7, 8, 9]
     assert np.allclose(solve.solve_sparse([9, 0], [1.0, 0.0]), Ainv[:, 9], atol=1e-13)
     assert np.allclose(solve.solve_sparse([9, 0], [0.0, 1.0]), Ainv[:, 0], atol=1e-13)
 

@@ -50,6 +50,19 @@ def _local_coordinate(c, L, x, xi):
     return min(max(xi, 0.0), 1.0)
 
 
+@njit(cache=True)
+def _point(x_start, x_end, E_x, Le, x):
+    """(element k, xi, weights, d weights / dx) of track position x inside
+    [x_start[0], x_end[-1]]: the element search, (3.12) and the Hermite functions (3.13)."""
+    k = np.searchsorted(x_start, x, side="right") - 1
+    k = min(max(k, 0), x_start.shape[0] - 1)
+    L = Le[k]
+    c = E_x[k]
+    xi = _local_coordinate(c, L, x, (x - x_start[k]) / max(x_end[k] - x_start[k], 1e-300))
+    s_xi = shape_dxi(xi, L)
+    return k, xi, shape(xi, L), s_xi / (s_xi * c).sum()
+
+
 class ContactLocator:
     """Locates track positions on the contact wire of a mesh at a reference configuration."""
 
@@ -57,11 +70,11 @@ class ContactLocator:
         S = mesh.structure
         self.mesh = mesh
         self.elems = np.asarray(mesh.contact_elems)
-        self.Le = S.cables.Le[self.elems]
+        self.Le = np.ascontiguousarray(S.cables.Le[self.elems], dtype=float)
         E = S.absolute(x_full_ref)[S.cables.dofs[self.elems]]
         self.E_x = E[:, [0, 3, 6, 9]]          # x, x', x_j, x_j'
-        self.x_start = E[:, 0]
-        self.x_end = E[:, 6]
+        self.x_start = np.ascontiguousarray(E[:, 0])
+        self.x_end = np.ascontiguousarray(E[:, 6])
         zd = S.cables.dofs[self.elems][:, [2, 5, 8, 11]]
         self.z_full_dofs = zd
         self.z_free = S.fmap[zd]                 # -1 for fixed
@@ -69,25 +82,21 @@ class ContactLocator:
         self.x_full_ref = x_full_ref
         self.x_min, self.x_max = float(self.x_start[0]), float(self.x_end[-1])
 
-    def locate(self, x: float) -> tuple[int, float]:
-        """(element position in the contact chain, xi in [0, 1]) of track position x."""
+    def _located(self, x: float):
+        """(k, xi, weights, dweights_dx) of track position x (:func:`_point`)."""
         if not (self.x_min - 1e-9 <= x <= self.x_max + 1e-9):
             raise ParameterError("pantograph position", float(x),
                                  f"outside the contact wire [{self.x_min:g}, "
                                  f"{self.x_max:g}] m")
-        k = int(np.clip(np.searchsorted(self.x_start, x, side="right") - 1, 0,
-                        len(self.elems) - 1))
-        L = self.Le[k]
-        c = self.E_x[k]
-        xi = (x - self.x_start[k]) / max(self.x_end[k] - self.x_start[k], 1e-300)
-        return k, _local_coordinate(c, L, x, xi)
+        return _point(self.x_start, self.x_end, self.E_x, self.Le, float(x))
+
+    def locate(self, x: float) -> tuple[int, float]:
+        """(element position in the contact chain, xi in [0, 1]) of track position x."""
+        k, xi, _, _ = self._located(x)
+        return int(k), xi
 
     def point(self, x: float) -> ContactPoint:
-        k, xi = self.locate(x)
-        L = self.Le[k]
-        w = shape(xi, L)
-        dxdxi = shape_dxi(xi, L) @ self.E_x[k]
-        dw = shape_dxi(xi, L) / dxdxi
+        k, xi, w, dw = self._located(x)
         free = self.z_free[k]
         if self._all_free[k]:
             return ContactPoint(dofs=free, weights=w, offset=0.0, element=int(self.elems[k]),

@@ -210,7 +210,7 @@ class AffineHHT:
         self._loads, self._slack = (), None
         self.passes = 0
         self._id = _new_id()
-        #: (state id, h, copies of the free response): a step redone from the same state
+        #: (state id, h, f_n formed by the pass): a step redone from the same state
         #: (co-simulation rollback) skips the pass and the solve
         self._memo = None
 
@@ -249,12 +249,12 @@ class AffineHHT:
         c_a, c_v, c_f = self._coefficients(h)
         self._loads = list(loads)
         self.passes = 0
-        memo = self._memo
-        if memo is not None and memo[0] == (self._id, h):
-            for dst, src in zip(self._free_state(), memo[1]):
-                dst[...] = src
-            self._pending, self._slack = False, memo[3]
-            self.W[...] = memo[2]
+        if self._memo is not None and self._memo[0] == (self._id, h):
+            # the step is redone from the state it was begun from (a co-simulation
+            # rollback): the free response, W and the slack set are still in their buffers
+            # (only a begin from another state overwrites them)
+            self.f[:] = self._memo[1]
+            self._pending = False
             self.passes = 1
             return
         _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
@@ -265,12 +265,7 @@ class AffineHHT:
         un = fm.unilateral
         self._solve(un.slack(un.axial(self.d_p)))
         if self.keep_free_response:
-            self._memo = ((self._id, h), [x.copy() for x in self._free_state()], self.W.copy(),
-                          self._slack)
-
-    def _free_state(self):
-        """The arrays :meth:`begin` computes (kept for a step redone from its state)."""
-        return self.q_p, self.v_p, self.d_p, self._rhs, self.delta_free, self.f
+            self._memo = ((self._id, h), self.f.copy())
 
     def _lowrank(self, rows, s) -> LowRankSolve:
         """The Woodbury solve of a slack set (kept while the set and the step size last: a

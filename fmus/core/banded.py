@@ -129,10 +129,15 @@ def local_band_solve(LT, x, lo, hi, rtol):
 
 
 @njit(cache=True)
-def axpy(a, x, y):
-    """y += a x in place."""
-    for i in range(y.shape[0]):
-        y[i] += a * x[i]
+def _sum_columns(store, span, slots, values, out):
+    """out = sum_i values[i] store[slots[i]], each column added over its nonzero range."""
+    for i in range(out.shape[0]):
+        out[i] = 0.0
+    for r in range(slots.shape[0]):
+        col = store[slots[r]]
+        c = values[r]
+        for i in range(span[slots[r], 0], span[slots[r], 1]):
+            out[i] += c * col[i]
 
 
 @dataclass
@@ -188,7 +193,12 @@ class BandedCholesky:
         self.n = cb.shape[1]
         self.LT = np.array(cb.T, order="C")         # factor columns as rows (band_solve)
         self.LT[:, 0] = 1.0 / self.LT[:, 0]
-        self._columns: OrderedDict[int, np.ndarray] = OrderedDict()
+        #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
+        #: used first) with the range of their nonzero entries
+        self._slots: OrderedDict[int, int] = OrderedDict()
+        self._store = np.zeros((self.cache_size, self.n))
+        self._span = np.zeros((self.cache_size, 2), dtype=np.int64)
+        self._slot_buf = np.zeros(self.cache_size, dtype=np.int64)
 
     @classmethod
     def factor(cls, ab: np.ndarray) -> "BandedCholesky | None":
@@ -220,27 +230,37 @@ class BandedCholesky:
         local_band_solve(self.LT, x, lo, hi, LOCAL_RTOL)
         return x
 
-    def _column(self, j: int) -> np.ndarray:
-        """A^-1 e_j, from the cache or solved (and kept; least recently used dropped)."""
-        cache = self._columns
-        col = cache.get(j)
-        if col is None:
-            col = self.solve_local(j, j, values=None)
-            cache[j] = col
-            if len(cache) > self.cache_size:
-                cache.popitem(last=False)
+    def _slot(self, j: int) -> int:
+        """The row of :attr:`_store` holding A^-1 e_j (solved and kept on first use; the least
+        recently used column gives up its row)."""
+        slots = self._slots
+        slot = slots.get(j)
+        if slot is None:
+            if len(slots) < self.cache_size:
+                slot = len(slots)
+            else:
+                _, slot = slots.popitem(last=False)
+            col = self._store[slot]
+            col[:] = 0.0
+            col[j] = 1.0
+            local_band_solve(self.LT, col, j, j, LOCAL_RTOL)
+            nz = np.flatnonzero(col)
+            self._span[slot] = (nz[0], nz[-1] + 1) if nz.size else (0, 0)
+            slots[j] = slot
         else:
-            cache.move_to_end(j)
-        return col
+            slots.move_to_end(j)
+        return slot
 
-    def _cached(self, dofs) -> list:
-        """The cached solves A^-1 e_j for j in dofs."""
-        return [self._column(int(j)) for j in np.asarray(dofs, dtype=np.int64)]
+    def _column(self, j: int) -> np.ndarray:
+        """A^-1 e_j (a view of the kept column)."""
+        return self._store[self._slot(j)]
 
     def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere), into ``out`` if given."""
         x = np.zeros(self.n) if out is None else out
-        x[:] = 0.0
-        for j, w in zip(np.asarray(dofs).tolist(), np.asarray(values, dtype=float).tolist()):
-            axpy(w, self._column(j), x)
+        slots = self._slot_buf[:len(dofs)]
+        for i, j in enumerate(dofs.tolist() if isinstance(dofs, np.ndarray) else dofs):
+            slots[i] = self._slot(int(j))
+        _sum_columns(self._store, self._span, slots,
+                     np.asarray(values, dtype=float), x)
         return x

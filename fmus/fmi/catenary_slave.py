@@ -433,11 +433,12 @@ class CatenarySlave(IntegratorSlave):
         if err is not None:
             self.log(err, _discard())
             return False
-        saved = self._integ.get_state()
+        n = int(self.n_substeps)
+        # a closed-form step leaves the state alone until it succeeds: no state to save
+        saved = None if (n == 1 and self._integ.closed_form) else self._integ.get_state()
         try:
             if self._mode == 1 and self.extrapolate_heights and self._integ.t == 0.0:
                 new = self._first_step_heights(new)
-            n = int(self.n_substeps)
             h = step_size / n
             old = self._prev_inputs
             iters = 0
@@ -456,7 +457,8 @@ class CatenarySlave(IntegratorSlave):
             self._update_outputs()
             return True
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            self._integ.set_state(saved)
+            if saved is not None:
+                self._integ.set_state(saved)
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: "
                      f"{type(exc).__name__}: {exc}", _discard())
             return False

@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any, Callable
 from xml.etree.ElementTree import Element, SubElement
 
+import numpy as np
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real, String
@@ -479,7 +480,7 @@ class GuardedSlave(Fmi2Slave):
             state = {"model": self._model_id, "instance": self._instance_id,
                      "instance_name": self.instance_name, "deserialized": False,
                      "time": self._time,
-                     "vars": {v.name: v.getter() for v in self.vars.values()},
+                     "vars": self._variable_values(),
                      "error": self._error}
             for name in self._state_attributes:
                 state[name] = self._copy_attribute(name)
@@ -526,12 +527,31 @@ class GuardedSlave(Fmi2Slave):
         except Exception as exc:  # noqa: BLE001 - partly applied: the instance is unusable
             self.fail(f"fmi2SetFMUstate: {type(exc).__name__}: {exc}")
 
+    def _variable_values(self) -> dict:
+        """Every variable's value for the FMU state: the attribute each variable is kept in
+        (:meth:`real`, :meth:`integer`), read directly; the getter only for a variable
+        without one. A master saves the state every communication step, so this is cheap."""
+        names = self.__dict__.get("_state_var_names")
+        if names is None or len(names) != len(self.vars):   # variables are registered once
+            names = self._state_var_names = [(v.name, v.getter) for v in self.vars.values()]
+        d = self.__dict__
+        return {name: d[name] if name in d else getter() for name, getter in names}
+
+    @staticmethod
+    def _copy_value(value):
+        """A deep copy of a state value (arrays and plain numbers without pickling)."""
+        if value is None or isinstance(value, (bool, int, float, str)):
+            return value
+        if type(value) is np.ndarray and value.dtype != object:
+            return value.copy()
+        return pickle.loads(pickle.dumps(value))
+
     def _copy_attribute(self, name: str):
         """Deep copy of an internal attribute for the FMU state (override for big objects)."""
-        return pickle.loads(pickle.dumps(getattr(self, name)))
+        return self._copy_value(getattr(self, name))
 
     def _restore_attribute(self, name: str, value) -> None:
-        setattr(self, name, pickle.loads(pickle.dumps(value)))
+        setattr(self, name, self._copy_value(value))
 
     @staticmethod
     def _picklable_state(state: dict) -> dict:
