@@ -278,6 +278,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
 
     sc = prep.scenario
     stepper = make_stepper(prep, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
+    stepper.warm_up(sc.dt)
     n_p = len(prep.pantographs)
     names = column_names(n_p, len(prep.support_x))
     rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTIntegrator
 
 
@@ -33,6 +34,10 @@ class AssembledStepper:
 
     def step(self, h: float) -> int:
         return self.integ.step(h).iterations
+
+    def warm_up(self, h: float) -> None:
+        """:func:`warm_up` of :attr:`integ`."""
+        warm_up(self.integ, h)
 
     def observe(self):
         """([(F, z_p, z_w) per pantograph], support uplifts) at the current state."""
@@ -61,10 +66,30 @@ class CondensedRunStepper:
     def step(self, h: float) -> int:
         return self.stepper.step(h)
 
+    def warm_up(self, h: float) -> None:
+        """The structure's set-up for steps of h (``prepare``), then :func:`warm_up`."""
+        if hasattr(self.structure, "prepare"):
+            self.structure.prepare(h)
+        warm_up(self.stepper, h)
+
     def observe(self):
         c = self.stepper.bodies
         return (list(zip(c.forces, c.heights, c.wire_heights)),
                 self.catenary.support_uplift(self.structure.q))
+
+
+def warm_up(stepper, h: float) -> None:
+    """Take one step of ``h`` and put the state back: what a first step pays once (numba
+    loading its compiled kernels, the factorization for h, the first unit-vector solves) is
+    paid at set-up, not inside the paced loop. A failing step is left for the run to
+    report."""
+    state = stepper.get_state()
+    try:
+        stepper.step(h)
+    except PantocosimError:
+        pass
+    finally:
+        stepper.set_state(state)
 
 
 def make_stepper(prep, settings):

@@ -41,6 +41,8 @@ from .lowrank import LowRankSolve
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
+#: memory the unilateral elements' columns may take when solved at set-up (:meth:`prepare`)
+PREFILL_BYTES = 256 * 2**20
 #: labels of the states a step starts from (a rolled-back step reuses its free response);
 #: the random token keeps a label restored from another process's saved state unique
 _TOKEN = secrets.randbits(64)
@@ -240,6 +242,22 @@ class AffineHHT:
             self._cache = self.form.factor(*self._coef)
             self._h = h
         return self._coef
+
+    def prepare(self, h: float) -> None:
+        """Pay at set-up what the steps of size h would pay on first use: the factorization,
+        every unilateral element's column A^-1 b_d (when they fit in
+        :data:`PREFILL_BYTES`) and one Woodbury solve (numba loads its kernels on first
+        call). A paced loop then has no first-use step."""
+        self._coefficients(h)
+        un = self.form.unilateral
+        n_el = len(un.ka)
+        if n_el == 0:
+            return
+        if n_el * self.form.n * 8 <= PREFILL_BYTES:
+            self._cache.prefill()
+        rows = np.arange(min(n_el, 2), dtype=np.int64)
+        LowRankSolve(self._cache, rows, np.ones(rows.size)).solve_into(self._rhs,
+                                                                       self._work[0])
 
     # ------------------------------------------------------------------ one step
     def begin(self, h: float, loads) -> None:

@@ -152,6 +152,16 @@ class NewtonBodies:
     def begin(self) -> None:
         self._saved = None
 
+    def get_state(self):
+        c = self.contacts
+        return self.integ.get_state(), [x.copy() for x in (c.forces, c.heights,
+                                                            c.wire_heights)]
+
+    def set_state(self, state) -> None:
+        self.integ.set_state(state[0])
+        for dst, src in zip((self.forces, self.heights, self.wire_heights), state[1]):
+            dst[:] = src
+
     def solve(self, h, x) -> int:
         """Step the bodies against the interface ``x``; the forces, heights and wire heights
         are then in :attr:`forces`, :attr:`heights`, :attr:`wire_heights`."""
@@ -215,6 +225,19 @@ class LinearBodies:
         return b.contact_height(integ.q), b.contact_velocity(integ.q, integ.v)
 
     def begin(self) -> None:
+        self._stepped = False
+
+    def get_state(self):
+        return ([i.get_state() for i in self.integs],
+                [x.copy() for x in (self.forces, self.heights, self.wire_heights,
+                                    self._applied)])
+
+    def set_state(self, state) -> None:
+        for integ, s in zip(self.integs, state[0]):
+            integ.set_state(s)
+        for dst, src in zip((self.forces, self.heights, self.wire_heights, self._applied),
+                            state[1]):
+            dst[:] = src
         self._stepped = False
 
     def _take_steps(self, h) -> None:
@@ -306,6 +329,14 @@ class CondensedStepper:
                 G[k, j] = g
                 H[k, j] = c_v * g + V * dg
         return x
+
+    def get_state(self):
+        return self.structure.get_state(), self.bodies.get_state(), self._inputs.copy()
+
+    def set_state(self, state) -> None:
+        self.structure.set_state(state[0])
+        self.bodies.set_state(state[1])
+        self._inputs[:] = state[2]
 
     def step(self, h: float) -> int:
         """Advance structure and bodies by h; returns the bodies' Newton iterations."""
