@@ -549,8 +549,8 @@ def _child(argv, cwd):
 
 
 def _interrupt_when_stepping(proc, folder: Path, limit: float = 300):
-    """SIGINT once the run is in its time loop: its time series holds rows (the recorder
-    writes the first block after 500 steps)."""
+    """SIGINT once the run is in its time loop: its time series holds rows (the recorder's
+    file buffer reached the disk)."""
     t0 = time.perf_counter()
     while proc.poll() is None and time.perf_counter() - t0 < limit:
         if any(p.stat().st_size > 2000 for p in folder.glob(".*.partial/timeseries.csv")):
@@ -579,7 +579,7 @@ def _check_interrupted(proc, out, err, waited, folder):
     summary = json.loads((folder / "summary.json").read_text())
     stop = summary["stopped"]
     assert summary["completed"] is False and stop["interrupted"] is True
-    assert 499 <= stop["steps"] < stop["of_steps"]   # the first block: t = 0 and 499 steps
+    assert 0 < stop["steps"] < stop["of_steps"]
     rows = (folder / "timeseries.csv").read_text().splitlines()
     assert len(rows) == stop["steps"] + 2                      # header, t = 0, the steps
     assert float(rows[-1].split(",")[0]) == pytest.approx(stop["time_s"])

@@ -411,7 +411,29 @@ class GuardedSlave(Fmi2Slave):
             out.append(_GET_DEFAULT[kind] if x is None else x)
         return out
 
+    def _fast_access(self):
+        """(getters of every Real variable, setters of the Real inputs) by value reference:
+        the per-step path of fmi2GetReal/fmi2SetReal, which needs none of the checks of
+        :meth:`_get`/:meth:`_set` (registered once, at instantiation)."""
+        fast = self.__dict__.get("_fast_real")
+        if fast is None or fast[2] != len(self.vars):
+            reals = [(vr, v) for vr, v in self.vars.items() if fmi_type(v) == "Real"]
+            fast = self._fast_real = (
+                {vr: v.getter for vr, v in reals},
+                {vr: v.setter for vr, v in reals
+                 if v.causality == Fmi2Causality.input and v.setter is not None},
+                len(self.vars))
+        return fast
+
     def set_real(self, vrs, values):
+        setters = self._fast_access()[1]
+        if all(vr in setters for vr in vrs):      # inputs: settable in every state
+            try:
+                for vr, value in zip(vrs, values):
+                    setters[vr](float(value))
+                return
+            except Exception:  # noqa: BLE001 - the checked path says what went wrong
+                pass
         self._set("fmi2SetReal", "Real", vrs, values)
 
     def set_integer(self, vrs, values):
@@ -424,7 +446,11 @@ class GuardedSlave(Fmi2Slave):
         self._set("fmi2SetString", "String", vrs, values)
 
     def get_real(self, vrs):
-        return self._get("fmi2GetReal", "Real", vrs)
+        getters = self._fast_access()[0]
+        try:
+            return [float(getters[vr]()) for vr in vrs]
+        except Exception:  # noqa: BLE001 - the checked path says what went wrong
+            return self._get("fmi2GetReal", "Real", vrs)
 
     def get_integer(self, vrs):
         return self._get("fmi2GetInteger", "Integer", vrs)
