@@ -42,10 +42,11 @@ def short_with_catenary(tmp_path, catenary_model):
     return p
 
 
-@pytest.mark.parametrize("catenary_model", ["nonlinear", "linear"])
+@pytest.mark.parametrize("catenary_model", ["nonlinear", "linear", "modal"])
 def test_implicit_fmu_coupling_equals_monolithic(tmp_path, catenary_model):
     """Tight tolerances: the iterative coupling through the FMUs reproduces the monolithic
-    solution of the same catenary model (the linear one: closed-form steps on both sides)."""
+    solution of the same catenary model (linear and modal: closed-form steps on both
+    sides)."""
     scenario = short_with_catenary(tmp_path, catenary_model)
     mono = run_monolithic(prepare(str(scenario)), None, progress=False)
     out = tmp_path / "implicit"
