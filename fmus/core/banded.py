@@ -251,13 +251,11 @@ class BandedCholesky:
             slots.move_to_end(j)
         return slot
 
-    def _column(self, j: int) -> np.ndarray:
-        """A^-1 e_j (a view of the kept column)."""
-        return self._store[self._slot(j)]
-
     def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere), into ``out`` if given."""
         x = np.zeros(self.n) if out is None else out
+        if len(dofs) > self.cache_size:      # a column would give up its row while in use
+            raise ValueError(f"{len(dofs)} entries: at most {self.cache_size} (cache_size)")
         slots = self._slot_buf[:len(dofs)]
         for i, j in enumerate(dofs.tolist() if isinstance(dofs, np.ndarray) else dofs):
             slots[i] = self._slot(int(j))
