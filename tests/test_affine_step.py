@@ -60,6 +60,24 @@ def test_closed_form_step_equals_newton_with_exact_slackening(line4):
     assert np.all(N[aff.committed] == 0.0) and np.all(N >= 0.0)
 
 
+def test_kept_products_follow_the_state(line4):
+    """The right-hand side comes from kept products [K d, K v, K a, M v, M a] advanced by
+    K Delta from the step's own equation: after 400 steps with droppers slackening they equal
+    the products formed from the state to round-off."""
+    from pantocosim.core import affine_hht
+    from pantocosim.core.affine_kernels import state_products
+
+    _, closed, _, aff = _pair(line4)
+    for n in range(400):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    assert aff.n_steps - aff._synced == 400 < affine_hht.RESYNC_STEPS    # never re-formed
+    P = np.zeros_like(aff._P)
+    state_products(aff._M, aff._K, aff.q, aff.form.q_ref, aff.v, aff.a, P,
+                   np.zeros(aff.form.n), np.zeros(aff.form.n))
+    for kept, formed in zip(aff._P, P):
+        assert np.max(np.abs(kept - formed)) < 1e-8 * np.max(np.abs(formed))
+
+
 def test_rollback_repeats_a_step_bitwise(line4):
     _, closed, _, aff = _pair(line4)
     for n in range(30):

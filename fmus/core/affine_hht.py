@@ -17,12 +17,13 @@ slack set:
 
 A_s = c_a M + c_f (c_v C + K) less the slack elements' rank-one terms (Woodbury on the kept
 factorization, :mod:`.lowrank`). Hence Delta = Delta_free + sum_k F_k w_k with
-w_k = c_f A_s^-1 n_k: a step is one sparse product, one solve with the factor kept for the
-run, and the response columns from cached unit-vector solves. Whoever supplies F_k (an FMU
-input, or a penalty contact solved on the small interface, :mod:`.condensed`) calls
-:meth:`AffineHHT.finish`; the slack set is checked at q_{n+1} and the step re-solved with the
-new set when it changed, so slackening is exact. The new f_{n+1} = (alpha f_n - M a_{n+1}) / c_f
-follows from (3.16) itself (formed in the next step's pass over the bands).
+w_k = c_f A_s^-1 n_k: a step is one solve with the factor kept for the run, the response
+columns from cached unit-vector solves, and one product with the sparse band of M (the
+right-hand side comes from kept products of the state, :mod:`.affine_kernels`). Whoever
+supplies F_k (an FMU input, or a penalty contact solved on the small interface,
+:mod:`.condensed`) calls :meth:`AffineHHT.finish`; the slack set is checked at q_{n+1} and the
+step re-solved with the new set when it changed, so slackening is exact. The new
+f_{n+1} = (alpha f_n - M a_{n+1}) / c_f follows from (3.16) itself (formed at the next step).
 """
 
 from __future__ import annotations
@@ -35,12 +36,16 @@ from typing import Any, Callable
 import numpy as np
 from numba import njit
 
+from . import affine_kernels as kern
 from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
+#: steps after which the kept products of the state are formed again from it
+#: (:mod:`.affine_kernels`: they carry the round-off of their updates)
+RESYNC_STEPS = 4096
 #: memory the unilateral elements' columns may take when solved at set-up (:meth:`prepare`)
 PREFILL_BYTES = 256 * 2**20
 #: labels of the states a step starts from (a rolled-back step reuses its free response);
@@ -98,68 +103,6 @@ class AffineForm:
 
 
 @njit(cache=True)
-def _predict(q, v, a, q_ref, h, beta, gamma, q_p, v_p, d_p):
-    """Newmark predictors (3.16)-(3.17) with a_{n+1} = 0, and d_p = q_p - q_ref."""
-    cq = (0.5 - beta) * h * h
-    cv = (1.0 - gamma) * h
-    for i in range(q.shape[0]):
-        q_p[i] = q[i] + h * v[i] + cq * a[i]
-        v_p[i] = v[i] + cv * a[i]
-        d_p[i] = q_p[i] - q_ref[i]
-
-
-@njit(cache=True, fastmath=True)
-def _free_rhs(M, K, ar, br, v_p, d_p, a, r0, f, alpha, c_f, pending, x1, x2, y, z, yb, zb,
-              out):
-    """One pass over the symmetric matrices M and K (:class:`~.banded.SparseBand` parts):
-    y = C v_p + K d_p (C = ar M + br K) and, when ``pending``, f <- (alpha f - M a) / c_f
-    (f_n of the step just taken, from (3.16)); then out = alpha f_n - c_f (y + r0)."""
-    Mm, Mo, Md, Mi, Mj, Mv = M
-    Km, Ko, Kd, Ki, Kj, Kv = K
-    n = Mm.shape[0]
-    for j in range(n):
-        x1[j] = ar * v_p[j]
-        x2[j] = br * v_p[j] + d_p[j]
-        y[j] = Mm[j] * x1[j] + Km[j] * x2[j]
-        z[j] = Mm[j] * a[j]
-        yb[j] = 0.0
-        zb[j] = 0.0
-    _band_terms(Ko, Kd, x2, y, yb)
-    _band_terms(Mo, Md, x1, y, yb)
-    _band_terms(Mo, Md, a, z, zb)
-    _coordinate_terms(Ki, Kj, Kv, x2, y)
-    _coordinate_terms(Mi, Mj, Mv, x1, y)
-    _coordinate_terms(Mi, Mj, Mv, a, z)
-    for j in range(n):
-        if pending:
-            f[j] = (alpha * f[j] - z[j] - zb[j]) / c_f
-        out[j] = alpha * f[j] - c_f * (y[j] + yb[j] + r0[j])
-
-
-@njit(cache=True, fastmath=True, inline="always")
-def _band_terms(offsets, diags, x, above, below):
-    """The dense off-diagonals of a symmetric product: above[j] += d_j x[j + k],
-    below[j + k] += d_j x[j] (apart, so each streaming loop vectorizes)."""
-    n = x.shape[0]
-    for r in range(offsets.shape[0]):
-        k = offsets[r]
-        d = diags[r]
-        x_, b_ = x[k:], below[k:]
-        for j in range(n - k):
-            above[j] += d[j] * x_[j]
-            b_[j] += d[j] * x[j]
-
-
-@njit(cache=True, inline="always")
-def _coordinate_terms(ci, cj, cv, x, out):
-    """The off-diagonal entries kept as coordinates, both triangles."""
-    for e in range(ci.shape[0]):
-        i, j, v = ci[e], cj[e], cv[e]
-        out[i] += v * x[j]
-        out[j] += v * x[i]
-
-
-@njit(cache=True)
 def _loaded(delta_free, W, F, d_p, delta, d_new):
     """delta = delta_free + sum_k F_k W_k and d_new = d_p + delta."""
     for i in range(delta.shape[0]):
@@ -171,15 +114,6 @@ def _loaded(delta_free, W, F, d_p, delta, d_new):
                 delta[i] += Fk * W[k, i]
     for i in range(delta.shape[0]):
         d_new[i] = d_p[i] + delta[i]
-
-
-@njit(cache=True)
-def _finish(q_p, v_p, delta, c_a, c_v, q, v, a):
-    for i in range(q.shape[0]):
-        d = delta[i]
-        q[i] = q_p[i] + d
-        v[i] = v_p[i] + c_v * d
-        a[i] = c_a * d
 
 
 class AffineHHT:
@@ -199,9 +133,16 @@ class AffineHHT:
         self.q, self.v, self.a, self.f = (np.zeros(n) for _ in range(4))
         self.q_p, self.v_p, self.d_p = (np.zeros(n) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(n) for _ in range(3))
-        #: M and K for the free-response products (empty band diagonals skipped)
+        #: M and K for the products (empty band diagonals skipped)
         self._M, self._K = (SparseBand.from_band(b).parts for b in (form.M_band, form.K_band))
-        self._work = np.zeros((6, n))             # x1, x2, y, z, yb, zb of _free_rhs
+        #: the kept products [K d, K v, K a, M v, M a] of the state (:mod:`.affine_kernels`)
+        self._P = np.zeros((5, n))
+        self._synced = 0                          # n_steps when P was last formed from q, v, a
+        #: the right-hand side solved with the slack terms, its load and rank-one terms
+        #: (``_corr``, kept zero between steps), work vectors
+        self._R, self._corr, self._MD, self._x, self._below, self._d_new = (
+            np.zeros(n) for _ in range(6))
+        self._R_used, self._removed = self._rhs, None
         #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
         #: formed in the next step's pass over the bands
         self._pending = False
@@ -229,6 +170,7 @@ class AffineHHT:
         self.f[:] = fm.forces(self.t, self.q, self.v, F0)
         self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
         self._h, self._pending = None, False
+        self._form_products()
         self._id, self._memo = _new_id(), None
 
     @property
@@ -239,6 +181,7 @@ class AffineHHT:
     def _coefficients(self, h: float):
         if h != self._h:
             self._coef = self.settings.newton_coefficients(h)
+            self._coef_arr = np.array(self._coef)
             self._cache = self.form.factor(*self._coef)
             self._h = h
         return self._coef
@@ -256,8 +199,13 @@ class AffineHHT:
         if n_el * self.form.n * 8 <= PREFILL_BYTES:
             self._cache.prefill()
         rows = np.arange(min(n_el, 2), dtype=np.int64)
-        LowRankSolve(self._cache, rows, np.ones(rows.size)).solve_into(self._rhs,
-                                                                       self._work[0])
+        LowRankSolve(self._cache, rows, np.ones(rows.size)).solve_into(self._rhs, self._x)
+
+    def _form_products(self) -> None:
+        """The kept products from the state itself."""
+        kern.state_products(self._M, self._K, self.q, self.form.q_ref, self.v, self.a,
+                            self._P, self._x, self._below)
+        self._synced = self.n_steps
 
     # ------------------------------------------------------------------ one step
     def begin(self, h: float, loads) -> None:
@@ -275,10 +223,11 @@ class AffineHHT:
             self._pending = False
             self.passes = 1
             return
-        _predict(self.q, self.v, self.a, fm.q_ref, h, s.beta, s.gamma, self.q_p, self.v_p,
-                 self.d_p)
-        _free_rhs(self._M, self._K, fm.alpha_r, fm.beta_r, self.v_p, self.d_p, self.a,
-                  fm.r0, self.f, s.alpha, c_f, self._pending, *self._work, self._rhs)
+        if self.n_steps - self._synced >= RESYNC_STEPS:
+            self._form_products()
+        kern.predict_rhs(self.q, self.v, self.a, fm.q_ref, self._P, fm.r0, self.f, h, s.beta,
+                         s.gamma, fm.alpha_r, fm.beta_r, s.alpha, c_f, self._pending,
+                         self.q_p, self.v_p, self.d_p, self._rhs)
         self._pending = False
         un = fm.unilateral
         self._solve(un.slack(un.axial(self.d_p)))
@@ -301,7 +250,7 @@ class AffineHHT:
         if slack.any() or self.committed.any():
             rows, s = un.removed_stiffness(slack, self.committed, c_v, c_f)
         if len(rows):
-            rhs = self.delta_free                   # solved in place
+            rhs = self._R
             rhs[:] = self._rhs
             if slack.any():
                 un.force(c_f * un.axial(self.d_p), slack, out=rhs)
@@ -309,10 +258,12 @@ class AffineHHT:
                 un.force(c_f * un.beta * un.ka * un.vectors.dots(self.v_p), self.committed,
                          out=rhs)
             solve = self._lowrank(rows, s)
-            solve.solve_into(rhs, rhs)
+            solve.solve_into(rhs, self.delta_free)
+            self._R_used, self._removed = rhs, (rows, s)
         else:
             solve = self._cache.solve
             solve.solve_into(self._rhs, self.delta_free)
+            self._R_used, self._removed = self._rhs, None
         m = len(self._loads)
         if self.W.shape[0] != m:
             self.W = np.zeros((m, self.form.n))
@@ -324,7 +275,7 @@ class AffineHHT:
     def finish(self, F) -> bool:
         """Take the step with the loads F (one per load vector), or re-solve for the slack
         set at the resulting q_{n+1} and return False."""
-        delta, d_new = self._delta, self._work[0]
+        delta, d_new = self._delta, self._d_new
         F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
         if F.size != self.W.shape[0]:
             raise ValueError(f"{F.size} loads given for {self.W.shape[0]} load vectors")
@@ -336,8 +287,7 @@ class AffineHHT:
                                self.n_steps + 1)
             self._solve(slack)
             return False
-        c_a, c_v, c_f = self._coef
-        _finish(self.q_p, self.v_p, delta, c_a, c_v, self.q, self.v, self.a)
+        self._advance(delta, F.reshape(-1))
         self._pending = True
         self.committed = slack
         self.t += self._h
@@ -345,13 +295,35 @@ class AffineHHT:
         self._id = _new_id()
         return True
 
+    def _advance(self, delta, F) -> None:
+        """q, v, a of the step and the kept products, with A Delta = the right-hand side
+        solved + the loads + the slack elements' rank-one terms (A_s = A less them)."""
+        c_f = self._coef[2]
+        corr = self._corr
+        for (dofs, w), Fk in zip(self._loads, F):
+            kern.scatter_add(dofs, w, c_f * Fk, corr)
+        if self._removed is not None:
+            rows, s = self._removed
+            vec = self.form.unilateral.vectors
+            vec.combine(s * vec.dots(delta, rows), rows, out=corr)
+        fm, st = self.form, self.settings
+        kern.advance(self._M, self.q_p, self.v_p, delta, self._R_used, corr, self._h,
+                     st.beta, st.gamma, self._coef_arr, fm.alpha_r, fm.beta_r,
+                     self.q, self.v, self.a, self._P, self._MD, self._below)
+
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        return {**step_state(self), "pending": self._pending}
+        return {**step_state(self), "pending": self._pending, "products": self._P.copy(),
+                "synced": self._synced}
 
     def set_state(self, state: dict) -> None:
         restore_step_state(self, state)
         self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
+        if "products" in state:
+            self._P[:] = state["products"]
+            self._synced = int(state["synced"])
+        else:
+            self._form_products()
 
 
 class ForcedAffineIntegrator:
