@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
-from numba import njit
 
 from . import affine_kernels as kern
 from .banded import SparseBand
@@ -94,26 +93,13 @@ class AffineForm:
     q_ref: np.ndarray
     r0: np.ndarray              # f_rest at q_ref, v = 0, no load (round-off of the statics)
     #: the unilateral elements: axial(d), slack(N), force(coef, mask),
-    #: removed_stiffness(slack, damped, c_v, c_f), beta, ka, N0 (:mod:`..catenary.linear_droppers`)
+    #: removed_stiffness(slack, damped, c_v, c_f), step_terms(N, v, slack, damped, c_v, c_f,
+    #: out), vectors, beta, ka, N0 (:mod:`..catenary.linear_droppers`)
     unilateral: Any
     #: (c_a, c_v, c_f) -> ColumnCache of the kept factorization of c_a M + c_f (c_v C + K)
     factor: Callable
     #: (t, q, v, F) -> f_rest, with the committed slack set at q (initial acceleration)
     forces: Callable
-
-
-@njit(cache=True)
-def _loaded(delta_free, W, F, d_p, delta, d_new):
-    """delta = delta_free + sum_k F_k W_k and d_new = d_p + delta."""
-    for i in range(delta.shape[0]):
-        delta[i] = delta_free[i]
-    for k in range(F.shape[0]):
-        Fk = F[k]
-        if Fk != 0.0:
-            for i in range(delta.shape[0]):
-                delta[i] += Fk * W[k, i]
-    for i in range(delta.shape[0]):
-        d_new[i] = d_p[i] + delta[i]
 
 
 class AffineHHT:
@@ -140,8 +126,10 @@ class AffineHHT:
         self._synced = 0                          # n_steps when P was last formed from q, v, a
         #: the right-hand side solved with the slack terms, its load and rank-one terms
         #: (``_corr``, kept zero between steps), work vectors
-        self._R, self._corr, self._MD, self._x, self._below, self._d_new = (
-            np.zeros(n) for _ in range(6))
+        self._R, self._corr, self._MD, self._x, self._below = (np.zeros(n) for _ in range(5))
+        #: axial forces at the predictor, b . Delta_free and b . w_k of the elements
+        self._N_p = self._b_free = np.zeros(len(form.unilateral.ka))
+        self._b_W = np.zeros((0, len(form.unilateral.ka)))
         self._R_used, self._removed = self._rhs, None
         #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
         #: formed in the next step's pass over the bands
@@ -230,7 +218,8 @@ class AffineHHT:
                          self.q_p, self.v_p, self.d_p, self._rhs)
         self._pending = False
         un = fm.unilateral
-        self._solve(un.slack(un.axial(self.d_p)))
+        self._N_p = un.axial(self.d_p)
+        self._solve(un.slack(self._N_p))
         if self.keep_free_response:
             self._memo = ((self._id, h), self.f.copy())
 
@@ -248,15 +237,10 @@ class AffineHHT:
         c_a, c_v, c_f = self._coef
         rows = ()
         if slack.any() or self.committed.any():
-            rows, s = un.removed_stiffness(slack, self.committed, c_v, c_f)
-        if len(rows):
             rhs = self._R
             rhs[:] = self._rhs
-            if slack.any():
-                un.force(c_f * un.axial(self.d_p), slack, out=rhs)
-            if self.committed.any():
-                un.force(c_f * un.beta * un.ka * un.vectors.dots(self.v_p), self.committed,
-                         out=rhs)
+            rows, s = un.step_terms(self._N_p, self.v_p, slack, self.committed, c_v, c_f, rhs)
+        if len(rows):
             solve = self._lowrank(rows, s)
             solve.solve_into(rhs, self.delta_free)
             self._R_used, self._removed = rhs, (rows, s)
@@ -269,25 +253,28 @@ class AffineHHT:
             self.W = np.zeros((m, self.form.n))
         for k, (dofs, w) in enumerate(self._loads):
             solve.solve_sparse(dofs, c_f * np.asarray(w, dtype=float), out=self.W[k])
+        vec = un.vectors                        # the elements' elongations b . delta
+        self._b_free = vec.dots(self.delta_free)
+        self._b_W = np.array([vec.dots(w) for w in self.W]).reshape(m, len(un.ka))
         self._slack = slack
         self.passes += 1
 
     def finish(self, F) -> bool:
         """Take the step with the loads F (one per load vector), or re-solve for the slack
         set at the resulting q_{n+1} and return False."""
-        delta, d_new = self._delta, self._d_new
         F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
         if F.size != self.W.shape[0]:
             raise ValueError(f"{F.size} loads given for {self.W.shape[0]} load vectors")
-        _loaded(self.delta_free, self.W, F.reshape(-1), self.d_p, delta, d_new)
+        F = F.reshape(-1)
+        b_delta = self._b_free + F @ self._b_W           # b . Delta of every element
         un = self.form.unilateral
-        slack = un.slack(un.axial(d_new))
+        slack = un.slack(self._N_p + un.ka * b_delta)
         if not np.array_equal(slack, self._slack):
             check_slack_passes("linear structure", self.passes, self.t + self._h,
                                self.n_steps + 1)
             self._solve(slack)
             return False
-        self._advance(delta, F.reshape(-1))
+        self._advance(F, b_delta)
         self._pending = True
         self.committed = slack
         self.t += self._h
@@ -295,21 +282,22 @@ class AffineHHT:
         self._id = _new_id()
         return True
 
-    def _advance(self, delta, F) -> None:
-        """q, v, a of the step and the kept products, with A Delta = the right-hand side
-        solved + the loads + the slack elements' rank-one terms (A_s = A less them)."""
+    def _advance(self, F, b_delta) -> None:
+        """q, v, a of the step (Delta = Delta_free + sum_k F_k w_k) and the kept products,
+        with A Delta = the right-hand side solved + the loads + the slack elements' rank-one
+        terms (A_s = A less them; ``b_delta``: their b . Delta)."""
         c_f = self._coef[2]
         corr = self._corr
         for (dofs, w), Fk in zip(self._loads, F):
             kern.scatter_add(dofs, w, c_f * Fk, corr)
         if self._removed is not None:
             rows, s = self._removed
-            vec = self.form.unilateral.vectors
-            vec.combine(s * vec.dots(delta, rows), rows, out=corr)
+            self.form.unilateral.vectors.combine(s * b_delta[rows], rows, out=corr)
         fm, st = self.form, self.settings
-        kern.advance(self._M, self.q_p, self.v_p, delta, self._R_used, corr, self._h,
-                     st.beta, st.gamma, self._coef_arr, fm.alpha_r, fm.beta_r,
-                     self.q, self.v, self.a, self._P, self._MD, self._below)
+        kern.advance(self._M, self.q_p, self.v_p, self.delta_free, self.W, F, self._delta,
+                     self._R_used, corr, self._h, st.beta, st.gamma, self._coef_arr,
+                     fm.alpha_r, fm.beta_r, self.q, self.v, self.a, self._P, self._MD,
+                     self._below)
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:

@@ -95,11 +95,17 @@ def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f, pe
 
 
 @njit(cache=True, fastmath=True)
-def advance(M, q_p, v_p, delta, R, corr, h, beta, gamma, coef, ar, br, q, v, a, P,
-            MD, below):
-    """Take the step: q, v, a from q_p, v_p and Delta, and the kept products advanced by
-    M Delta and K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
+def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, beta, gamma, coef, ar, br,
+            q, v, a, P, MD, below):
+    """Take the step: Delta = Delta_free + sum_k F_k W_k, q, v, a from q_p, v_p and Delta,
+    and the kept products advanced by M Delta and
+    K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
     A Delta = R + corr (``corr`` is zeroed on the way)."""
+    for i in range(delta.shape[0]):
+        delta[i] = delta_free[i]
+    for k in range(F.shape[0]):
+        for i in range(delta.shape[0]):
+            delta[i] += F[k] * W[k, i]
     c_a, c_v, c_f = coef[0], coef[1], coef[2]
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h

@@ -198,7 +198,8 @@ class BandedCholesky:
         self._slots: OrderedDict[int, int] = OrderedDict()
         self._store = np.zeros((self.cache_size, self.n))
         self._span = np.zeros((self.cache_size, 2), dtype=np.int64)
-        self._slot_buf = np.zeros(self.cache_size, dtype=np.int64)
+        self._solved = 0                  # columns solved so far (a row may have changed)
+        self._last_slots = None           # ((dofs, _solved), rows) of the last solve_sparse
 
     @classmethod
     def factor(cls, ab: np.ndarray) -> "BandedCholesky | None":
@@ -244,6 +245,7 @@ class BandedCholesky:
             col[:] = 0.0
             col[j] = 1.0
             local_band_solve(self.LT, col, j, j, LOCAL_RTOL)
+            self._solved += 1
             nz = np.flatnonzero(col)
             self._span[slot] = (nz[0], nz[-1] + 1) if nz.size else (0, 0)
             slots[j] = slot
@@ -254,11 +256,21 @@ class BandedCholesky:
     def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
         """A^-1 b for b with ``values`` at ``dofs`` (zero elsewhere), into ``out`` if given."""
         x = np.zeros(self.n) if out is None else out
-        if len(dofs) > self.cache_size:      # a column would give up its row while in use
-            raise ValueError(f"{len(dofs)} entries: at most {self.cache_size} (cache_size)")
-        slots = self._slot_buf[:len(dofs)]
-        for i, j in enumerate(dofs.tolist() if isinstance(dofs, np.ndarray) else dofs):
-            slots[i] = self._slot(int(j))
-        _sum_columns(self._store, self._span, slots,
+        _sum_columns(self._store, self._span, self._slots_of(dofs),
                      np.asarray(values, dtype=float), x)
         return x
+
+    def _slots_of(self, dofs) -> np.ndarray:
+        """The rows of :attr:`_store` of ``dofs``' columns. The same dofs as the last call,
+        with no column solved since, keep their rows (a pantograph stays on an element for
+        many steps)."""
+        key = dofs.tobytes() if isinstance(dofs, np.ndarray) else tuple(dofs)
+        if self._last_slots is not None and self._last_slots[0] == (key, self._solved):
+            return self._last_slots[1]
+        if len(dofs) > self.cache_size:      # a column would give up its row while in use
+            raise ValueError(f"{len(dofs)} entries: at most {self.cache_size} (cache_size)")
+        slots = np.empty(len(dofs), dtype=np.int64)
+        for i, j in enumerate(dofs.tolist() if isinstance(dofs, np.ndarray) else dofs):
+            slots[i] = self._slot(int(j))
+        self._last_slots = ((key, self._solved), slots)
+        return slots
