@@ -90,6 +90,22 @@ def test_rollback_repeats_a_step_bitwise(line4):
     assert np.array_equal(aff.q, first)
 
 
+def test_an_older_state_comes_back_with_its_products(line4):
+    """Restoring a state saved several steps back (its kept products are no longer in a
+    buffer, they come from the saved state): the steps repeat bit for bit."""
+    _, closed, _, aff = _pair(line4)
+    for n in range(30):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    saved = aff.get_state()
+    for n in range(30, 40):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    first = aff.q.copy()
+    aff.set_state(saved)
+    for n in range(30, 40):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    assert np.array_equal(aff.q, first)
+
+
 @pytest.mark.parametrize("pantograph", ["en50318-2mass", "dsa380-rigid"])
 def test_condensed_monolithic_equals_the_assembled_newton_solution(pantograph):
     from pantocosim.master.run import prepare

@@ -122,8 +122,12 @@ class AffineHHT:
         #: M and K for the products (empty band diagonals skipped)
         self._M, self._K = (SparseBand.from_band(b).parts for b in (form.M_band, form.K_band))
         #: the kept products [K d, K v, K a, M v, M a] of the state (:mod:`.affine_kernels`)
-        self._P = np.zeros((5, n))
-        self._synced = 0                          # n_steps when P was last formed from q, v, a
+        #: and of the state before the last step (a step writes the other buffer, so a
+        #: rollback of it swaps them back)
+        self._P, self._P_prev = np.zeros((5, n)), np.zeros((5, n))
+        self._prev_id = None
+        #: n_steps when each buffer was last formed from the state itself
+        self._synced = self._prev_synced = 0
         #: the right-hand side solved with the slack terms, its load and rank-one terms
         #: (``_corr``, kept zero between steps), work vectors
         self._R, self._corr, self._MD, self._x, self._below = (np.zeros(n) for _ in range(5))
@@ -159,6 +163,7 @@ class AffineHHT:
         self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
         self._h, self._pending = None, False
         self._form_products()
+        self._prev_id = None
         self._id, self._memo = _new_id(), None
 
     @property
@@ -275,12 +280,17 @@ class AffineHHT:
             self._solve(slack)
             return False
         self._advance(F, b_delta)
+        self._swap_products()
         self._pending = True
         self.committed = slack
         self.t += self._h
         self.n_steps += 1
-        self._id = _new_id()
+        self._prev_id, self._id = self._id, _new_id()
         return True
+
+    def _swap_products(self) -> None:
+        self._P, self._P_prev = self._P_prev, self._P
+        self._synced, self._prev_synced = self._prev_synced, self._synced
 
     def _advance(self, F, b_delta) -> None:
         """q, v, a of the step (Delta = Delta_free + sum_k F_k w_k) and the kept products,
@@ -296,8 +306,9 @@ class AffineHHT:
         fm, st = self.form, self.settings
         kern.advance(self._M, self.q_p, self.v_p, self.delta_free, self.W, F, self._delta,
                      self._R_used, corr, self._h, st.beta, st.gamma, self._coef_arr,
-                     fm.alpha_r, fm.beta_r, self.q, self.v, self.a, self._P, self._MD,
-                     self._below)
+                     fm.alpha_r, fm.beta_r, self.q, self.v, self.a, self._P, self._P_prev,
+                     self._MD, self._below)
+        self._prev_synced = self._synced
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
@@ -305,13 +316,21 @@ class AffineHHT:
                 "synced": self._synced}
 
     def set_state(self, state: dict) -> None:
+        """Put back a :meth:`get_state` (with its kept products, so the steps that follow
+        repeat bit for bit); those of the current or the previous state are still in their
+        buffers."""
+        current, label = self._id, state["id"]
         restore_step_state(self, state)
         self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
-        if "products" in state:
+        if label == current:
+            return
+        if label == self._prev_id:
+            self._swap_products()
+            self._prev_id = current
+        else:
             self._P[:] = state["products"]
             self._synced = int(state["synced"])
-        else:
-            self._form_products()
+            self._prev_id = None
 
 
 class ForcedAffineIntegrator:

@@ -96,9 +96,9 @@ def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f, pe
 
 @njit(cache=True, fastmath=True)
 def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, beta, gamma, coef, ar, br,
-            q, v, a, P, MD, below):
+            q, v, a, P, P_next, MD, below):
     """Take the step: Delta = Delta_free + sum_k F_k W_k, q, v, a from q_p, v_p and Delta,
-    and the kept products advanced by M Delta and
+    and the kept products P advanced into P_next by M Delta and
     K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
     A Delta = R + corr (``corr`` is zeroed on the way)."""
     for i in range(delta.shape[0]):
@@ -113,14 +113,15 @@ def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, beta, gamma, coef,
     c_K = c_f * (1.0 + c_v * br)
     sym_product(M, delta, MD, below)
     Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
+    Kd1, Kv1, Ka1, Mv1, Ma1 = P_next[KD], P_next[KV], P_next[KA], P_next[MV], P_next[MA]
     for i in range(q.shape[0]):
         KDi = (R[i] + corr[i] - c_M * MD[i]) / c_K
         corr[i] = 0.0
-        Kd[i] += h * Kv[i] + cq * Ka[i] + KDi
-        Kv[i] += cv * Ka[i] + c_v * KDi
-        Ka[i] = c_a * KDi
-        Mv[i] += cv * Ma[i] + c_v * MD[i]
-        Ma[i] = c_a * MD[i]
+        Kd1[i] = Kd[i] + h * Kv[i] + cq * Ka[i] + KDi
+        Kv1[i] = Kv[i] + cv * Ka[i] + c_v * KDi
+        Ka1[i] = c_a * KDi
+        Mv1[i] = Mv[i] + cv * Ma[i] + c_v * MD[i]
+        Ma1[i] = c_a * MD[i]
         d = delta[i]
         q[i] = q_p[i] + d
         v[i] = v_p[i] + c_v * d
