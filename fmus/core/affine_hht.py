@@ -23,7 +23,7 @@ right-hand side comes from kept products of the state, :mod:`.affine_kernels`). 
 supplies F_k (an FMU input, or a penalty contact solved on the small interface,
 :mod:`.condensed`) calls :meth:`AffineHHT.finish`; the slack set is checked at q_{n+1} and the
 step re-solved with the new set when it changed, so slackening is exact. The new
-f_{n+1} = (alpha f_n - M a_{n+1}) / c_f follows from (3.16) itself (formed at the next step).
+f_{n+1} = (alpha f_n - M a_{n+1}) / c_f follows from (3.16) itself (with M Delta).
 """
 
 from __future__ import annotations
@@ -135,9 +135,6 @@ class AffineHHT:
         self._N_p = self._b_free = np.zeros(len(form.unilateral.ka))
         self._b_W = np.zeros((0, len(form.unilateral.ka)))
         self._R_used, self._removed = self._rhs, None
-        #: f holds f_n of the step before the last one: f_{n+1} = (alpha f - M a) / c_f is
-        #: formed in the next step's pass over the bands
-        self._pending = False
         self.committed = np.zeros(len(form.unilateral.ka), dtype=bool)
         self.W = np.zeros((0, n))
         self._h, self._cache, self._coef = None, None, None
@@ -145,8 +142,8 @@ class AffineHHT:
         self._loads, self._slack = (), None
         self.passes = 0
         self._id = _new_id()
-        #: (state id, h, f_n formed by the pass): a step redone from the same state
-        #: (co-simulation rollback) skips the pass and the solve
+        #: (state id, h) of the last step begun: a step redone from the same state
+        #: (co-simulation rollback) skips the prediction and the solve
         self._memo = None
 
     # ------------------------------------------------------------------ set-up
@@ -161,7 +158,7 @@ class AffineHHT:
         self.committed = un.slack(un.axial(self.q - fm.q_ref))
         self.f[:] = fm.forces(self.t, self.q, self.v, F0)
         self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
-        self._h, self._pending = None, False
+        self._h = None
         self._form_products()
         self._prev_id = None
         self._id, self._memo = _new_id(), None
@@ -212,21 +209,18 @@ class AffineHHT:
             # the step is redone from the state it was begun from (a co-simulation
             # rollback): the free response, W and the slack set are still in their buffers
             # (only a begin from another state overwrites them)
-            self.f[:] = self._memo[1]
-            self._pending = False
             self.passes = 1
             return
         if self.n_steps - self._synced >= RESYNC_STEPS:
             self._form_products()
         kern.predict_rhs(self.q, self.v, self.a, fm.q_ref, self._P, fm.r0, self.f, h, s.beta,
-                         s.gamma, fm.alpha_r, fm.beta_r, s.alpha, c_f, self._pending,
-                         self.q_p, self.v_p, self.d_p, self._rhs)
-        self._pending = False
+                         s.gamma, fm.alpha_r, fm.beta_r, s.alpha, c_f, self.q_p, self.v_p,
+                         self.d_p, self._rhs)
         un = fm.unilateral
         self._N_p = un.axial(self.d_p)
         self._solve(un.slack(self._N_p))
         if self.keep_free_response:
-            self._memo = ((self._id, h), self.f.copy())
+            self._memo = ((self._id, h),)
 
     def _lowrank(self, rows, s) -> LowRankSolve:
         """The Woodbury solve of a slack set (kept while the set and the step size last: a
@@ -281,7 +275,6 @@ class AffineHHT:
             return False
         self._advance(F, b_delta)
         self._swap_products()
-        self._pending = True
         self.committed = slack
         self.t += self._h
         self.n_steps += 1
@@ -305,14 +298,14 @@ class AffineHHT:
             self.form.unilateral.vectors.combine(s * b_delta[rows], rows, out=corr)
         fm, st = self.form, self.settings
         kern.advance(self._M, self.q_p, self.v_p, self.delta_free, self.W, F, self._delta,
-                     self._R_used, corr, self._h, st.beta, st.gamma, self._coef_arr,
-                     fm.alpha_r, fm.beta_r, self.q, self.v, self.a, self._P, self._P_prev,
+                     self._R_used, corr, self._h, st.alpha, st.beta, st.gamma,
+                     self._coef_arr, fm.alpha_r, fm.beta_r, self.f, self.q, self.v, self.a, self._P, self._P_prev,
                      self._MD, self._below)
         self._prev_synced = self._synced
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        return {**step_state(self), "pending": self._pending, "products": self._P.copy(),
+        return {**step_state(self), "products": self._P.copy(),
                 "synced": self._synced}
 
     def set_state(self, state: dict) -> None:
@@ -321,7 +314,6 @@ class AffineHHT:
         buffers."""
         current, label = self._id, state["id"]
         restore_step_state(self, state)
-        self._pending = bool(state["pending"])      # c_f = 1 + alpha: any step size
         if label == current:
             return
         if label == self._prev_id:

@@ -2,7 +2,7 @@
 products of the state, and their update after the step.
 
 The HHT equation (3.16) of a linear structure needs C v_p + K d_p at the Newmark predictors
-(3.16)-(3.17) and M a_n for f_n. With C = ar M + br K (Rayleigh, (3.1)) these are sums of
+(3.16)-(3.17), and M a_{n+1} for f_{n+1}. With C = ar M + br K (Rayleigh, (3.1)) these are sums of
 the kept products P = [K d, K v, K a, M v, M a] of the state, so the right-hand side needs no
 pass over K. After the step (q_{n+1} = q_p + Delta, v = v_p + c_v Delta, a = c_a Delta) the
 products advance by K Delta and M Delta; M Delta is one pass over the sparse band of M, and
@@ -74,11 +74,10 @@ def state_products(M, K, q, q_ref, v, a, P, x, below):
 
 
 @njit(cache=True, fastmath=True)
-def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f, pending,
+def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f,
                 q_p, v_p, d_p, out):
     """Newmark predictors (3.16)-(3.17) with a_{n+1} = 0, d_p = q_p - q_ref, and
-    out = alpha f_n - c_f (C v_p + K d_p + r0) from the kept products; when ``pending``,
-    f <- (alpha f - M a) / c_f first (f_n of the step just taken, from (3.16))."""
+    out = alpha f_n - c_f (C v_p + K d_p + r0) from the kept products."""
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h
     Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
@@ -89,18 +88,17 @@ def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f, pe
         Kv_p = Kv[i] + cv * Ka[i]
         y = (ar * (Mv[i] + cv * Ma[i]) + br * Kv_p
              + Kd[i] + h * Kv[i] + cq * Ka[i])
-        if pending:
-            f[i] = (alpha * f[i] - Ma[i]) / c_f
         out[i] = alpha * f[i] - c_f * (y + r0[i])
 
 
 @njit(cache=True, fastmath=True)
-def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, beta, gamma, coef, ar, br,
-            q, v, a, P, P_next, MD, below):
+def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, alpha, beta, gamma, coef, ar,
+            br, f, q, v, a, P, P_next, MD, below):
     """Take the step: Delta = Delta_free + sum_k F_k W_k, q, v, a from q_p, v_p and Delta,
     and the kept products P advanced into P_next by M Delta and
     K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
-    A Delta = R + corr (``corr`` is zeroed on the way)."""
+    A Delta = R + corr (``corr`` is zeroed on the way); f_{n+1} = (alpha f_n - M a_{n+1}) / c_f
+    from (3.16) itself."""
     for i in range(delta.shape[0]):
         delta[i] = delta_free[i]
     for k in range(F.shape[0]):
@@ -110,18 +108,20 @@ def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, beta, gamma, coef,
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h
     c_M = c_a + c_f * c_v * ar
-    c_K = c_f * (1.0 + c_v * br)
+    inv_K = 1.0 / (c_f * (1.0 + c_v * br))
+    inv_f = 1.0 / c_f
     sym_product(M, delta, MD, below)
     Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
     Kd1, Kv1, Ka1, Mv1, Ma1 = P_next[KD], P_next[KV], P_next[KA], P_next[MV], P_next[MA]
     for i in range(q.shape[0]):
-        KDi = (R[i] + corr[i] - c_M * MD[i]) / c_K
+        KDi = (R[i] + corr[i] - c_M * MD[i]) * inv_K
         corr[i] = 0.0
         Kd1[i] = Kd[i] + h * Kv[i] + cq * Ka[i] + KDi
         Kv1[i] = Kv[i] + cv * Ka[i] + c_v * KDi
         Ka1[i] = c_a * KDi
         Mv1[i] = Mv[i] + cv * Ma[i] + c_v * MD[i]
         Ma1[i] = c_a * MD[i]
+        f[i] = (alpha * f[i] - Ma1[i]) * inv_f
         d = delta[i]
         q[i] = q_p[i] + d
         v[i] = v_p[i] + c_v * d
