@@ -331,14 +331,14 @@ class _ModalSolve:
         d[m:] = c_f * model.kbar * (1.0 + c_v * model.linear.beta_r) if c_f else 1.0
         self.inv_diag = 1.0 / d
         self.Ts = np.ascontiguousarray(model.T[rows, :k])        # (ns, K); xi: zero
-        self.U = np.ascontiguousarray((self.Ts * self.inv_diag).T)  # A0^-1 Ts^T
-        self.small_inv = (np.linalg.inv(np.eye(rows.size) - s[:, None] * (self.Ts @ self.U))
+        self.UT = self.Ts * self.inv_diag                        # (A0^-1 Ts^T)^T
+        self.small_inv = (np.linalg.inv(np.eye(rows.size) - s[:, None] * (self.Ts @ self.UT.T))
                           if rows.size else np.zeros((0, 0)))
         self.s = np.ascontiguousarray(s, dtype=float)
 
     def __call__(self, r, out=None):
         r = np.ascontiguousarray(r, dtype=float)
         out = np.empty_like(r) if out is None else out
-        _k.diag_woodbury(r, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
+        _k.diag_woodbury(r, 1.0, self.inv_diag, self.K, self.model._g.G, self.c[2], self.UT,
                          self.Ts, self.small_inv, self.s, out)
         return out

@@ -14,6 +14,14 @@ committed ones' damping share): diagonal plus a small Woodbury correction, nothi
 factorize. Delta = Delta_free + sum_k F_k w_k; the slack set is checked once at y_{n+1} (the
 previous step's set is the first guess) and the step re-solved when it changed, so
 slackening stays exact. f_{n+1} = (alpha f_n - f_inertia(a_{n+1})) / c_f follows from (3.16).
+
+Per step: one kernel for the predictor and rhs, one for delta_free and W (the Woodbury pieces
+kept per pair of slack and committed sets), one for the check and the end of the step. The
+check does not form T y[:K] (droppers x coordinates, the bulk of a step) each time: a kept
+reference and a bound of the droppers' drift from it settle most droppers; the others take
+their row, in single precision with a bound of its error (double precision when that is too
+close); every few steps every row and a new reference. The set is the one of the
+double-precision product, to round-off.
 """
 
 from __future__ import annotations
@@ -22,6 +30,10 @@ import numpy as np
 
 from ..core.affine_hht import _new_id, check_slack_passes, restore_step_state, step_state
 from . import modal_kernels as _k
+from .modal import _ModalSolve
+
+#: slack sets whose Woodbury pieces are kept (first in, first out)
+KEPT_SOLVES = 64
 
 
 class ModalHHT:
@@ -39,14 +51,21 @@ class ModalHHT:
         self.q, self.v, self.a, self.f = (np.zeros(N) for _ in range(4))
         self.q_p, self.v_p, self._zero = (np.zeros(N) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(N) for _ in range(3))
-        self._rhs2, self._sf = np.zeros(N), np.zeros(N)
-        self.committed = np.zeros(len(model.droppers), dtype=bool)
-        self._y, self._e = np.zeros(N), np.zeros(len(model.droppers))
-        self._slack_buf = np.zeros(len(model.droppers), dtype=bool)
-        self._slack = np.zeros(len(model.droppers), dtype=bool)
-        self._F = np.zeros(0)
+        self._r, self._sf = np.zeros(N), np.zeros(N)
+        nd = len(model.droppers)
+        self.committed = np.zeros(nd, dtype=bool)
+        self._slack_buf = np.zeros(nd, dtype=bool)
+        self._slack = np.zeros(nd, dtype=bool)
+        self._screen = _screen_tables(model)
+        ref = np.zeros((3, nd))
+        ref[0] = np.nan                     # no reference yet: the first check takes every row
+        nb = self._screen[2].shape[1]
+        self._screen_work = (np.zeros(self.K), ref, np.zeros((2, nb)),
+                             np.zeros(self.K, dtype=np.float32))
         self.W = np.zeros((0, N))
+        self._L = np.zeros((0, N))
         self._h, self._coef = None, None
+        self._solves = {}
         self._loads = []
         self.passes = 0
         self._id = _new_id()
@@ -78,12 +97,13 @@ class ModalHHT:
         if h != self._h:
             self._coef = s.newton_coefficients(h)
             self._h = h
-        self._loads = list(loads)
+            self._solves.clear()
+        self._loads = loads = list(loads)
         self.passes = 0
         memo = self._memo
         if memo is not None and memo[0] == (self._id, h):
             self.q_p[:], self.v_p[:], self._rhs[:] = memo[1]
-            self.model.geometry(self.t + h)
+            self._load_rows(loads, self.model.geometry(self.t + h))
             self._solve(self.committed)
             return
         c_a, c_v, c_f = self._coef
@@ -94,56 +114,63 @@ class ModalHHT:
                        model.m, model.nz, g.Ginv, self.q_p, self.v_p, self._rhs)
         if self.keep_free_response:
             self._memo = ((self._id, h), (self.q_p.copy(), self.v_p.copy(), self._rhs.copy()))
+        self._load_rows(loads, g)
         self._solve(self.committed)
+
+    def _load_rows(self, loads, g) -> None:
+        """The loads' weights as rows on y (:attr:`_L`): the model's own contact points
+        are the geometry's rows themselves."""
+        own, pts = self.model.contact_dofs, g.points
+        if len(loads) == len(pts) and all(d is own and w is p.weights
+                                          for (d, w), p in zip(loads, pts)):
+            self._L = g.Wc
+        else:
+            self._L = L = np.zeros((len(loads), self.N))
+            for k, (dofs, w) in enumerate(loads):
+                L[k, dofs] = w
+        if self.W.shape[0] != len(loads):
+            self.W = np.zeros((len(loads), self.N))
+
+    def _woodbury(self, slack: np.ndarray) -> _ModalSolve:
+        """The solve with the step's Newton matrix less the rank-one rows of ``slack`` and
+        the committed set (kept per pair of sets)."""
+        key = slack.tobytes() + self.committed.tobytes()
+        ws = self._solves.get(key)
+        if ws is None:
+            c_a, c_v, c_f = self._coef
+            rows, s = self.model.droppers.removed_stiffness(slack, self.committed, c_v, c_f)
+            ws = _ModalSolve(self.model, c_a, c_v, c_f, rows, s)
+            if len(self._solves) >= KEPT_SOLVES:
+                del self._solves[next(iter(self._solves))]
+            self._solves[key] = ws
+        return ws
 
     def _solve(self, slack: np.ndarray) -> None:
         """delta_free and W for the slack set ``slack``."""
-        model = self.model
-        c_a, c_v, c_f = self._coef
-        rhs = self._rhs
-        if slack.any() or self.committed.any():
-            dr = model.droppers
-            _k.slack_forces(model.T_K, dr.N0, dr.ka, dr.beta, slack, self.committed, self.q_p,
-                            self.v_p, self._sf)
-            rhs = self._rhs2
-            np.multiply(self._sf, c_f, out=rhs)
-            rhs += self._rhs
-        solve = model.step_solve(c_a, c_v, c_f, slack, self.committed)
-        solve(rhs, out=self.delta_free)
-        m = len(self._loads)
-        if self.W.shape[0] != m:
-            self.W = np.zeros((m, self.N))
-        n = self._zero
-        for k, (dofs, w) in enumerate(self._loads):
-            if dofs is self.model.contact_dofs:   # the model's own points: every y, in order
-                np.multiply(w, c_f, out=n)
-            else:
-                n[:] = 0.0
-                n[dofs] = c_f * np.asarray(w, dtype=float)
-            solve(n, out=self.W[k])
-        n[:] = 0.0
+        model, dr = self.model, self.model.droppers
+        ws = self._woodbury(slack)
+        _k.solve_step(self._rhs, self.q_p, self.v_p, self._coef[2], model.T_K, dr.N0, dr.ka,
+                      dr.beta, slack, self.committed, ws.inv_diag, model._g.G, ws.UT, ws.Ts,
+                      ws.small_inv, ws.s, self._L, self._sf, self._r, self.delta_free, self.W)
         self._slack = slack
         self.passes += 1
 
     def finish(self, F) -> bool:
-        model, dr = self.model, self.model.droppers
         F = F if type(F) is np.ndarray and F.dtype == np.float64 else np.asarray(F, float)
-        if _k.step_and_check(self.delta_free, self.W, F.reshape(-1), self.q_p, model.T_K,
-                             dr.N0, dr.ka, dr.tension_only, self._delta, self._y, self._e,
-                             self._slack_buf, self._slack):
-            slack = self._slack_buf.copy()
+        c_a, c_v, c_f = self._coef
+        changed = _k.finish_step(self.delta_free, self.W, F.reshape(-1), self.q_p, self.v_p,
+                                 *self._screen, *self._screen_work, self._slack,
+                                 self.committed, c_a, c_v, c_f, self.settings.alpha,
+                                 self.model.m, self._delta, self._slack_buf, self.q, self.v,
+                                 self.a, self.f)
+        if changed < 0:
             check_slack_passes("modal catenary", self.passes, self.t + self._h,
                                self.n_steps + 1)
-            self._solve(slack)
+            self._solve(self._slack_buf.copy())
             return False
-        delta = self._delta
-        c_a, c_v, c_f = self._coef
-        _k.finish_step(self.q_p, self.v_p, delta, c_a, c_v, c_f, self.settings.alpha, model.m,
-                       self.q, self.v, self.a, self.f)
-        slack = self._slack
-        if not np.array_equal(slack, self.committed):
-            self.committed = slack
-            model.set_internal_state({"slack": slack})
+        if changed:
+            self.committed = self._slack
+            self.model.set_internal_state({"slack": self._slack})
         self.t += self._h
         self.n_steps += 1
         self._id = _new_id()
@@ -156,3 +183,25 @@ class ModalHHT:
     def set_state(self, state: dict) -> None:
         restore_step_state(self, state)
         self.model.set_internal_state({"slack": self.committed})
+
+
+def _screen_tables(model) -> tuple:
+    """(T32, T_K, Tb, Tm, tol, N0, k_a, tension_only, most) of
+    :func:`~.modal_kernels.screen_slack`: T_K in single precision; on blocks of
+    SCREEN_BLOCK coordinates, |k_a,d| times the 2-norms (Tb, a hair up for their own
+    rounding) and the largest entries (Tm) of t_d; the factors 2 gamma_{K+2} of single and
+    double precision (tol; gamma_n = n u / (1 - n u)); a new reference when more than an
+    eighth of the droppers are open."""
+    T = model.T_K
+    nd, K = T.shape
+    dr = model.droppers
+    ka = np.abs(dr.ka)[:, None]
+    edges = np.arange(0, K, _k.SCREEN_BLOCK)
+    if K:
+        Tb = np.sqrt(np.add.reduceat(T * T, edges, axis=1)) * ka * (1.0 + 1e-9)
+        Tm = np.maximum.reduceat(np.abs(T), edges, axis=1) * ka
+    else:
+        Tb = Tm = np.zeros((nd, 0))
+    tol = np.array([2.0 * (K + 2) * u / (1.0 - (K + 2) * u) for u in (2.0 ** -24, 2.0 ** -53)])
+    return (np.ascontiguousarray(T, dtype=np.float32), T, np.ascontiguousarray(Tb),
+            np.ascontiguousarray(Tm), tol, dr.N0, dr.ka, dr.tension_only, max(1, nd // 8))
