@@ -108,20 +108,19 @@ def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, alpha, beta, gamma
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h
     c_M = c_a + c_f * c_v * ar
-    inv_K = 1.0 / (c_f * (1.0 + c_v * br))
-    inv_f = 1.0 / c_f
+    c_K = c_f * (1.0 + c_v * br)
     sym_product(M, delta, MD, below)
     Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
     Kd1, Kv1, Ka1, Mv1, Ma1 = P_next[KD], P_next[KV], P_next[KA], P_next[MV], P_next[MA]
     for i in range(q.shape[0]):
-        KDi = (R[i] + corr[i] - c_M * MD[i]) * inv_K
+        KDi = (R[i] + corr[i] - c_M * MD[i]) / c_K
         corr[i] = 0.0
         Kd1[i] = Kd[i] + h * Kv[i] + cq * Ka[i] + KDi
         Kv1[i] = Kv[i] + cv * Ka[i] + c_v * KDi
         Ka1[i] = c_a * KDi
         Mv1[i] = Mv[i] + cv * Ma[i] + c_v * MD[i]
         Ma1[i] = c_a * MD[i]
-        f[i] = (alpha * f[i] - Ma1[i]) * inv_f
+        f[i] = (alpha * f[i] - Ma1[i]) / c_f
         d = delta[i]
         q[i] = q_p[i] + d
         v[i] = v_p[i] + c_v * d
