@@ -291,6 +291,7 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
             csub, psubs = fmu_subsystems(prep, instances, plan)
         coupler = Coupler(csub, psubs, prep.contact, settings)
         coupler.initialise(prep.static_forces)
+        coupler.warm_up(0.0, sc.dt)
         n_p = len(psubs)
         n_sup = len(prep.support_x)
 

@@ -258,3 +258,28 @@ def test_discard_rolls_back_and_halves_the_step(scheme):
     pans[0].t_from, pans[0].t_to = 0.1, 0.2
     with pytest.raises(ConvergenceError, match="discarded down to.*DISCARD"):
         coupler.step(0.1, 1e-3)
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", "implicit"])
+def test_warm_up_leaves_the_coupled_run_as_it_was(scheme):
+    """Coupler.warm_up takes a step and puts the participants and the coupler back: the
+    steps that follow are bit for bit those of a coupler without it."""
+    from pantocosim.master.cosim import in_process_subsystems
+    from pantocosim.master.coupling import Coupler, CouplingSettings
+
+    runs = []
+    for warm in (False, True):
+        prep = prepare(SHORT)
+        cat, pans = in_process_subsystems(prep)
+        coupler = Coupler(cat, pans, prep.contact, CouplingSettings(scheme=scheme,
+                                                                    tolerance=1e-8))
+        coupler.initialise(prep.static_forces)
+        if warm:
+            coupler.warm_up(0.0, 1e-3)
+            assert coupler.iterations == [] and cat.integ.t == 0.0
+        rows = []
+        for i in range(20):
+            coupler.step(i * 1e-3, 1e-3)
+            rows.append(np.concatenate([coupler.forces, cat.integ.q[:50], pans[0].integ.q]))
+        runs.append((np.array(rows), list(coupler.iterations)))
+    assert np.array_equal(runs[0][0], runs[1][0]) and runs[0][1] == runs[1][1]

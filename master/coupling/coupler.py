@@ -16,11 +16,12 @@ Runs stop the iteration at ``coupling_rtol`` (scenario) times the mean contact f
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
 
-from pantocosim.core.errors import ConvergenceError, ParameterError
+from pantocosim.core.errors import ConvergenceError, ParameterError, PantocosimError
 
 from .accelerators import ACCELERATORS, DEFAULT_ACCELERATOR
 from .schemes import SCHEME_NAMES, scheme_named
@@ -141,6 +142,31 @@ class Coupler:
         self.cat.free_state(states[0])
         for p, s in zip(self.pans, states[1:]):
             p.free_state(s)
+
+    #: what the coupler holds but does not own (left alone by :meth:`warm_up`)
+    _SHARED = ("cat", "pans", "law", "s", "scheme")
+
+    def warm_up(self, t: float, h: float) -> None:
+        """Take one step of h and put everything back (the participants' states and the
+        coupler's own): what a first step pays once (numba loading its kernels inside the
+        FMUs, the catenary's factorization for h) is paid at set-up, not inside the paced
+        loop. A failing step is left for the run to report."""
+        own = copy.deepcopy({k: v for k, v in vars(self).items() if k not in self._SHARED})
+        states = self._save()
+        failed = None
+        try:
+            self.step(t, h)
+        except PantocosimError as exc:
+            failed = exc
+        try:
+            self.restore(states)
+        except PantocosimError:
+            if failed is None:
+                raise
+            raise failed from None
+        finally:
+            self._free(states)
+        vars(self).update(own)
 
     def step(self, t: float, h: float) -> int:
         """One communication step t -> t + h; returns the number of coupling iterations.
