@@ -26,11 +26,23 @@ from ..core.lowrank import SparseVectors
 
 
 @njit(cache=True)
-def _step_terms(idx, val, ka, beta, N, v, slack, damped, c_v, c_f, out, rows, s):
-    """out += c_f sum_{d slack} N_d b_d + c_f sum_{d damped} beta k_a,d (b_d . v) b_d; the
-    nonzero rank-one scales c_f k_a (slack + c_v beta damped) into ``rows``, ``s``; returns
-    their count."""
+def _removed_scales(ka, beta, slack, damped, c_v, c_f, rows, s):
+    """The nonzero rank-one scales c_f k_a (slack + c_v beta damped) into ``rows``, ``s``;
+    returns their count."""
     m = 0
+    for d in range(ka.shape[0]):
+        sd = c_f * ka[d] * ((1.0 if slack[d] else 0.0) + (c_v * beta if damped[d] else 0.0))
+        if sd != 0.0:
+            rows[m] = d
+            s[m] = sd
+            m += 1
+    return m
+
+
+@njit(cache=True)
+def _step_terms(idx, val, ka, beta, N, v, slack, damped, c_v, c_f, out, rows, s):
+    """out += c_f sum_{d slack} N_d b_d + c_f sum_{d damped} beta k_a,d (b_d . v) b_d, and
+    :func:`_removed_scales`."""
     for d in range(idx.shape[0]):
         if not (slack[d] or damped[d]):
             continue
@@ -46,12 +58,7 @@ def _step_terms(idx, val, ka, beta, N, v, slack, damped, c_v, c_f, out, rows, s)
         for k in range(idx.shape[1]):
             if idx[d, k] >= 0:
                 out[idx[d, k]] += c_f * coef * val[d, k]
-        sd = c_f * ka[d] * ((1.0 if slack[d] else 0.0) + (c_v * beta if damped[d] else 0.0))
-        if sd != 0.0:
-            rows[m] = d
-            s[m] = sd
-            m += 1
-    return m
+    return _removed_scales(ka, beta, slack, damped, c_v, c_f, rows, s)
 
 
 class LinearDroppers:
@@ -96,8 +103,11 @@ class LinearDroppers:
                           c_f: float) -> tuple[np.ndarray, np.ndarray]:
         """(rows, s): the rank-one scales s_d of c_f (k_a [d slack] + c_v beta k_a [d in the
         damping's slack set]) b b^T that leave the Newton matrix c_a M + c_f (c_v C + K)."""
-        return self.step_terms(np.zeros(len(self)), np.zeros(self.vectors.n), slack,
-                               damped_slack, c_v, c_f, np.zeros(self.vectors.n))
+        rows = np.empty(len(self), dtype=np.int64)
+        s = np.empty(len(self))
+        m = _removed_scales(self.ka, self.beta, slack, damped_slack, float(c_v), float(c_f),
+                            rows, s)
+        return rows[:m], s[:m]
 
     def step_terms(self, N, v, slack, damped_slack, c_v: float, c_f: float, out):
         """The slack droppers' share of an HHT step in one pass: adds to ``out`` the forces
