@@ -132,8 +132,9 @@ class AffineHHT:
         #: (``_corr``, kept zero between steps), work vectors
         self._R, self._corr, self._MD, self._x, self._below = (np.zeros(n) for _ in range(5))
         #: axial forces at the predictor, b . Delta_free and b . w_k of the elements
-        self._N_p = self._b_free = np.zeros(len(form.unilateral.ka))
-        self._b_W = np.zeros((0, len(form.unilateral.ka)))
+        n_el = len(form.unilateral.ka)
+        self._N_p, self._b_free = np.zeros(n_el), np.zeros(n_el)
+        self._b_W = np.zeros((0, n_el))
         self._R_used, self._removed = self._rhs, None
         self.committed = np.zeros(len(form.unilateral.ka), dtype=bool)
         self.W = np.zeros((0, n))
@@ -205,7 +206,7 @@ class AffineHHT:
         c_a, c_v, c_f = self._coefficients(h)
         self._loads = list(loads)
         self.passes = 0
-        if self._memo is not None and self._memo[0] == (self._id, h):
+        if self._memo == (self._id, h):
             # the step is redone from the state it was begun from (a co-simulation
             # rollback): the free response, W and the slack set are still in their buffers
             # (only a begin from another state overwrites them)
@@ -220,7 +221,7 @@ class AffineHHT:
         self._N_p = un.axial(self.d_p)
         self._solve(un.slack(self._N_p))
         if self.keep_free_response:
-            self._memo = ((self._id, h),)
+            self._memo = (self._id, h)
 
     def _lowrank(self, rows, s) -> LowRankSolve:
         """The Woodbury solve of a slack set (kept while the set and the step size last: a
