@@ -180,9 +180,10 @@ class AffineHHT:
     def prepare(self, h: float) -> None:
         """Pay at set-up what the steps of size h would pay on first use: the factorization,
         every unilateral element's column A^-1 b_d (when they fit in
-        :data:`PREFILL_BYTES`) and one Woodbury solve (numba loads its kernels on first
-        call). A paced loop then has no first-use step."""
-        self._coefficients(h)
+        :data:`PREFILL_BYTES`), one Woodbury solve and the slack elements' terms with no
+        element slack (numba loads its kernels on first call). A paced loop then has no
+        first-use step."""
+        c_a, c_v, c_f = self._coefficients(h)
         un = self.form.unilateral
         n_el = len(un.ka)
         if n_el == 0:
@@ -191,6 +192,8 @@ class AffineHHT:
             self._cache.prefill()
         rows = np.arange(min(n_el, 2), dtype=np.int64)
         LowRankSolve(self._cache, rows, np.ones(rows.size)).solve_into(self._rhs, self._x)
+        none = np.zeros(n_el, dtype=bool)
+        un.step_terms(self._N_p, self.v_p, none, none, c_v, c_f, self._x)
 
     def _form_products(self) -> None:
         """The kept products from the state itself."""
