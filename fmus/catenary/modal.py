@@ -196,15 +196,6 @@ class ModalCatenary(SecondOrderModel):
         out += self.r0
         return out
 
-    def step_solve(self, c_a, c_v, c_f, slack, committed):
-        """The solve with the Newton matrix of (c_a, c_v, c_f) and the slack sets (kept
-        while they last)."""
-        key = (c_a, c_v, c_f, slack.tobytes(), committed.tobytes())
-        if getattr(self, "_solve_key", None) != key:
-            rows, s = self.droppers.removed_stiffness(slack, committed, c_v, c_f)
-            self._solve_key, self._solve_obj = key, _ModalSolve(self, c_a, c_v, c_f, rows, s)
-        return self._solve_obj
-
     def closed_form(self, settings, keep_free_response: bool = False):
         """The closed-form HHT stepper of this model (:mod:`.modal_step`)."""
         from .modal_step import ModalHHT
