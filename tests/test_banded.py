@@ -3,6 +3,7 @@
 import numpy as np
 import scipy.linalg as sla
 
+from pantocosim.core import band_window
 from pantocosim.core.banded import BandedCholesky
 
 
@@ -92,3 +93,53 @@ def _general_band(A, kd):
         else:
             out[kd - k, :n + k] = d
     return out
+
+
+def test_window_substitution_of_every_kind_of_width_against_lapack():
+    """The generated kernels (pending sums in registers) on widths from a diagonal matrix
+    to the widest given a kernel; wider bands keep the array substitution."""
+    rng = np.random.default_rng(5)
+    n = 70
+    for w in (1, 2, 3, 5, 8, 19, band_window.MAX_WIDTH, band_window.MAX_WIDTH + 1):
+        A, ab = _spd_band(n, w - 1, seed=w)
+        solve = BandedCholesky.factor(ab)
+        assert (solve._window is None) == (w > band_window.MAX_WIDTH), w
+        r = rng.standard_normal(n)
+        expected = sla.solve(A, r)
+        assert np.allclose(solve(r), expected, rtol=1e-12, atol=1e-13), w
+        x = r.copy()
+        solve.solve_into(x, x)                      # in place
+        assert np.allclose(x, expected, rtol=1e-12, atol=1e-13), w
+
+
+def test_window_kernel_compiled_in_memory_where_no_folder_is_writable(monkeypatch, tmp_path):
+    blocked = tmp_path / "file"
+    blocked.write_text("")                          # a file where a folder should be
+    monkeypatch.setattr(band_window, "_folders", lambda: iter([blocked / "kernels"]))
+    band_window.solver.cache_clear()
+    try:
+        solve = band_window.solver(4)
+        A, ab = _spd_band(30, 3, seed=8)
+        chol = BandedCholesky.factor(ab)
+        r = np.random.default_rng(9).standard_normal(30)
+        x = np.empty(30)
+        solve(chol.LT, chol.R, r, x)
+        assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
+        assert not (blocked / "kernels").exists()
+    finally:
+        band_window.solver.cache_clear()
+
+
+def test_window_kernel_module_is_written_once(monkeypatch, tmp_path):
+    monkeypatch.setenv(band_window.FOLDER_VARIABLE, str(tmp_path))
+    band_window.solver.cache_clear()
+    try:
+        band_window.solver(6)
+        written = list(tmp_path.glob("band_window_w6_*.py"))
+        assert len(written) == 1
+        stamp = written[0].stat().st_mtime_ns
+        band_window.solver.cache_clear()
+        band_window.solver(6)                        # found, not written again
+        assert written[0].stat().st_mtime_ns == stamp
+    finally:
+        band_window.solver.cache_clear()

@@ -15,6 +15,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg.lapack import dpbtrf, dpbtrs
 
+from . import band_window
 
 #: solution entries below this are set to zero in :func:`band_solve`: the solve of a unit
 #: vector decays geometrically away from its entry and would otherwise run into subnormal
@@ -140,6 +141,17 @@ def _sum_columns(store, span, slots, values, out):
             out[i] += c * col[i]
 
 
+def _rows(LT: np.ndarray) -> np.ndarray:
+    """The factor's rows R[j, k] = L[j, j - k] (zero for j < k) from its columns as rows
+    LT[j, k] = L[j + k, j]; the reciprocal diagonal stays in column 0."""
+    n, w = LT.shape
+    R = np.zeros_like(LT)
+    R[:, 0] = LT[:, 0]
+    for k in range(1, min(w, n)):
+        R[k:, k] = LT[:n - k, k]
+    return R
+
+
 @dataclass
 class SparseBand:
     """A symmetric band matrix (lower band storage) for products: the diagonals below the
@@ -193,6 +205,10 @@ class BandedCholesky:
         self.n = cb.shape[1]
         self.LT = np.array(cb.T, order="C")         # factor columns as rows (band_solve)
         self.LT[:, 0] = 1.0 / self.LT[:, 0]
+        #: the substitution with the pending sums in registers (:mod:`.band_window`), which
+        #: also needs the factor's rows R[j, k] = L[j, j - k]; None: :func:`band_solve`
+        self._window = band_window.solver(self.LT.shape[1])
+        self.R = _rows(self.LT) if self._window is not None else None
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
@@ -209,15 +225,16 @@ class BandedCholesky:
     def __call__(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=float)
         if rhs.ndim == 1 and rhs.flags.c_contiguous:
-            x = np.empty(self.n)
-            band_solve(self.LT, rhs, x)
-            return x
+            return self.solve_into(rhs, np.empty(self.n))
         x, _ = dpbtrs(self.cb, rhs, lower=1)
         return x
 
     def solve_into(self, rhs: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` = A^-1 rhs without allocating (``out`` may be ``rhs``)."""
-        band_solve(self.LT, rhs, out)
+        if self._window is not None:
+            self._window(self.LT, self.R, rhs, out)
+        else:
+            band_solve(self.LT, rhs, out)
         return out
 
     def solve_local(self, lo: int, hi: int, values=None) -> np.ndarray:
