@@ -80,13 +80,13 @@ def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f,
     out = alpha f_n - c_f (C v_p + K d_p + r0) from the kept products."""
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h
-    Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
     for i in range(q.shape[0]):
         q_p[i] = q[i] + h * v[i] + cq * a[i]
         v_p[i] = v[i] + cv * a[i]
         d_p[i] = q_p[i] - q_ref[i]
-        Kv_p = Kv[i] + cv * Ka[i]
-        y = (ar * (Mv[i] + cv * Ma[i]) + br * Kv_p
+    Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
+    for i in range(q.shape[0]):
+        y = (ar * (Mv[i] + cv * Ma[i]) + br * (Kv[i] + cv * Ka[i])
              + Kd[i] + h * Kv[i] + cq * Ka[i])
         out[i] = alpha * f[i] - c_f * (y + r0[i])
 
@@ -99,32 +99,51 @@ def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, alpha, beta, gamma
     K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
     A Delta = R + corr (``corr`` is zeroed on the way); f_{n+1} = (alpha f_n - M a_{n+1}) / c_f
     from (3.16) itself."""
-    for i in range(delta.shape[0]):
+    n = delta.shape[0]
+    for i in range(n):
         delta[i] = delta_free[i]
     for k in range(F.shape[0]):
-        for i in range(delta.shape[0]):
-            delta[i] += F[k] * W[k, i]
+        Fk, Wk = F[k], W[k]
+        for i in range(n):
+            delta[i] += Fk * Wk[i]
     c_a, c_v, c_f = coef[0], coef[1], coef[2]
     cq = (0.5 - beta) * h * h
     cv = (1.0 - gamma) * h
     c_M = c_a + c_f * c_v * ar
-    c_K = c_f * (1.0 + c_v * br)
+    inv_K = 1.0 / (c_f * (1.0 + c_v * br))
     sym_product(M, delta, MD, below)
-    Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
-    Kd1, Kv1, Ka1, Mv1, Ma1 = P_next[KD], P_next[KV], P_next[KA], P_next[MV], P_next[MA]
-    for i in range(q.shape[0]):
-        KDi = (R[i] + corr[i] - c_M * MD[i]) / c_K
+    KDelta = below                                  # the work vector, free again
+    for i in range(n):
+        KDelta[i] = (R[i] + corr[i] - c_M * MD[i]) * inv_K
         corr[i] = 0.0
-        Kd1[i] = Kd[i] + h * Kv[i] + cq * Ka[i] + KDi
-        Kv1[i] = Kv[i] + cv * Ka[i] + c_v * KDi
-        Ka1[i] = c_a * KDi
-        Mv1[i] = Mv[i] + cv * Ma[i] + c_v * MD[i]
-        Ma1[i] = c_a * MD[i]
-        f[i] = (alpha * f[i] - Ma1[i]) / c_f
+    _advance_products(P, P_next, KDelta, MD, h, cq, cv, c_a, c_v)
+    inv_f = 1.0 / c_f
+    Ma1 = P_next[MA]
+    for i in range(n):
+        f[i] = (alpha * f[i] - Ma1[i]) * inv_f
+    for i in range(n):
         d = delta[i]
         q[i] = q_p[i] + d
         v[i] = v_p[i] + c_v * d
         a[i] = c_a * d
+
+
+@njit(cache=True, fastmath=True, inline="always")
+def _advance_products(P, P_next, KDelta, MD, h, cq, cv, c_a, c_v):
+    """P_next = P advanced by K Delta and M Delta (one loop per row, few arrays each: loops
+    over many arrays are left scalar by the compiler's aliasing checks)."""
+    Kd, Kv, Ka, Mv, Ma = P[KD], P[KV], P[KA], P[MV], P[MA]
+    Kd1, Kv1, Ka1, Mv1, Ma1 = P_next[KD], P_next[KV], P_next[KA], P_next[MV], P_next[MA]
+    for i in range(KDelta.shape[0]):
+        Kd1[i] = Kd[i] + h * Kv[i] + cq * Ka[i] + KDelta[i]
+    for i in range(KDelta.shape[0]):
+        Kv1[i] = Kv[i] + cv * Ka[i] + c_v * KDelta[i]
+    for i in range(KDelta.shape[0]):
+        Ka1[i] = c_a * KDelta[i]
+    for i in range(KDelta.shape[0]):
+        Mv1[i] = Mv[i] + cv * Ma[i] + c_v * MD[i]
+    for i in range(KDelta.shape[0]):
+        Ma1[i] = c_a * MD[i]
 
 
 @njit(cache=True)
