@@ -25,6 +25,33 @@ from numba import njit
 from ..core.lowrank import SparseVectors
 
 
+@njit(cache=True, inline="always")
+def _is_slack(tension_only, N):
+    """A tension-only dropper carries no force at a negative axial force N."""
+    return tension_only and N < 0.0
+
+
+@njit(cache=True)
+def _slack_of(tension_only, N, out):
+    for d in range(N.shape[0]):
+        out[d] = _is_slack(tension_only[d], N[d])
+
+
+@njit(cache=True)
+def _slack_after(tension_only, ka, N_p, b_free, b_W, F, b_delta, slack, previous):
+    """b . Delta = b . Delta_free + sum_k F_k b . w_k into ``b_delta``, the slack set at
+    N_p + k_a b . Delta into ``slack``; True when it differs from ``previous``."""
+    changed = False
+    for d in range(N_p.shape[0]):
+        bd = b_free[d]
+        for k in range(F.shape[0]):
+            bd += F[k] * b_W[k, d]
+        b_delta[d] = bd
+        slack[d] = _is_slack(tension_only[d], N_p[d] + ka[d] * bd)
+        changed = changed or slack[d] != previous[d]
+    return changed
+
+
 @njit(cache=True)
 def _removed_scales(ka, beta, slack, damped, c_v, c_f, rows, s):
     """The nonzero rank-one scales c_f k_a (slack + c_v beta damped) into ``rows``, ``s``;
@@ -82,13 +109,27 @@ class LinearDroppers:
     def __len__(self) -> int:
         return self.bars.size
 
-    def axial(self, dq: np.ndarray) -> np.ndarray:
-        """Linearised axial force N of every dropper at q = q_static + dq (tension > 0)."""
-        return self.N0 + self.ka * self.vectors.dots(dq)
+    def axial(self, dq: np.ndarray, out=None) -> np.ndarray:
+        """Linearised axial force N of every dropper at q = q_static + dq (tension > 0),
+        into ``out`` if given."""
+        out = self.vectors.dots(dq, out=out)
+        out *= self.ka
+        out += self.N0
+        return out
 
     def slack(self, N: np.ndarray) -> np.ndarray:
         """The droppers that carry no force at axial force N."""
-        return self.tension_only & (N < 0.0)
+        out = np.empty(len(self), dtype=bool)
+        _slack_of(self.tension_only, np.asarray(N, dtype=float), out)
+        return out
+
+    def slack_after(self, N_p, b_free, b_W, F, b_delta, previous) -> tuple[np.ndarray, bool]:
+        """(slack set, changed from ``previous``) at the end of a step: N = N_p + k_a b . Delta
+        with b . Delta = ``b_free`` + F . ``b_W`` (written into ``b_delta``)."""
+        slack = np.empty(len(self), dtype=bool)
+        changed = _slack_after(self.tension_only, self.ka, N_p, b_free, b_W, F, b_delta,
+                               slack, previous)
+        return slack, changed
 
     def force(self, coef: np.ndarray, mask: np.ndarray, out=None) -> np.ndarray:
         """sum over the ``mask`` droppers of coef_d b_d (free DOFs), added to ``out`` if

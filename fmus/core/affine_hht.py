@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import itertools
 import secrets
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -47,6 +48,9 @@ MAX_SLACK_PASSES = 20
 RESYNC_STEPS = 4096
 #: memory the unilateral elements' columns may take when solved at set-up (:meth:`prepare`)
 PREFILL_BYTES = 256 * 2**20
+#: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
+#: steps, and neighbouring droppers do so in turn: the same sets come back)
+KEPT_SLACK_SETS = 64
 #: labels of the states a step starts from (a rolled-back step reuses its free response);
 #: the random token keeps a label restored from another process's saved state unique
 _TOKEN = secrets.randbits(64)
@@ -92,7 +96,8 @@ class AffineForm:
     beta_r: float
     q_ref: np.ndarray
     r0: np.ndarray              # f_rest at q_ref, v = 0, no load (round-off of the statics)
-    #: the unilateral elements: axial(d), slack(N), force(coef, mask),
+    #: the unilateral elements: axial(d, out), slack(N), slack_after(N_p, b_free, b_W, F,
+    #: b_delta, previous), force(coef, mask),
     #: removed_stiffness(slack, damped, c_v, c_f), step_terms(N, v, slack, damped, c_v, c_f,
     #: out), vectors, beta, ka, N0 (:mod:`..catenary.linear_droppers`)
     unilateral: Any
@@ -133,13 +138,13 @@ class AffineHHT:
         self._R, self._corr, self._MD, self._x, self._below = (np.zeros(n) for _ in range(5))
         #: axial forces at the predictor, b . Delta_free and b . w_k of the elements
         n_el = len(form.unilateral.ka)
-        self._N_p, self._b_free = np.zeros(n_el), np.zeros(n_el)
+        self._N_p, self._b_free, self._b_delta = (np.zeros(n_el) for _ in range(3))
         self._b_W = np.zeros((0, n_el))
         self._R_used, self._removed = self._rhs, None
         self.committed = np.zeros(len(form.unilateral.ka), dtype=bool)
         self.W = np.zeros((0, n))
         self._h, self._cache, self._coef = None, None, None
-        self._woodbury = None
+        self._woodbury: OrderedDict = OrderedDict()
         self._loads, self._slack = (), None
         self.passes = 0
         self._id = _new_id()
@@ -221,18 +226,23 @@ class AffineHHT:
                          s.gamma, fm.alpha_r, fm.beta_r, s.alpha, c_f, self.q_p, self.v_p,
                          self.d_p, self._rhs)
         un = fm.unilateral
-        self._N_p = un.axial(self.d_p)
+        un.axial(self.d_p, out=self._N_p)
         self._solve(un.slack(self._N_p))
         if self.keep_free_response:
             self._memo = (self._id, h)
 
     def _lowrank(self, rows, s) -> LowRankSolve:
-        """The Woodbury solve of a slack set (kept while the set and the step size last: a
-        dropper stays slack for several steps)."""
+        """The Woodbury solve of a slack set (the last :data:`KEPT_SLACK_SETS` kept)."""
         key = (self._h, rows.tobytes(), s.tobytes())
-        if self._woodbury is None or self._woodbury[0] != key:
-            self._woodbury = (key, LowRankSolve(self._cache, rows, s))
-        return self._woodbury[1]
+        kept = self._woodbury
+        solve = kept.get(key)
+        if solve is None:
+            solve = kept[key] = LowRankSolve(self._cache, rows, s)
+            if len(kept) > KEPT_SLACK_SETS:
+                kept.popitem(last=False)
+        else:
+            kept.move_to_end(key)
+        return solve
 
     def _solve(self, slack: np.ndarray) -> None:
         """delta_free and W for the slack set ``slack``."""
@@ -257,8 +267,11 @@ class AffineHHT:
         for k, (dofs, w) in enumerate(self._loads):
             solve.solve_sparse(dofs, c_f * np.asarray(w, dtype=float), out=self.W[k])
         vec = un.vectors                        # the elements' elongations b . delta
-        self._b_free = vec.dots(self.delta_free)
-        self._b_W = np.array([vec.dots(w) for w in self.W]).reshape(m, len(un.ka))
+        vec.dots(self.delta_free, out=self._b_free)
+        if self._b_W.shape[0] != m:
+            self._b_W = np.zeros((m, len(un.ka)))
+        for k in range(m):
+            vec.dots(self.W[k], out=self._b_W[k])
         self._slack = slack
         self.passes += 1
 
@@ -269,10 +282,10 @@ class AffineHHT:
         if F.size != self.W.shape[0]:
             raise ValueError(f"{F.size} loads given for {self.W.shape[0]} load vectors")
         F = F.reshape(-1)
-        b_delta = self._b_free + F @ self._b_W           # b . Delta of every element
-        un = self.form.unilateral
-        slack = un.slack(self._N_p + un.ka * b_delta)
-        if not np.array_equal(slack, self._slack):
+        b_delta = self._b_delta                          # b . Delta of every element
+        slack, changed = self.form.unilateral.slack_after(self._N_p, self._b_free, self._b_W,
+                                                          F, b_delta, self._slack)
+        if changed:
             check_slack_passes("linear structure", self.passes, self.t + self._h,
                                self.n_steps + 1)
             self._solve(slack)

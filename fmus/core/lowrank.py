@@ -39,22 +39,21 @@ def _combine(idx, val, coef, rows, out):
 
 
 @njit(cache=True)
-def _add_columns(U, c, out):
-    """out += U c (U: n x r, r small)."""
-    n, r = U.shape
-    for i in range(n):
-        s = 0.0
-        for j in range(r):
-            s += U[i, j] * c[j]
-        out[i] += s
+def _add_rows(Z, rows, c, out):
+    """out += sum_r c[r] Z[rows[r]]."""
+    for r in range(rows.shape[0]):
+        z, cr = Z[rows[r]], c[r]
+        for i in range(out.shape[0]):
+            out[i] += cr * z[i]
 
 
 @njit(cache=True)
-def _woodbury(idx, val, rows, s, small_inv, U, x):
-    """x <- x + U small_inv (s * B_rows^T x), in place (:class:`LowRankSolve`)."""
+def _woodbury(idx, val, rows, s, small_inv, Z, x):
+    """x <- x + U small_inv (s * B_rows^T x), in place, with U = Z[rows]^T
+    (:class:`LowRankSolve`)."""
     y = np.empty(rows.shape[0])
     _dots(idx, val, x, rows, y)
-    _add_columns(U, small_inv @ (s * y), x)
+    _add_rows(Z, rows, small_inv @ (s * y), x)
 
 
 class SparseVectors:
@@ -67,10 +66,10 @@ class SparseVectors:
         self._pad_idx = np.where(self.idx >= 0, self.idx, self.n)
         self._all = np.arange(self.idx.shape[0], dtype=np.int64)
 
-    def dots(self, x: np.ndarray, rows=None) -> np.ndarray:
-        """b_j . x for every vector (or the ``rows``)."""
+    def dots(self, x: np.ndarray, rows=None, out=None) -> np.ndarray:
+        """b_j . x for every vector (or the ``rows``), into ``out`` if given."""
         rows = self._all if rows is None else np.asarray(rows, dtype=np.int64)
-        out = np.empty(rows.shape[0])
+        out = np.empty(rows.shape[0]) if out is None else out
         _dots(self.idx, self.val, np.asarray(x, dtype=float), rows, out)
         return out
 
@@ -86,32 +85,43 @@ class SparseVectors:
 
 
 class ColumnCache:
-    """A^-1 b_j of a kept factorization ``solve``, computed on first use and kept."""
+    """A^-1 b_j of a kept factorization ``solve``, computed on first use and kept as the
+    rows of :attr:`Z` (the memory of every column is reserved at once; the system gives
+    it page by page as columns are solved)."""
 
     def __init__(self, solve, vectors: SparseVectors):
         self.solve = solve
         self.vectors = vectors
-        self._cols: dict[int, np.ndarray] = {}
+        self.Z = np.zeros((vectors.idx.shape[0], vectors.n))
+        self._known = np.zeros(vectors.idx.shape[0], dtype=bool)
 
-    def columns(self, rows) -> np.ndarray:
-        missing = [int(j) for j in rows if int(j) not in self._cols]
+    def ensure(self, rows) -> None:
+        """Solve the columns of ``rows`` not solved yet."""
+        rows = np.asarray(rows, dtype=np.int64)
+        missing = rows[~self._known[rows]]
+        if missing.size == 0:
+            return
         local = getattr(self.solve, "solve_local", None)
-        if missing and local is not None:     # each vector is short: a local solve
-            for j in missing:
+        if local is not None:                 # each vector is short: a local solve
+            for j in missing.tolist():
                 idx = self.vectors.idx[j]
                 idx = idx[idx >= 0]
-                self._cols[j] = local(int(idx.min()), int(idx.max()), self.vectors.dense(j))
-        elif missing:
-            B = np.column_stack([self.vectors.dense(j) for j in missing])
-            X = np.asarray(self.solve(B)).reshape(self.vectors.n, len(missing))
-            for i, j in enumerate(missing):
-                self._cols[j] = np.ascontiguousarray(X[:, i])
-        return np.column_stack([self._cols[int(j)] for j in rows])
+                self.Z[j] = local(int(idx.min()), int(idx.max()), self.vectors.dense(j))
+        else:
+            B = np.column_stack([self.vectors.dense(j) for j in missing.tolist()])
+            X = np.asarray(self.solve(B)).reshape(self.vectors.n, missing.size)
+            self.Z[missing] = X.T
+        self._known[missing] = True
+
+    def columns(self, rows) -> np.ndarray:
+        """A^-1 b_j of ``rows`` as the columns of an (n, len(rows)) array."""
+        self.ensure(rows)
+        return self.Z[np.asarray(rows, dtype=np.int64)].T
 
     def prefill(self, rows=None) -> None:
         """Solve the columns of ``rows`` (default: every vector) now, e.g. at set-up, so
         that no step pays for them."""
-        self.columns(np.arange(self.vectors.idx.shape[0]) if rows is None else rows)
+        self.ensure(np.arange(self.vectors.idx.shape[0]) if rows is None else rows)
 
 
 class LowRankSolve:
@@ -122,10 +132,11 @@ class LowRankSolve:
         self.vectors = cache.vectors
         self.rows = np.asarray(rows, dtype=np.int64)
         self.s = np.asarray(scales, dtype=float)
+        self.Z = cache.Z
         if self.rows.size:
-            self.U = cache.columns(self.rows)
-            BtU = np.column_stack([self.vectors.dots(self.U[:, i], self.rows)
-                                   for i in range(self.rows.size)])
+            cache.ensure(self.rows)
+            BtU = np.column_stack([self.vectors.dots(self.Z[j], self.rows)
+                                   for j in self.rows.tolist()])
             self.small = np.eye(self.rows.size) - self.s[:, None] * BtU
             self._small_inv = np.linalg.inv(self.small)
 
@@ -133,7 +144,7 @@ class LowRankSolve:
         """x <- x + U (I - S B^T U)^-1 S B^T x, in place."""
         if self.rows.size:
             v = self.vectors
-            _woodbury(v.idx, v.val, self.rows, self.s, self._small_inv, self.U, x)
+            _woodbury(v.idx, v.val, self.rows, self.s, self._small_inv, self.Z, x)
         return x
 
     def __call__(self, r: np.ndarray) -> np.ndarray:
