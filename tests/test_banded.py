@@ -123,7 +123,7 @@ def test_window_kernel_compiled_in_memory_where_no_folder_is_writable(monkeypatc
         chol = BandedCholesky.factor(ab)
         r = np.random.default_rng(9).standard_normal(30)
         x = np.empty(30)
-        solve(chol.LT, chol.R, r, x)
+        solve.solve(chol.LT, chol.R, r, x)
         assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
         assert not (blocked / "kernels").exists()
     finally:

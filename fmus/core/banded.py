@@ -232,7 +232,7 @@ class BandedCholesky:
     def solve_into(self, rhs: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` = A^-1 rhs without allocating (``out`` may be ``rhs``)."""
         if self._window is not None:
-            self._window(self.LT, self.R, rhs, out)
+            self._window.solve(self.LT, self.R, rhs, out)
         else:
             band_solve(self.LT, rhs, out)
         return out
@@ -245,8 +245,15 @@ class BandedCholesky:
             x[lo] = 1.0
         else:
             x[lo:hi + 1] = values[lo:hi + 1]
-        local_band_solve(self.LT, x, lo, hi, LOCAL_RTOL)
+        self._local(x, lo, hi)
         return x
+
+    def _local(self, x: np.ndarray, lo: int, hi: int) -> None:
+        """x <- A^-1 x in place for x zero outside [lo, hi] (:func:`local_band_solve`)."""
+        if self._window is not None:
+            self._window.local(self.LT, self.R, x, lo, hi, LOCAL_RTOL)
+        else:
+            local_band_solve(self.LT, x, lo, hi, LOCAL_RTOL)
 
     def _slot(self, j: int) -> int:
         """The row of :attr:`_store` holding A^-1 e_j (solved and kept on first use; the least
@@ -261,7 +268,7 @@ class BandedCholesky:
             col = self._store[slot]
             col[:] = 0.0
             col[j] = 1.0
-            local_band_solve(self.LT, col, j, j, LOCAL_RTOL)
+            self._local(col, j, j)
             self._solved += 1
             nz = np.flatnonzero(col)
             self._span[slot] = (nz[0], nz[-1] + 1) if nz.size else (0, 0)
