@@ -228,6 +228,17 @@ def _linear_step(q, v, a, a_prev, f_rest, w, S_inv, C, K, B, h, alpha, beta, gam
         f_rest[i] = r
 
 
+@njit(cache=True)
+def _shift(q, v, a, f_rest, dq, dv, da, df, scale):
+    """(q, v, a, f_rest) += scale (dq, dv, da, df) (:meth:`HHTIntegrator.shift_last_step`)."""
+    for i in range(q.shape[0]):
+        q[i] += scale * dq[i]
+        v[i] += scale * dv[i]
+        a[i] += scale * da[i]
+    for i in range(f_rest.shape[0]):
+        f_rest[i] += scale * df[i]
+
+
 def _vector(x, n: int) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64).reshape(n)
 
@@ -457,8 +468,8 @@ class HHTIntegrator:
         """The last closed-form step as if taken with ``inputs``: the state moves by
         ``scale`` times an :meth:`input_response` (exact: the step is affine in its
         inputs)."""
-        for x, d in zip((self.q, self.v, self.a, self.f_rest), response):
-            x += scale * d
+        dq, dv, da, df = response
+        _shift(self.q, self.v, self.a, self.f_rest, dq, dv, da, df, scale)
         self.inputs[...] = inputs
 
     # ------------------------------------------------------------------ state
