@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import operator
 import pickle
 import traceback
 import uuid
@@ -543,9 +544,7 @@ class GuardedSlave(Fmi2Slave):
             self.refuse(f"fmi2SetFMUstate: {problem}: state not applied")
             return
         try:
-            for v in self.vars.values():
-                if v.name in state["vars"] and v.setter is not None:
-                    v.setter(state["vars"][v.name])
+            self._set_variable_values(*state["vars"])
             self._error = state.get("error")
             self._time = float(state["time"])
             for name in self._state_attributes:
@@ -553,15 +552,44 @@ class GuardedSlave(Fmi2Slave):
         except Exception as exc:  # noqa: BLE001 - partly applied: the instance is unusable
             self.fail(f"fmi2SetFMUstate: {type(exc).__name__}: {exc}")
 
-    def _variable_values(self) -> dict:
-        """Every variable's value for the FMU state: the attribute each variable is kept in
-        (:meth:`real`, :meth:`integer`), read directly; the getter only for a variable
-        without one. A master saves the state every communication step, so this is cheap."""
-        names = self.__dict__.get("_state_var_names")
-        if names is None or len(names) != len(self.vars):   # variables are registered once
-            names = self._state_var_names = [(v.name, v.getter) for v in self.vars.values()]
+    def _state_variables(self) -> tuple:
+        """(names, read): every variable's name in registration order and a function giving
+        their values as a tuple, read from the attribute each is kept in (:meth:`real`,
+        :meth:`integer`) in one C-level lookup; the getter only for a variable without one.
+        Variables are registered once, in ``__init__``: built on first use."""
+        cached = self.__dict__.get("_state_var_reader")
+        if cached is not None and len(cached[0]) == len(self.vars):
+            return cached
+        names = tuple(v.name for v in self.vars.values())
         d = self.__dict__
-        return {name: d[name] if name in d else getter() for name, getter in names}
+        if len(names) > 1 and all(n in d for n in names):
+            lookup = operator.itemgetter(*names)
+
+            def read():
+                return lookup(d)
+        else:
+            pairs = [(v.name, v.getter) for v in self.vars.values()]
+
+            def read():
+                return tuple(d[n] if n in d else getter() for n, getter in pairs)
+        self._state_var_reader = (names, read)
+        return names, read
+
+    def _variable_values(self) -> tuple:
+        """(names, values) of every variable for the FMU state. A master saves the state
+        every communication step, so this is cheap (no per-variable Python code)."""
+        names, read = self._state_variables()
+        return names, read()
+
+    def _set_variable_values(self, names, values) -> None:
+        """Put back :meth:`_variable_values` (the variables that can be set)."""
+        setters = self.__dict__.get("_state_var_setters")
+        if setters is None or len(setters) != len(self.vars):
+            setters = self._state_var_setters = {v.name: v.setter for v in self.vars.values()}
+        for name, value in zip(names, values):
+            setter = setters.get(name)
+            if setter is not None:
+                setter(value)
 
     @staticmethod
     def _copy_value(value):
