@@ -158,6 +158,9 @@ class GuardedSlave(Fmi2Slave):
         self._logged_fallbacks: set[str] = set()
         #: refused calls since the last doStep; the next doStep discards naming them
         self._refused: list[str] = []
+        #: value references of the Real variables of :meth:`real`: each is kept in its
+        #: attribute, which its getter reads outside initialisation mode
+        self._attribute_reals: set[int] = set()
         #: the FMU's current time: the start time, then the end of each accepted step
         self._t0 = 0.0
         self._time = 0.0
@@ -232,7 +235,10 @@ class GuardedSlave(Fmi2Slave):
             kwargs.update(causality=Fmi2Causality.local, variability=Fmi2Variability.continuous)
         if unit:
             self._units.add(unit)
-        self.register_variable(UnitReal(name, unit=unit, **kwargs))
+        var = UnitReal(name, unit=unit, **kwargs)
+        self.register_variable(var)
+        if "." not in name:
+            self._attribute_reals.add(var.value_reference)
 
     def integer(self, name: str, value: int, description: str | None = None) -> None:
         setattr(self, name, int(value))
@@ -447,11 +453,42 @@ class GuardedSlave(Fmi2Slave):
         self._set("fmi2SetString", "String", vrs, values)
 
     def get_real(self, vrs):
-        getters = self._fast_access()[0]
         try:
+            if not self._in_initialization:
+                read = self._attribute_reader(vrs)
+                if read is not None:
+                    return read(self.__dict__)
+            getters = self._fast_access()[0]
             return [float(getters[vr]()) for vr in vrs]
         except Exception:  # noqa: BLE001 - the checked path says what went wrong
             return self._get("fmi2GetReal", "Real", vrs)
+
+    #: lists of value references whose attribute reader is kept (a master reads a few
+    #: fixed lists every step)
+    MAX_READERS = 32
+
+    def _attribute_reader(self, vrs):
+        """A function of the instance's ``__dict__`` giving the values of the Real variables
+        ``vrs`` (one C-level lookup), kept per list of references; None if one of them is not
+        a variable of :meth:`real` (kept in its attribute, read by its getter outside
+        initialisation mode)."""
+        key = tuple(vrs)
+        readers = self.__dict__.setdefault("_attribute_readers", {})
+        if key not in readers:
+            if len(readers) >= self.MAX_READERS:
+                readers.clear()
+            readers[key] = self._make_attribute_reader(key)
+        return readers[key]
+
+    def _make_attribute_reader(self, vrs: tuple):
+        if not vrs or not all(vr in self._attribute_reals for vr in vrs):
+            return None
+        names = [self.vars[vr].name for vr in vrs]
+        if len(names) == 1:
+            name = names[0]
+            return lambda d: [float(d[name])]
+        lookup = operator.itemgetter(*names)
+        return lambda d: list(map(float, lookup(d)))
 
     def get_integer(self, vrs):
         return self._get("fmi2GetInteger", "Integer", vrs)
