@@ -64,35 +64,46 @@ class ModelSubsystem:
 
 
 class _FmuState:
-    """FMU state save/restore/free of an adapter holding ``self.fmu``; the outputs read
-    after a step are kept until the FMU's state or inputs change (one fmi2GetReal per step
-    for everything the master reads)."""
+    """FMU state save/restore/free of an adapter holding ``self.fmu``; the values read after
+    a step (:attr:`reads`) and the outputs made of them are kept until the FMU's state or
+    inputs change (one fmi2GetReal per step for everything the master reads)."""
 
     _read = None
+    _outputs = None
+
+    def _changed(self):
+        self._read = self._outputs = None
 
     def get_state(self):
         return self.fmu.get_state()
 
     def set_state(self, s):
         self.fmu.set_state(s)
-        self._read = None
+        self._changed()
 
     def free_state(self, s):
         self.fmu.free_state(s)
 
     def set_forces(self, forces):
-        self.fmu.set_real(self.r_in, forces)
-        self._read = None
+        self.inputs.set(forces)
+        self._changed()
 
     def step(self, t, h):
-        self._read = None
+        self._changed()
         self.fmu.do_step(t, h)
 
-    def _values(self) -> list:
-        """The values of :attr:`r_read`, read once per change."""
+    def _values(self) -> np.ndarray:
+        """The values of :attr:`reads`, read once per change."""
         if self._read is None:
-            self._read = self.fmu.get_real(self.r_read)
+            self._read = self.reads.get()
         return self._read
+
+    def outputs(self):
+        """(heights, velocities) at the interface, made once per change (the same arrays
+        until then: a caller must not change them)."""
+        if self._outputs is None:
+            self._outputs = self._make_outputs(self._values())
+        return self._outputs
 
 
 class FmuPantograph(_FmuState):
@@ -100,12 +111,12 @@ class FmuPantograph(_FmuState):
 
     def __init__(self, fmu):
         self.fmu = fmu
-        self.r_in = fmu.refs(["contact_force"])
-        self.r_read = fmu.refs(["contact_height", "contact_velocity"])
+        self.inputs = fmu.reals(["contact_force"])
+        self.reads = fmu.reals(["contact_height", "contact_velocity"])
 
-    def outputs(self):
-        z, v = self._values()
-        return np.array([z]), np.array([v])
+    @staticmethod
+    def _make_outputs(values):
+        return values[0:1], values[1:2]
 
 
 class FmuCatenary(_FmuState):
@@ -114,10 +125,10 @@ class FmuCatenary(_FmuState):
     def __init__(self, fmu, n_pantographs: int, n_supports: int):
         self.fmu = fmu
         k = range(1, n_pantographs + 1)
-        self.r_in = fmu.refs([f"contact_force_{i}" for i in k])
+        self.inputs = fmu.reals([f"contact_force_{i}" for i in k])
         self.n, self.n_supports = n_pantographs, n_supports
         #: wire heights, wire velocities, support uplifts, Newton iterations
-        self.r_read = fmu.refs([f"wire_height_{i}" for i in k]
+        self.reads = fmu.reals([f"wire_height_{i}" for i in k]
                                + [f"wire_velocity_{i}" for i in k]
                                + [f"support_uplift_{j}" for j in range(n_supports)]
                                + ["newton_iterations"])
@@ -125,9 +136,8 @@ class FmuCatenary(_FmuState):
     def newton_iterations(self) -> float:
         return float(self._values()[-1])
 
-    def outputs(self):
-        y = np.asarray(self._values()[:2 * self.n])
-        return y[:self.n], y[self.n:]
+    def _make_outputs(self, values):
+        return values[:self.n], values[self.n:2 * self.n]
 
     def uplift(self):
         return self._values()[2 * self.n:2 * self.n + self.n_supports]

@@ -93,7 +93,7 @@ class FmuInstance:
 
     def __init__(self, fmu_path: str | Path, instance_name: str):
         from fmpy import read_model_description
-        from fmpy.fmi2 import FMU2Slave
+        from fmpy.fmi2 import FMU2Slave, fmi2False
 
         self.path = Path(fmu_path)
         self.name = instance_name
@@ -109,21 +109,26 @@ class FmuInstance:
         self._call("instantiate", lambda: self.slave.instantiate(callbacks=_callbacks(),
                                                                   loggingOn=True))
         self.t = 0.0
+        #: doStep's noSetFMUStatePriorToCurrentPoint: the master may roll back
+        self._no_set_prior = fmi2False
 
     # ------------------------------------------------------------------ errors
     def messages(self, min_status: int = 1) -> list[str]:
         return [f"[{STATUS_NAMES[s]}] {m}" for s, m in _LOGS.get(self.name, [])
                 if s >= min_status]
 
-    def _call(self, what: str, fn):
+    def _call(self, what, fn, *args):
+        """``fn(*args)``; a failure becomes :class:`FmuError` naming ``what`` (a string, or a
+        function giving it: per-step calls format their label only when they fail)."""
         try:
-            return fn()
+            return fn(*args)
         except Exception as exc:
             status = getattr(exc, "status", 3)
             if status == 4:
                 self.fatal = True  # the instance is dangling: never call it again (B4)
             msgs = self.messages()
             detail = ("; ".join(m.splitlines()[0] for m in msgs[-3:])) if msgs else str(exc)
+            what = what() if callable(what) else what
             raise FmuError(f"{self.name} ({self.path.name}): {what} returned "
                            f"{STATUS_NAMES[status] if isinstance(status, int) and status < 6 else status}: "
                            f"{detail}", status=status if isinstance(status, int) else 3,
@@ -161,6 +166,10 @@ class FmuInstance:
         self._call("exitInitializationMode", self.slave.exitInitializationMode)
         self.t = start_time
 
+    def reals(self, names) -> "RealVector":
+        """The Real variables ``names``, exchanged together (:class:`RealVector`)."""
+        return RealVector(self, self.refs(names))
+
     def set_real(self, refs: list[int], values) -> None:
         self.slave.setReal(refs, list(values))
 
@@ -168,20 +177,18 @@ class FmuInstance:
         return np.asarray(self.slave.getReal(refs), dtype=float)
 
     def do_step(self, t: float, h: float) -> None:
-        from fmpy.fmi2 import fmi2False
-
-        self._call(f"doStep(t = {t:.6g}, h = {h:.3g})",
-                   lambda: self.slave.doStep(t, h, noSetFMUStatePriorToCurrentPoint=fmi2False))
+        self._call(lambda: f"doStep(t = {t:.6g}, h = {h:.3g})", self.slave.doStep, t, h,
+                   self._no_set_prior)
 
     # ------------------------------------------------------------------ state
     def get_state(self):
         return self._call("getFMUstate", self.slave.getFMUstate)
 
     def set_state(self, state) -> None:
-        self._call("setFMUstate", lambda: self.slave.setFMUstate(state))
+        self._call("setFMUstate", self.slave.setFMUstate, state)
 
     def free_state(self, state) -> None:
-        self._call("freeFMUstate", lambda: self.slave.freeFMUstate(state))
+        self._call("freeFMUstate", self.slave.freeFMUstate, state)
 
     def serialize_state(self, state) -> bytes:
         return self._call("serializeFMUstate", lambda: self.slave.serializeFMUstate(state))
@@ -197,3 +204,34 @@ class FmuInstance:
             self.slave.freeInstance()
         except Exception:  # noqa: BLE001 - best effort at shutdown
             pass
+
+
+class RealVector:
+    """Real variables of one FMU read or written together every step: the value references
+    and the C arrays of fmpy's ``fmi2GetReal``/``fmi2SetReal`` are built once, so an exchange
+    allocates nothing but the values it returns."""
+
+    def __init__(self, fmu: FmuInstance, refs: list[int]):
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+        self.fmu = fmu
+        self.refs = list(refs)
+        self.n = len(self.refs)
+        self._vr = (fmi2ValueReference * self.n)(*self.refs)
+        self._buffer = (fmi2Real * self.n)()
+        #: the C buffer seen as a numpy array (no copy)
+        self._values = np.ctypeslib.as_array(self._buffer) if self.n else np.zeros(0)
+
+    def get(self) -> np.ndarray:
+        """The current values (a new array)."""
+        slave = self.fmu.slave
+        self.fmu._call("getReal", slave.fmi2GetReal, slave.component, self._vr, self.n,
+                       self._buffer)
+        return self._values.copy()
+
+    def set(self, values) -> None:
+        """Set the variables to ``values`` (one per reference)."""
+        self._values[:] = values
+        slave = self.fmu.slave
+        self.fmu._call("setReal", slave.fmi2SetReal, slave.component, self._vr, self.n,
+                       self._buffer)

@@ -37,6 +37,8 @@ inputs are interpolated linearly inside the communication step.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +69,28 @@ LAW_OUTPUTS = (
 
 TIMING = ("the value set before doStep(t, h) is the value at t + h; the value at t is the "
           "previous accepted step's (kept in the FMU state)")
+
+
+@dataclass(frozen=True)
+class PortNames:
+    """The names of the ports of pantographs 1..n and of the support uplifts (a step sets
+    and reads its variables by these names, built once)."""
+
+    forces: tuple            # contact_force_k (input, contact_mode 0)
+    heights: tuple           # pantograph_height_k (input, contact_mode 1)
+    velocities: tuple        # pantograph_velocity_k (input, contact_mode 1)
+    wire_heights: tuple      # wire_height_k
+    wire_velocities: tuple   # wire_velocity_k
+    forces_out: tuple        # contact_force_out_k
+    uplifts: tuple           # support_uplift_j, j = 0 .. MAX_SUPPORTS - 1
+
+    @classmethod
+    def of(cls, n: int) -> "PortNames":
+        k = range(1, n + 1)
+        return cls(*(tuple(f"{base}_{i}" for i in k) for base in (
+            "contact_force", "pantograph_height", "pantograph_velocity", "wire_height",
+            "wire_velocity", "contact_force_out")),
+            tuple(f"support_uplift_{j}" for j in range(MAX_SUPPORTS)))
 
 
 def _discard():
@@ -134,32 +158,35 @@ class CatenarySlave(IntegratorSlave):
 
         self.real("newton_rtol", RUN_RTOL, "parameter", "1", "Newton residual tolerance, "
                   "relative to the largest force in the residual")
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            self.real(f"contact_force_{k}", 0.0, "input", "N",
+        ports = PortNames.of(MAX_PANTOGRAPHS)
+        for k, name in enumerate(ports.forces, start=1):
+            self.real(name, 0.0, "input", "N",
                       f"contact_mode 0: upward contact force of pantograph {k} on the wire, "
                       f">= 0; {TIMING}; at t0 it is static_force_{k}")
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            self.real(f"pantograph_height_{k}", 0.0, "input", "m",
+        for k, (height, velocity) in enumerate(zip(ports.heights, ports.velocities), start=1):
+            self.real(height, 0.0, "input", "m",
                       f"contact_mode 1: contact height of pantograph {k} above the rail; "
                       f"{TIMING}")
-            self.real(f"pantograph_velocity_{k}", 0.0, "input", "m/s",
+            self.real(velocity, 0.0, "input", "m/s",
                       f"contact_mode 1: vertical velocity of pantograph {k}'s contact point; "
                       f"{TIMING}")
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            self.real(f"wire_height_{k}", 0.0, "output", "m",
+        for k, names in enumerate(zip(ports.wire_heights, ports.wire_velocities,
+                                      ports.forces_out), start=1):
+            height, velocity, force = names
+            self.real(height, 0.0, "output", "m",
                       f"contact-wire height above the rail under pantograph {k}")
-            self.real(f"wire_velocity_{k}", 0.0, "output", "m/s",
+            self.real(velocity, 0.0, "output", "m/s",
                       f"vertical velocity of the contact wire seen by pantograph {k} "
                       "(including the convective term V dz/dx)")
-            self.real(f"contact_force_out_{k}", 0.0, "output", "N",
+            self.real(force, 0.0, "output", "N",
                       f"contact force of pantograph {k}: mode 1 the penalty force at the end "
                       "of the step, mode 0 the input force")
         for k in range(1, MAX_PANTOGRAPHS + 1):
             for name, unit, text in LAW_OUTPUTS:
                 self.real(f"{name}_{k}", 0.0, "output", unit, f"start law of pantograph {k} "
                           f"(constant; available in initialisation mode): {text}")
-        for j in range(MAX_SUPPORTS):
-            self.real(f"support_uplift_{j}", 0.0, "output", "m",
+        for j, name in enumerate(ports.uplifts):
+            self.real(name, 0.0, "output", "m",
                       f"uplift of the contact wire at support {j} relative to the unloaded "
                       "static configuration (0 beyond the last support)")
         self.real("n_supports", 0.0, "output", "1", "number of supports of the line (spans + 1)")
@@ -172,6 +199,7 @@ class CatenarySlave(IntegratorSlave):
         self._n = 1
         self._mode = 0
         self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
+        self._port_names = PortNames.of(1)   # of the active pantographs (initialise)
         self._state_attributes = ["_integ_state", "_prev_inputs"]
         self._cache: dict = {}    # model and start laws by the parameters they depend on
         self.apply_start_values()
@@ -333,6 +361,7 @@ class CatenarySlave(IntegratorSlave):
                                  "per step) or 2 (reuse across steps)")
         self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
         self._mode, self._n = mode, n
+        self._port_names = PortNames.of(n)
         if mode == 0:
             q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
             integ = _forced_integrator(model, self._settings)
@@ -403,23 +432,20 @@ class CatenarySlave(IntegratorSlave):
     # ------------------------------------------------------------------ stepping
     def _read_inputs(self):
         """Inputs at t + h for the active pantographs, or an error message."""
-        n = self._n
+        d = self.__dict__
         if self._mode == 0:
-            F = np.empty(n)
-            for k in range(1, n + 1):
-                name = f"contact_force_{k}"
-                x = float(getattr(self, name))
-                if not np.isfinite(x) or x < 0.0:
+            values = [float(d[name]) for name in self._port_names.forces]
+            for name, x in zip(self._port_names.forces, values):
+                if not (math.isfinite(x) and x >= 0.0):
                     return None, f"{name} = {x!r}: must be finite and >= 0"
-                F[k - 1] = x
-            return F, None
-        out = np.empty((n, 2))
-        for k in range(1, n + 1):
-            for j, name in enumerate((f"pantograph_height_{k}", f"pantograph_velocity_{k}")):
-                x = float(getattr(self, name))
-                if not np.isfinite(x):
+            return np.array(values), None
+        out = np.empty((self._n, 2))
+        for k, names in enumerate(zip(self._port_names.heights, self._port_names.velocities)):
+            for j, name in enumerate(names):
+                x = float(d[name])
+                if not math.isfinite(x):
                     return None, f"{name} = {x!r}: must be finite"
-                out[k - 1, j] = x
+                out[k, j] = x
         return out, None
 
     def advance(self, current_time, step_size):
@@ -452,7 +478,7 @@ class CatenarySlave(IntegratorSlave):
                             z, v = z_new + v_new * i * h, v_new
                         s.set(z, v)
                     iters += self._integ.step(h).iterations
-            self._prev_inputs = new.copy()
+            self._prev_inputs = new   # made by _read_inputs (the steps took copies)
             self.newton_iterations = float(iters)
             self._update_outputs()
             return True
@@ -488,13 +514,11 @@ class CatenarySlave(IntegratorSlave):
             F = self._prev_inputs
         else:
             F = self._system.contact_forces(t, integ.q, integ.v)
-        for k in range(1, self._n + 1):
-            setattr(self, f"wire_height_{k}", float(zw[k - 1]))
-            setattr(self, f"wire_velocity_{k}", float(vw[k - 1]))
-            setattr(self, f"contact_force_out_{k}", float(F[k - 1]))
-        up = model.support_uplift(qc)
-        for j in range(min(len(up), MAX_SUPPORTS)):
-            setattr(self, f"support_uplift_{j}", float(up[j]))
+        names, d = self._port_names, self.__dict__
+        d.update(zip(names.wire_heights, zw.tolist()))
+        d.update(zip(names.wire_velocities, vw.tolist()))
+        d.update(zip(names.forces_out, F.tolist()))
+        d.update(zip(names.uplifts, model.support_uplift(qc).tolist()))
 
 
 def _forced_integrator(model, settings):

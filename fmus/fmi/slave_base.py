@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import operator
 import pickle
 import traceback
 import uuid
@@ -157,6 +158,9 @@ class GuardedSlave(Fmi2Slave):
         self._logged_fallbacks: set[str] = set()
         #: refused calls since the last doStep; the next doStep discards naming them
         self._refused: list[str] = []
+        #: value references of the Real variables of :meth:`real`: each is kept in its
+        #: attribute, which its getter reads outside initialisation mode
+        self._attribute_reals: set[int] = set()
         #: the FMU's current time: the start time, then the end of each accepted step
         self._t0 = 0.0
         self._time = 0.0
@@ -231,7 +235,10 @@ class GuardedSlave(Fmi2Slave):
             kwargs.update(causality=Fmi2Causality.local, variability=Fmi2Variability.continuous)
         if unit:
             self._units.add(unit)
-        self.register_variable(UnitReal(name, unit=unit, **kwargs))
+        var = UnitReal(name, unit=unit, **kwargs)
+        self.register_variable(var)
+        if "." not in name:
+            self._attribute_reals.add(var.value_reference)
 
     def integer(self, name: str, value: int, description: str | None = None) -> None:
         setattr(self, name, int(value))
@@ -446,11 +453,42 @@ class GuardedSlave(Fmi2Slave):
         self._set("fmi2SetString", "String", vrs, values)
 
     def get_real(self, vrs):
-        getters = self._fast_access()[0]
         try:
+            if not self._in_initialization:
+                read = self._attribute_reader(vrs)
+                if read is not None:
+                    return read(self.__dict__)
+            getters = self._fast_access()[0]
             return [float(getters[vr]()) for vr in vrs]
         except Exception:  # noqa: BLE001 - the checked path says what went wrong
             return self._get("fmi2GetReal", "Real", vrs)
+
+    #: lists of value references whose attribute reader is kept (a master reads a few
+    #: fixed lists every step)
+    MAX_READERS = 32
+
+    def _attribute_reader(self, vrs):
+        """A function of the instance's ``__dict__`` giving the values of the Real variables
+        ``vrs`` (one C-level lookup), kept per list of references; None if one of them is not
+        a variable of :meth:`real` (kept in its attribute, read by its getter outside
+        initialisation mode)."""
+        key = tuple(vrs)
+        readers = self.__dict__.setdefault("_attribute_readers", {})
+        if key not in readers:
+            if len(readers) >= self.MAX_READERS:
+                readers.clear()
+            readers[key] = self._make_attribute_reader(key)
+        return readers[key]
+
+    def _make_attribute_reader(self, vrs: tuple):
+        if not vrs or not all(vr in self._attribute_reals for vr in vrs):
+            return None
+        names = [self.vars[vr].name for vr in vrs]
+        if len(names) == 1:
+            name = names[0]
+            return lambda d: [float(d[name])]
+        lookup = operator.itemgetter(*names)
+        return lambda d: list(map(float, lookup(d)))
 
     def get_integer(self, vrs):
         return self._get("fmi2GetInteger", "Integer", vrs)
@@ -543,9 +581,7 @@ class GuardedSlave(Fmi2Slave):
             self.refuse(f"fmi2SetFMUstate: {problem}: state not applied")
             return
         try:
-            for v in self.vars.values():
-                if v.name in state["vars"] and v.setter is not None:
-                    v.setter(state["vars"][v.name])
+            self._set_variable_values(*state["vars"])
             self._error = state.get("error")
             self._time = float(state["time"])
             for name in self._state_attributes:
@@ -553,15 +589,44 @@ class GuardedSlave(Fmi2Slave):
         except Exception as exc:  # noqa: BLE001 - partly applied: the instance is unusable
             self.fail(f"fmi2SetFMUstate: {type(exc).__name__}: {exc}")
 
-    def _variable_values(self) -> dict:
-        """Every variable's value for the FMU state: the attribute each variable is kept in
-        (:meth:`real`, :meth:`integer`), read directly; the getter only for a variable
-        without one. A master saves the state every communication step, so this is cheap."""
-        names = self.__dict__.get("_state_var_names")
-        if names is None or len(names) != len(self.vars):   # variables are registered once
-            names = self._state_var_names = [(v.name, v.getter) for v in self.vars.values()]
+    def _state_variables(self) -> tuple:
+        """(names, read): every variable's name in registration order and a function giving
+        their values as a tuple, read from the attribute each is kept in (:meth:`real`,
+        :meth:`integer`) in one C-level lookup; the getter only for a variable without one.
+        Variables are registered once, in ``__init__``: built on first use."""
+        cached = self.__dict__.get("_state_var_reader")
+        if cached is not None and len(cached[0]) == len(self.vars):
+            return cached
+        names = tuple(v.name for v in self.vars.values())
         d = self.__dict__
-        return {name: d[name] if name in d else getter() for name, getter in names}
+        if len(names) > 1 and all(n in d for n in names):
+            lookup = operator.itemgetter(*names)
+
+            def read():
+                return lookup(d)
+        else:
+            pairs = [(v.name, v.getter) for v in self.vars.values()]
+
+            def read():
+                return tuple(d[n] if n in d else getter() for n, getter in pairs)
+        self._state_var_reader = (names, read)
+        return names, read
+
+    def _variable_values(self) -> tuple:
+        """(names, values) of every variable for the FMU state. A master saves the state
+        every communication step, so this is cheap (no per-variable Python code)."""
+        names, read = self._state_variables()
+        return names, read()
+
+    def _set_variable_values(self, names, values) -> None:
+        """Put back :meth:`_variable_values` (the variables that can be set)."""
+        setters = self.__dict__.get("_state_var_setters")
+        if setters is None or len(setters) != len(self.vars):
+            setters = self._state_var_setters = {v.name: v.setter for v in self.vars.values()}
+        for name, value in zip(names, values):
+            setter = setters.get(name)
+            if setter is not None:
+                setter(value)
 
     @staticmethod
     def _copy_value(value):
