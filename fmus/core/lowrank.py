@@ -113,11 +113,6 @@ class ColumnCache:
             self.Z[missing] = X.T
         self._known[missing] = True
 
-    def columns(self, rows) -> np.ndarray:
-        """A^-1 b_j of ``rows`` as the columns of an (n, len(rows)) array."""
-        self.ensure(rows)
-        return self.Z[np.asarray(rows, dtype=np.int64)].T
-
     def prefill(self, rows=None) -> None:
         """Solve the columns of ``rows`` (default: every vector) now, e.g. at set-up, so
         that no step pays for them."""
