@@ -95,7 +95,7 @@ class Coupler:
             h, v = p.outputs()
             zp.append(float(h[0]))
             vp.append(float(v[0]))
-        return zp, vp, list(map(float, zw)), list(map(float, vw))
+        return zp, vp, np.asarray(zw, float).tolist(), np.asarray(vw, float).tolist()
 
     def contact_forces(self, predict_h: float = 0.0) -> np.ndarray:
         """The contact law at the participants' outputs, the pantographs' heights taken
