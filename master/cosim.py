@@ -305,16 +305,20 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
         n_p = len(psubs)
         n_sup = len(prep.support_x)
 
+        #: a row: time, (x, contact force, contact height, wire height) per pantograph,
+        #: support uplifts, iterations (:func:`column_names`)
+        width = len(rec.names)
+        first_uplift = 1 + 4 * n_p
+
         def record(t, forces, iterations):
-            zp, vp, zw, vw = coupler._interface()
-            up = np.zeros(n_sup)
-            u = csub.uplift()
-            up[:min(n_sup, len(u))] = u[:n_sup]
-            row = [t]
+            zp, _, zw, _ = coupler.interface()
+            row = np.zeros(width)
+            row[0] = t
             for k in range(n_p):
-                row += [spec_x(k, t), forces[k], zp[k], zw[k]]
-            row += list(up)
-            row.append(iterations)
+                row[1 + 4 * k:5 + 4 * k] = (spec_x(k, t), forces[k], zp[k], zw[k])
+            u = csub.uplift()[:n_sup]
+            row[first_uplift:first_uplift + len(u)] = u
+            row[-1] = iterations
             rec.append(row)
 
         def spec_x(k, t):

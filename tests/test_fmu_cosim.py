@@ -109,3 +109,44 @@ def test_master_reports_the_fmu_message(tmp_path):
     assert "STATUS 2" in proc.stdout, proc.stdout + proc.stderr
     assert "speed_kmh = nan" in proc.stdout
     assert "ALIVE" in proc.stdout
+
+
+def test_real_vector_exchanges_values_through_fmi(fmus):
+    """RealVector (the master's per-step exchange) writes and reads the FMU's variables as
+    fmpy's setReal/getReal do."""
+    code = (
+        "from pantocosim.master.fmu_runtime import FmuInstance\n"
+        "import os\n"
+        f"i = FmuInstance({str(fmus['en50318-2mass'])!r}, 'pan')\n"
+        "i.initialize({'speed_kmh': 300.0})\n"
+        "i.reals(['contact_force']).set([123.5])\n"
+        "both = i.reals(['contact_height', 'contact_force'])\n"
+        "print('GOT', list(both.get()) == i.get_real(both.refs).tolist(), both.get()[1])\n"
+        "i.terminate()\n"
+        "os._exit(0)\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+    assert "GOT True 123.5" in proc.stdout, proc.stdout + proc.stderr
+
+
+def test_real_vector_failure_is_an_fmu_error():
+    """A failing fmi2GetReal/fmi2SetReal of a RealVector raises FmuError with the call's
+    status and the instance's name (an FMU stand-in: nothing is loaded)."""
+    from types import SimpleNamespace
+
+    from pantocosim.master.fmu_runtime import FmuError, FmuInstance, RealVector
+
+    class Refused(Exception):
+        status = 3
+
+    def refuse(*args):
+        raise Refused("fmi2GetReal failed")
+
+    fmu = FmuInstance.__new__(FmuInstance)
+    fmu.name, fmu.path, fmu.fatal = "pan", Path("pan.fmu"), False
+    fmu.slave = SimpleNamespace(component=None, fmi2GetReal=refuse, fmi2SetReal=refuse)
+    vector = RealVector(fmu, [1, 2])
+    for call in (vector.get, lambda: vector.set([1.0, 2.0])):
+        with pytest.raises(FmuError) as err:
+            call()
+        assert err.value.status == 3 and err.value.instance == "pan"

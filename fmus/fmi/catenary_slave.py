@@ -200,6 +200,7 @@ class CatenarySlave(IntegratorSlave):
         self._mode = 0
         self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
         self._port_names = PortNames.of(1)   # of the active pantographs (initialise)
+        self._prepared = False    # the structure's prepare ran (the first step)
         self._state_attributes = ["_integ_state", "_prev_inputs"]
         self._cache: dict = {}    # model and start laws by the parameters they depend on
         self.apply_start_values()
@@ -466,6 +467,7 @@ class CatenarySlave(IntegratorSlave):
             if self._mode == 1 and self.extrapolate_heights and self._integ.t == 0.0:
                 new = self._first_step_heights(new)
             h = step_size / n
+            self._prepare_once(h)
             old = self._prev_inputs
             iters = 0
             for i in range(1, n + 1):
@@ -488,6 +490,19 @@ class CatenarySlave(IntegratorSlave):
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: "
                      f"{type(exc).__name__}: {exc}", _discard())
             return False
+
+    def _prepare_once(self, h: float) -> None:
+        """At the first step, the structure's set-up for steps of h (``prepare``, where it has
+        one: the factorization, the dropper columns, numba loading the kernels of slack
+        droppers), so the step where a dropper first goes slack pays none of it. A master's
+        first step (ours: its warm-up) pays it; a later step size (a halved step) does not
+        prepare again."""
+        if self._prepared:
+            return
+        self._prepared = True
+        prepare = getattr(getattr(self._integ, "structure", None), "prepare", None)
+        if prepare is not None:
+            prepare(h)
 
     def _first_step_heights(self, new):
         """A zero-order-hold master passes the pantographs' heights at t0 before the first

@@ -124,6 +124,11 @@ def bundled_stamp(fmu: str | Path) -> str | None:
         return None
 
 
+def _do_step_call(t: float, h: float) -> str:
+    """The doStep call named in a refusal."""
+    return f"fmi2DoStep(t = {t!r}, h = {h!r})"
+
+
 class UnitReal(Real):
     """A Real variable with a ``unit`` attribute."""
 
@@ -324,20 +329,20 @@ class GuardedSlave(Fmi2Slave):
 
     def _step_refusal(self, t: float, h: float) -> str | None:
         """Why doStep(t, h) is not taken (FMI 2.0 state machine), or None."""
-        call = f"fmi2DoStep(t = {t!r}, h = {h!r})"
         if self._terminated:
-            return f"{call} after fmi2Terminate: only fmi2Reset or fmi2FreeInstance may follow"
+            return (f"{_do_step_call(t, h)} after fmi2Terminate: only fmi2Reset or "
+                    "fmi2FreeInstance may follow")
         if self._refused:
             msgs, self._refused = self._refused, []
             more = f" (and {len(msgs) - 3} more)" if len(msgs) > 3 else ""
-            return (f"{call} not taken: refused since the last step: "
+            return (f"{_do_step_call(t, h)} not taken: refused since the last step: "
                     + " | ".join(msgs[:3]) + more)
         if not (math.isfinite(h) and h > 0.0):
-            return f"{call}: the communication step size must be finite and > 0"
+            return f"{_do_step_call(t, h)}: the communication step size must be finite and > 0"
         if not math.isfinite(t) or abs(t - self._time) > self.time_tolerance(h):
-            return (f"{call}: the communication point {t!r} is not the FMU's current time "
-                    f"{self._time!r} (the start time, the end of the last accepted step, or "
-                    f"the time of the FMU state set last)")
+            return (f"{_do_step_call(t, h)}: the communication point {t!r} is not the FMU's "
+                    f"current time {self._time!r} (the start time, the end of the last "
+                    "accepted step, or the time of the FMU state set last)")
         return None
 
     def do_step(self, current_time, step_size):

@@ -87,19 +87,23 @@ class Coupler:
         #: communication steps halved after a discard
         self.halvings = 0
 
-    def _interface(self):
+    def interface(self):
+        """(z_p, v_p, z_w, v_w): each a list of one float per pantograph."""
         zw, vw = self.cat.outputs()
-        zp = np.empty(len(self.pans))
-        vp = np.empty(len(self.pans))
-        for k, p in enumerate(self.pans):
+        zp, vp = [], []
+        for p in self.pans:
             h, v = p.outputs()
-            zp[k], vp[k] = h[0], v[0]
-        return zp, vp, zw, vw
+            zp.append(float(h[0]))
+            vp.append(float(v[0]))
+        return zp, vp, np.asarray(zw, float).tolist(), np.asarray(vw, float).tolist()
 
     def contact_forces(self, predict_h: float = 0.0) -> np.ndarray:
-        zp, vp, zw, vw = self._interface()
-        return np.array([self.law.force(zp[k] + predict_h * vp[k], zw[k], vp[k], vw[k])
-                         for k in range(len(self.pans))])
+        """The contact law at the participants' outputs, the pantographs' heights taken
+        ``predict_h`` ahead with their velocities."""
+        zp, vp, zw, vw = self.interface()
+        force = self.law.force
+        return np.array([force(zp[k] + predict_h * vp[k], zw[k], vp[k], vw[k])
+                         for k in range(len(zp))])
 
     def predicted_forces(self, t: float, h: float) -> np.ndarray:
         """Explicit prediction of the contact forces at t + h: linear extrapolation of the

@@ -1,0 +1,89 @@
+"""The FMU slaves' per-step paths, on slave objects in this process (no FMU build): the
+fmi2GetReal fast path gives what the checked path gives, the FMU state puts every variable
+back, and the catenary prepares its structure once, at its first step."""
+
+import math
+
+import pytest
+
+from pantocosim.fmi.catenary_slave import CatenarySlave
+
+LINEAR = {"catenary_definition": "en50318", "spans": 4, "speed_kmh": 300.0,
+          "n_pantographs": 1, "position_1": 30.0, "static_force_1": 120.0,
+          "catenary_model": 1}
+
+
+def _vr(slave, name):
+    return next(vr for vr, v in slave.vars.items() if v.name == name)
+
+
+def _initialised(params=LINEAR):
+    s = CatenarySlave(instance_name="in-process")
+    s.setup_experiment(0.0)
+    s.enter_initialization_mode()
+    for name, value in params.items():
+        setattr(s, name, value)
+    s.exit_initialization_mode()
+    assert s._error is None, s._error
+    return s
+
+
+@pytest.fixture(scope="module")
+def catenary():
+    return _initialised()
+
+
+def test_get_real_fast_path_equals_the_checked_path(catenary):
+    s = catenary
+    assert s.do_step(0.0, 1e-3)
+    names = ["wire_height_1", "wire_velocity_1", "support_uplift_1", "contact_force_1",
+             "speed_kmh", "newton_iterations"]
+    vrs = [_vr(s, n) for n in names]
+    fast = s.get_real(vrs)
+    assert fast == s._get("fmi2GetReal", "Real", vrs)
+    assert all(type(x) is float for x in fast)
+    assert fast[0] == s.wire_height_1 and fast[0] != 0.0
+    # a variable that is not a Real of real() (an Integer) goes the checked way: converted
+    assert s.get_real([_vr(s, "spans")]) == [4.0]
+    # an unknown reference is refused (the next doStep discards), not read
+    assert math.isnan(s.get_real([10 ** 6])[0])
+    assert s._refused
+    s._refused.clear()
+
+
+def test_get_real_in_initialisation_mode_reads_through_the_getters():
+    s = CatenarySlave(instance_name="laws")
+    s.setup_experiment(0.0)
+    s.enter_initialization_mode()
+    for name, value in LINEAR.items():
+        setattr(s, name, value)
+    vr = _vr(s, "static_height_1")
+    assert s.get_real([vr])[0] > 0.0    # the start law, computed on the read
+    assert s.static_height_1 > 0.0
+
+
+def test_fmu_state_puts_every_variable_back(catenary):
+    s = catenary
+    state = s._get_fmu_state()
+    before = {v.name: v.getter() for v in s.vars.values()}
+    t = s._time
+    assert s.do_step(t, 1e-3)
+    s.window_start = 12.0        # a parameter changed after the state was taken
+    s._set_fmu_state(state)
+    assert {v.name: v.getter() for v in s.vars.values()} == before
+    assert s._time == t
+
+
+def test_the_catenary_prepares_its_structure_once_at_its_first_step(monkeypatch):
+    from pantocosim.core.affine_hht import AffineHHT
+
+    calls = []
+    prepare = AffineHHT.prepare
+    monkeypatch.setattr(AffineHHT, "prepare", lambda self, h: (calls.append(h),
+                                                                 prepare(self, h)))
+    s = _initialised()
+    assert calls == []
+    assert s.do_step(0.0, 1e-3)
+    assert calls == [1e-3]
+    assert s.do_step(1e-3, 5e-4)     # a halved step: no second set-up
+    assert calls == [1e-3]
