@@ -106,6 +106,34 @@ def test_an_older_state_comes_back_with_its_products(line4):
     assert np.array_equal(aff.q, first)
 
 
+def test_a_saved_state_copies_its_products_only_when_they_would_be_overwritten(line4):
+    """A state saved and freed before the next step never copies the kept products; one still
+    held when a step reuses its buffer gets its own copy first, and one pickled carries
+    them: either way the steps from it repeat bit for bit."""
+    import pickle
+
+    _, closed, _, aff = _pair(line4)
+    for n in range(20):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    freed = aff.get_state()
+    assert freed["products"].buffer is aff._P                # no copy at the save
+    del freed
+    _affine_step(aff, closed, _load(21 * H))
+    _affine_step(aff, closed, _load(22 * H))
+    held = aff.get_state()
+    frozen = pickle.loads(pickle.dumps(held))
+    assert frozen["products"].buffer is None
+    for n in range(22, 26):
+        _affine_step(aff, closed, _load((n + 1) * H))
+    assert held["products"].buffer is None                   # copied before the overwrite
+    first = aff.q.copy()
+    for state in (held, frozen):
+        aff.set_state(state)
+        for n in range(22, 26):
+            _affine_step(aff, closed, _load((n + 1) * H))
+        assert np.array_equal(aff.q, first)
+
+
 @pytest.mark.parametrize("pantograph", ["en50318-2mass", "dsa380-rigid"])
 def test_condensed_monolithic_equals_the_assembled_newton_solution(pantograph):
     from pantocosim.master.run import prepare

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import itertools
 import secrets
+import weakref
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -85,6 +86,33 @@ def restore_step_state(st, state: dict) -> None:
     st._id = state["id"]
 
 
+class KeptProducts:
+    """The kept products of a saved state (:meth:`AffineHHT.get_state`): the stepper's buffer
+    itself for as long as the stepper leaves it alone, a copy of it from the moment the
+    stepper is about to write it (:meth:`detach`), or when the state is pickled or copied. A
+    master that frees each saved state before the next step (fmi2FreeFMUstate) never pays for
+    the copy."""
+
+    __slots__ = ("buffer", "data", "__weakref__")
+
+    def __init__(self, buffer: np.ndarray):
+        self.buffer, self.data = buffer, None
+
+    def detach(self) -> None:
+        if self.buffer is not None:
+            self.data, self.buffer = self.buffer.copy(), None
+
+    @property
+    def array(self) -> np.ndarray:
+        return self.buffer if self.buffer is not None else self.data
+
+    def __getstate__(self):
+        return self.array.copy()
+
+    def __setstate__(self, data) -> None:
+        self.buffer, self.data = None, data
+
+
 @dataclass
 class AffineForm:
     """What :class:`AffineHHT` needs of a linear structure."""
@@ -130,6 +158,8 @@ class AffineHHT:
         #: and of the state before the last step (a step writes the other buffer, so a
         #: rollback of it swaps them back)
         self._P, self._P_prev = np.zeros((5, n)), np.zeros((5, n))
+        #: the saved states' :class:`KeptProducts` still on each buffer (by id of the buffer)
+        self._on_buffer = {id(b): weakref.WeakSet() for b in (self._P, self._P_prev)}
         self._prev_id = None
         #: n_steps when each buffer was last formed from the state itself
         self._synced = self._prev_synced = 0
@@ -200,8 +230,17 @@ class AffineHHT:
         none = np.zeros(n_el, dtype=bool)
         un.step_terms(self._N_p, self.v_p, none, none, c_v, c_f, self._x)
 
+    def _to_write(self, buffer: np.ndarray) -> np.ndarray:
+        """``buffer``, once the saved states still on it have their own copy."""
+        watchers = self._on_buffer[id(buffer)]
+        for kept in list(watchers):
+            kept.detach()
+        watchers.clear()
+        return buffer
+
     def _form_products(self) -> None:
         """The kept products from the state itself."""
+        self._to_write(self._P)
         kern.state_products(self._M, self._K, self.q, self.form.q_ref, self.v, self.a,
                             self._P, self._x, self._below)
         self._synced = self.n_steps
@@ -314,6 +353,7 @@ class AffineHHT:
             rows, s = self._removed
             self.form.unilateral.vectors.combine(s * b_delta[rows], rows, out=corr)
         fm, st = self.form, self.settings
+        self._to_write(self._P_prev)
         kern.advance(self._M, self.q_p, self.v_p, self.delta_free, self.W, F, self._delta,
                      self._R_used, corr, self._h, st.alpha, st.beta, st.gamma,
                      self._coef_arr, fm.alpha_r, fm.beta_r, self.f, self.q, self.v, self.a, self._P, self._P_prev,
@@ -322,8 +362,11 @@ class AffineHHT:
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        return {**step_state(self), "products": self._P.copy(),
-                "synced": self._synced}
+        """The state with its kept products (:class:`KeptProducts`: copied only when a step
+        is about to overwrite them while the state is still held)."""
+        kept = KeptProducts(self._P)
+        self._on_buffer[id(self._P)].add(kept)
+        return {**step_state(self), "products": kept, "synced": self._synced}
 
     def set_state(self, state: dict) -> None:
         """Put back a :meth:`get_state` (with its kept products, so the steps that follow
@@ -336,10 +379,15 @@ class AffineHHT:
         if label == self._prev_id:
             self._swap_products()
             self._prev_id = current
-        else:
-            self._P[:] = state["products"]
-            self._synced = int(state["synced"])
-            self._prev_id = None
+            return
+        products = state["products"]
+        products = products.array if isinstance(products, KeptProducts) else products
+        if products is self._P_prev:
+            self._swap_products()
+        elif products is not self._P:
+            self._to_write(self._P)[:] = products
+        self._synced = int(state["synced"])
+        self._prev_id = None
 
 
 class ForcedAffineIntegrator:
