@@ -143,3 +143,22 @@ def test_window_kernel_module_is_written_once(monkeypatch, tmp_path):
         assert written[0].stat().st_mtime_ns == stamp
     finally:
         band_window.solver.cache_clear()
+
+
+def test_window_kernel_compiled_in_memory_when_its_file_cannot_be_loaded(monkeypatch, tmp_path):
+    monkeypatch.setenv(band_window.FOLDER_VARIABLE, str(tmp_path))
+    band_window.solver.cache_clear()
+    try:
+        band_window.solver(7)
+        (written,) = tmp_path.glob("band_window_w7_*.py")
+        written.write_text("raise ImportError('damaged')\n")   # same name, other content
+        band_window.solver.cache_clear()
+        kernels = band_window.solver(7)
+        A, ab = _spd_band(40, 6, seed=11)
+        chol = BandedCholesky.factor(ab)
+        r = np.random.default_rng(12).standard_normal(40)
+        x = np.empty(40)
+        kernels.solve(chol.LT, chol.R, r, x)
+        assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
+    finally:
+        band_window.solver.cache_clear()

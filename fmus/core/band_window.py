@@ -38,7 +38,8 @@ FOLDER_VARIABLE = "PANTOCOSIM_KERNEL_DIR"
 
 def _row(rows: str, w: int) -> list[str]:
     """x_j and the pending sums' shift for row j of ``rows`` (inside a loop over j)."""
-    lines = [f"        r = {rows}[j]", "        xj = _flush((x[j] - a0) * r[0])", "        x[j] = xj"]
+    lines = [f"        r = {rows}[j]", "        xj = _flush((x[j] - a0) * r[0])",
+             "        x[j] = xj"]
     lines += [f"        a{k} = a{k + 1} + r[{k + 1}] * xj" for k in range(w - 2)]
     if w > 1:
         lines.append(f"        a{w - 2} = r[{w - 1}] * xj")
@@ -91,7 +92,8 @@ def _folders():
         yield Path(os.environ[FOLDER_VARIABLE])
     cache_home = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     yield Path(cache_home) / "pantocosim" / "kernels"
-    yield Path(tempfile.gettempdir()) / f"pantocosim-kernels-{os.getuid()}"
+    user = getattr(os, "getuid", lambda: "user")()
+    yield Path(tempfile.gettempdir()) / f"pantocosim-kernels-{user}"
 
 
 def _written(name: str, source: str) -> Path | None:
@@ -123,10 +125,18 @@ def solver(w: int):
     digest = hashlib.sha1(source.encode()).hexdigest()[:12]
     name = f"band_window_w{w}_{digest}"
     path = _written(name, source)
-    if path is None:
-        namespace: dict = {}
-        exec(compile(source.replace("cache=True", "cache=False"), name, "exec"), namespace)
-        return SimpleNamespace(**namespace)
+    if path is not None:
+        try:
+            return _imported(name, path)
+        except Exception:  # noqa: BLE001 - an unreadable file: compile in memory instead
+            sys.modules.pop(name, None)
+    namespace: dict = {}
+    exec(compile(source.replace("cache=True", "cache=False"), name, "exec"), namespace)
+    return SimpleNamespace(**namespace)
+
+
+def _imported(name: str, path: Path):
+    """The module ``name`` at ``path``."""
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module          # numba's cached code refers to it by name
