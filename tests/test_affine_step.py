@@ -70,7 +70,7 @@ def test_kept_products_follow_the_state(line4):
     _, closed, _, aff = _pair(line4)
     for n in range(400):
         _affine_step(aff, closed, _load((n + 1) * H))
-    assert aff.n_steps - aff._synced[aff._cur] == 400 < affine_hht.RESYNC_STEPS  # never re-formed
+    assert aff.n_steps - aff._synced == 400 < affine_hht.RESYNC_STEPS    # never re-formed
     P = np.zeros_like(aff._P)
     state_products(aff._M, aff._K, aff.q, aff.form.q_ref, aff.v, aff.a, P,
                    np.zeros(aff.form.n), np.zeros(aff.form.n))
@@ -106,27 +106,26 @@ def test_an_older_state_comes_back_with_its_products(line4):
     assert np.array_equal(aff.q, first)
 
 
-def test_a_saved_state_is_copied_only_when_it_would_be_overwritten(line4):
-    """A state saved and freed before the next step is never copied (its q, v, a, f and kept
-    products stay in the stepper's buffer); one still held when a step reuses its buffer
-    gets its own copy first, and one pickled carries them: either way the steps from it
-    repeat bit for bit."""
+def test_a_saved_state_copies_its_products_only_when_they_would_be_overwritten(line4):
+    """A state saved and freed before the next step never copies the kept products; one still
+    held when a step reuses its buffer gets its own copy first, and one pickled carries
+    them: either way the steps from it repeat bit for bit."""
     import pickle
 
     _, closed, _, aff = _pair(line4)
     for n in range(20):
         _affine_step(aff, closed, _load((n + 1) * H))
     freed = aff.get_state()
-    assert freed["arrays"].buffer is aff._buffers[aff._cur]  # no copy at the save
+    assert freed["products"].buffer is aff._P                # no copy at the save
     del freed
     _affine_step(aff, closed, _load(21 * H))
     _affine_step(aff, closed, _load(22 * H))
     held = aff.get_state()
     frozen = pickle.loads(pickle.dumps(held))
-    assert frozen["arrays"].buffer is None
+    assert frozen["products"].buffer is None
     for n in range(22, 26):
         _affine_step(aff, closed, _load((n + 1) * H))
-    assert held["arrays"].buffer is None                     # copied before the overwrite
+    assert held["products"].buffer is None                   # copied before the overwrite
     first = aff.q.copy()
     for state in (held, frozen):
         aff.set_state(state)

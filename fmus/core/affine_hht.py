@@ -52,8 +52,6 @@ PREFILL_BYTES = 256 * 2**20
 #: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
 #: steps, and neighbouring droppers do so in turn: the same sets come back)
 KEPT_SLACK_SETS = 64
-#: rows of a state buffer: q, v, a, f and the five kept products
-_ROWS = 9
 #: labels of the states a step starts from (a rolled-back step reuses its free response);
 #: the random token keeps a label restored from another process's saved state unique
 _TOKEN = secrets.randbits(64)
@@ -88,12 +86,12 @@ def restore_step_state(st, state: dict) -> None:
     st._id = state["id"]
 
 
-class KeptState:
-    """The arrays of a saved state (:meth:`AffineHHT.get_state`: q, v, a, f and the kept
-    products): the stepper's buffer itself for as long as the stepper leaves it alone, a copy
-    of it from the moment the stepper is about to write it (:meth:`detach`), or when the
-    state is pickled or copied. A master that frees each saved state before the next step
-    (fmi2FreeFMUstate) never pays for a copy."""
+class KeptProducts:
+    """The kept products of a saved state (:meth:`AffineHHT.get_state`): the stepper's buffer
+    itself for as long as the stepper leaves it alone, a copy of it from the moment the
+    stepper is about to write it (:meth:`detach`), or when the state is pickled or copied. A
+    master that frees each saved state before the next step (fmi2FreeFMUstate) never pays for
+    the copy."""
 
     __slots__ = ("buffer", "data", "__weakref__")
 
@@ -151,20 +149,20 @@ class AffineHHT:
         self.settings = settings
         n = form.n
         self.t, self.n_steps = 0.0, 0
-        #: two buffers of the state's arrays: q, v, a, f and the kept products
-        #: [K d, K v, K a, M v, M a] (:mod:`.affine_kernels`); a step writes the other one
-        #: and makes it current, so a rollback of the last step, or a saved state whose buffer
-        #: is still intact, needs no copy
-        self._buffers = (np.zeros((_ROWS, n)), np.zeros((_ROWS, n)))
-        #: the saved states' :class:`KeptState` still on each buffer
-        self._on_buffer = (weakref.WeakSet(), weakref.WeakSet())
-        #: n_steps when each buffer's products were last formed from the state itself
-        self._synced = [0, 0]
-        self._use(0)
+        self.q, self.v, self.a, self.f = (np.zeros(n) for _ in range(4))
         self.q_p, self.v_p, self.d_p = (np.zeros(n) for _ in range(3))
         self._rhs, self.delta_free, self._delta = (np.zeros(n) for _ in range(3))
         #: M and K for the products (empty band diagonals skipped)
         self._M, self._K = (SparseBand.from_band(b).parts for b in (form.M_band, form.K_band))
+        #: the kept products [K d, K v, K a, M v, M a] of the state (:mod:`.affine_kernels`)
+        #: and of the state before the last step (a step writes the other buffer, so a
+        #: rollback of it swaps them back)
+        self._P, self._P_prev = np.zeros((5, n)), np.zeros((5, n))
+        #: the saved states' :class:`KeptProducts` still on each buffer (by id of the buffer)
+        self._on_buffer = {id(b): weakref.WeakSet() for b in (self._P, self._P_prev)}
+        self._prev_id = None
+        #: n_steps when each buffer was last formed from the state itself
+        self._synced = self._prev_synced = 0
         #: the right-hand side solved with the slack terms, its load and rank-one terms
         #: (``_corr``, kept zero between steps), work vectors
         self._R, self._corr, self._MD, self._x, self._below = (np.zeros(n) for _ in range(5))
@@ -190,7 +188,6 @@ class AffineHHT:
         without force in the damping)."""
         fm = self.form
         self.t, self.n_steps = float(t0), 0
-        self._to_write(self._cur)
         self.q[:] = q0
         self.v[:] = 0.0 if v0 is None else v0
         un = fm.unilateral
@@ -199,6 +196,7 @@ class AffineHHT:
         self.a[:] = -fm.factor(1.0, 0.0, 0.0).solve(self.f)
         self._h = None
         self._form_products()
+        self._prev_id = None
         self._id, self._memo = _new_id(), None
 
     @property
@@ -232,27 +230,20 @@ class AffineHHT:
         none = np.zeros(n_el, dtype=bool)
         un.step_terms(self._N_p, self.v_p, none, none, c_v, c_f, self._x)
 
-    def _use(self, k: int) -> None:
-        """Make buffer k the current state (q, v, a, f and the products are its rows)."""
-        self._cur = k
-        self.q, self.v, self.a, self.f = self._buffers[k][:4]
-        self._P = self._buffers[k][4:]
-        self._next = self._buffers[1 - k]
-
-    def _to_write(self, k: int) -> np.ndarray:
-        """Buffer k, once the saved states still on it have their own copy."""
-        watchers = self._on_buffer[k]
+    def _to_write(self, buffer: np.ndarray) -> np.ndarray:
+        """``buffer``, once the saved states still on it have their own copy."""
+        watchers = self._on_buffer[id(buffer)]
         for kept in list(watchers):
             kept.detach()
         watchers.clear()
-        return self._buffers[k]
+        return buffer
 
     def _form_products(self) -> None:
         """The kept products from the state itself."""
-        self._to_write(self._cur)
+        self._to_write(self._P)
         kern.state_products(self._M, self._K, self.q, self.form.q_ref, self.v, self.a,
                             self._P, self._x, self._below)
-        self._synced[self._cur] = self.n_steps
+        self._synced = self.n_steps
 
     # ------------------------------------------------------------------ one step
     def begin(self, h: float, loads) -> None:
@@ -268,7 +259,7 @@ class AffineHHT:
             # (only a begin from another state overwrites them)
             self.passes = 1
             return
-        if self.n_steps - self._synced[self._cur] >= RESYNC_STEPS:
+        if self.n_steps - self._synced >= RESYNC_STEPS:
             self._form_products()
         kern.predict_rhs(self.q, self.v, self.a, fm.q_ref, self._P, fm.r0, self.f, h, s.beta,
                          s.gamma, fm.alpha_r, fm.beta_r, s.alpha, c_f, self.q_p, self.v_p,
@@ -339,12 +330,16 @@ class AffineHHT:
             self._solve(slack)
             return False
         self._advance(F, b_delta)
-        self._use(1 - self._cur)
+        self._swap_products()
         self.committed = slack
         self.t += self._h
         self.n_steps += 1
-        self._id = _new_id()
+        self._prev_id, self._id = self._id, _new_id()
         return True
+
+    def _swap_products(self) -> None:
+        self._P, self._P_prev = self._P_prev, self._P
+        self._synced, self._prev_synced = self._prev_synced, self._synced
 
     def _advance(self, F, b_delta) -> None:
         """q, v, a of the step (Delta = Delta_free + sum_k F_k w_k) and the kept products,
@@ -358,38 +353,41 @@ class AffineHHT:
             rows, s = self._removed
             self.form.unilateral.vectors.combine(s * b_delta[rows], rows, out=corr)
         fm, st = self.form, self.settings
-        nxt = 1 - self._cur
-        q1, v1, a1, f1 = self._to_write(nxt)[:4]
+        self._to_write(self._P_prev)
         kern.advance(self._M, self.q_p, self.v_p, self.delta_free, self.W, F, self._delta,
                      self._R_used, corr, self._h, st.alpha, st.beta, st.gamma,
-                     self._coef_arr, fm.alpha_r, fm.beta_r, self.f, f1, q1, v1, a1, self._P,
-                     self._next[4:], self._MD, self._below)
-        self._synced[nxt] = self._synced[self._cur]
+                     self._coef_arr, fm.alpha_r, fm.beta_r, self.f, self.q, self.v, self.a, self._P, self._P_prev,
+                     self._MD, self._below)
+        self._prev_synced = self._synced
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
-        """The state: its arrays (q, v, a, f, the kept products) as a :class:`KeptState`,
-        copied only when a step is about to overwrite them while the state is still held."""
-        kept = KeptState(self._buffers[self._cur])
-        self._on_buffer[self._cur].add(kept)
-        return {"t": self.t, "n_steps": self.n_steps, "id": self._id,
-                "committed": self.committed.copy(), "arrays": kept,
-                "synced": self._synced[self._cur]}
+        """The state with its kept products (:class:`KeptProducts`: copied only when a step
+        is about to overwrite them while the state is still held)."""
+        kept = KeptProducts(self._P)
+        self._on_buffer[id(self._P)].add(kept)
+        return {**step_state(self), "products": kept, "synced": self._synced}
 
     def set_state(self, state: dict) -> None:
         """Put back a :meth:`get_state` (with its kept products, so the steps that follow
-        repeat bit for bit): a state whose buffer is still intact (the current one, or the
-        one before the last step) is made current without a copy."""
-        self.t, self.n_steps = float(state["t"]), int(state["n_steps"])
-        self.committed = np.array(state["committed"], dtype=bool)
-        self._id = state["id"]
-        arrays = state["arrays"]
-        arrays = arrays.array if isinstance(arrays, KeptState) else arrays
-        if arrays is self._buffers[1 - self._cur]:
-            self._use(1 - self._cur)
-        elif arrays is not self._buffers[self._cur]:
-            self._to_write(self._cur)[:] = arrays
-            self._synced[self._cur] = int(state["synced"])
+        repeat bit for bit); those of the current or the previous state are still in their
+        buffers."""
+        current, label = self._id, state["id"]
+        restore_step_state(self, state)
+        if label == current:
+            return
+        if label == self._prev_id:
+            self._swap_products()
+            self._prev_id = current
+            return
+        products = state["products"]
+        products = products.array if isinstance(products, KeptProducts) else products
+        if products is self._P_prev:
+            self._swap_products()
+        elif products is not self._P:
+            self._to_write(self._P)[:] = products
+        self._synced = int(state["synced"])
+        self._prev_id = None
 
 
 class ForcedAffineIntegrator:

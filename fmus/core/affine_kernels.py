@@ -93,12 +93,12 @@ def predict_rhs(q, v, a, q_ref, P, r0, f, h, beta, gamma, ar, br, alpha, c_f,
 
 @njit(cache=True, fastmath=True)
 def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, alpha, beta, gamma, coef, ar,
-            br, f, f_next, q, v, a, P, P_next, MD, below):
-    """Take the step into the next state's arrays: Delta = Delta_free + sum_k F_k W_k, q, v, a
-    from q_p, v_p and Delta, the kept products P advanced into P_next by M Delta and
+            br, f, q, v, a, P, P_next, MD, below):
+    """Take the step: Delta = Delta_free + sum_k F_k W_k, q, v, a from q_p, v_p and Delta,
+    and the kept products P advanced into P_next by M Delta and
     K Delta = (A Delta - (c_a + c_f c_v ar) M Delta) / (c_f (1 + c_v br)) with
-    A Delta = R + corr (``corr`` is zeroed on the way), and
-    f_next = (alpha f - M a_{n+1}) / c_f from (3.16) itself."""
+    A Delta = R + corr (``corr`` is zeroed on the way); f_{n+1} = (alpha f_n - M a_{n+1}) / c_f
+    from (3.16) itself."""
     n = delta.shape[0]
     for i in range(n):
         delta[i] = delta_free[i]
@@ -120,7 +120,7 @@ def advance(M, q_p, v_p, delta_free, W, F, delta, R, corr, h, alpha, beta, gamma
     inv_f = 1.0 / c_f
     Ma1 = P_next[MA]
     for i in range(n):
-        f_next[i] = (alpha * f[i] - Ma1[i]) * inv_f
+        f[i] = (alpha * f[i] - Ma1[i]) * inv_f
     for i in range(n):
         d = delta[i]
         q[i] = q_p[i] + d
