@@ -1,6 +1,7 @@
 """Banded Cholesky with cached unit-vector solves (pantocosim.core.banded)."""
 
 import numpy as np
+import pytest
 import scipy.linalg as sla
 
 from pantocosim.core import band_window
@@ -112,53 +113,47 @@ def test_window_substitution_of_every_kind_of_width_against_lapack():
         assert np.allclose(x, expected, rtol=1e-12, atol=1e-13), w
 
 
-def test_window_kernel_compiled_in_memory_where_no_folder_is_writable(monkeypatch, tmp_path):
-    blocked = tmp_path / "file"
+@pytest.fixture
+def kernel_folder(monkeypatch, tmp_path):
+    """A kernel folder of the test's own, and :func:`band_window.solver` forgetting what it
+    loaded before and after the test."""
+    monkeypatch.setenv(band_window.FOLDER_VARIABLE, str(tmp_path))
+    band_window.solver.cache_clear()
+    yield tmp_path
+    band_window.solver.cache_clear()
+
+
+def _solves_like_lapack(kernels, n, kd, seed):
+    A, ab = _spd_band(n, kd, seed=seed)
+    chol = BandedCholesky.factor(ab)
+    r = np.random.default_rng(seed + 1).standard_normal(n)
+    x = np.empty(n)
+    kernels.solve(chol.LT, chol.R, r, x)
+    return np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
+
+
+def test_window_kernel_compiled_in_memory_where_no_folder_is_writable(monkeypatch,
+                                                                       kernel_folder):
+    blocked = kernel_folder / "file"
     blocked.write_text("")                          # a file where a folder should be
     monkeypatch.setattr(band_window, "_folders", lambda: iter([blocked / "kernels"]))
+    assert _solves_like_lapack(band_window.solver(4), 30, 3, seed=8)
+    assert not (blocked / "kernels").exists()
+
+
+def test_window_kernel_module_is_written_once(kernel_folder):
+    band_window.solver(6)
+    written = list(kernel_folder.glob("band_window_w6_*.py"))
+    assert len(written) == 1
+    stamp = written[0].stat().st_mtime_ns
     band_window.solver.cache_clear()
-    try:
-        solve = band_window.solver(4)
-        A, ab = _spd_band(30, 3, seed=8)
-        chol = BandedCholesky.factor(ab)
-        r = np.random.default_rng(9).standard_normal(30)
-        x = np.empty(30)
-        solve.solve(chol.LT, chol.R, r, x)
-        assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
-        assert not (blocked / "kernels").exists()
-    finally:
-        band_window.solver.cache_clear()
+    band_window.solver(6)                            # found, not written again
+    assert written[0].stat().st_mtime_ns == stamp
 
 
-def test_window_kernel_module_is_written_once(monkeypatch, tmp_path):
-    monkeypatch.setenv(band_window.FOLDER_VARIABLE, str(tmp_path))
+def test_window_kernel_compiled_in_memory_when_its_file_cannot_be_loaded(kernel_folder):
+    band_window.solver(7)
+    (written,) = kernel_folder.glob("band_window_w7_*.py")
+    written.write_text("raise ImportError('damaged')\n")   # same name, other content
     band_window.solver.cache_clear()
-    try:
-        band_window.solver(6)
-        written = list(tmp_path.glob("band_window_w6_*.py"))
-        assert len(written) == 1
-        stamp = written[0].stat().st_mtime_ns
-        band_window.solver.cache_clear()
-        band_window.solver(6)                        # found, not written again
-        assert written[0].stat().st_mtime_ns == stamp
-    finally:
-        band_window.solver.cache_clear()
-
-
-def test_window_kernel_compiled_in_memory_when_its_file_cannot_be_loaded(monkeypatch, tmp_path):
-    monkeypatch.setenv(band_window.FOLDER_VARIABLE, str(tmp_path))
-    band_window.solver.cache_clear()
-    try:
-        band_window.solver(7)
-        (written,) = tmp_path.glob("band_window_w7_*.py")
-        written.write_text("raise ImportError('damaged')\n")   # same name, other content
-        band_window.solver.cache_clear()
-        kernels = band_window.solver(7)
-        A, ab = _spd_band(40, 6, seed=11)
-        chol = BandedCholesky.factor(ab)
-        r = np.random.default_rng(12).standard_normal(40)
-        x = np.empty(40)
-        kernels.solve(chol.LT, chol.R, r, x)
-        assert np.allclose(x, sla.solve(A, r), rtol=1e-12, atol=1e-13)
-    finally:
-        band_window.solver.cache_clear()
+    assert _solves_like_lapack(band_window.solver(7), 40, 6, seed=11)
