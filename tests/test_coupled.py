@@ -260,6 +260,48 @@ def test_discard_rolls_back_and_halves_the_step(scheme):
         coupler.step(0.1, 1e-3)
 
 
+class _CountingStates:
+    """A participant that counts its state saves."""
+
+    def __init__(self, inner):
+        self.inner, self.saves = inner, 0
+
+    def get_state(self):
+        self.saves += 1
+        return self.inner.get_state()
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", "gauss-seidel"])
+def test_a_discard_between_checkpoints_is_rolled_back_by_replay(scheme):
+    """Explicit schemes save the states every checkpoint_steps steps: a step discarded 18
+    steps after the checkpoint is rolled back by restoring it and replaying the journal, and
+    the run is the one of a coupler saving the states at every step."""
+    from pantocosim.master.cosim import in_process_subsystems
+    from pantocosim.master.coupling import Coupler, CouplingSettings
+
+    runs = []
+    for period in (1, 32):
+        prep = prepare(SHORT)
+        cat, pans = in_process_subsystems(prep)
+        cat = _CountingStates(cat)
+        pans[0] = _Discarding(pans[0], h_max=3e-4, t_from=0.05, t_to=0.052)
+        coupler = Coupler(cat, pans, prep.contact,
+                          CouplingSettings(scheme=scheme, checkpoint_steps=period))
+        coupler.initialise(prep.static_forces)
+        for i in range(70):
+            coupler.step(i * 1e-3, 1e-3)
+        assert pans[0].discards == 6 and coupler.halvings == 6
+        runs.append((cat.saves, np.concatenate([coupler.forces, cat.integ.q, cat.integ.v,
+                                                pans[0].integ.q, pans[0].integ.v])))
+    (saves_1, end_1), (saves_32, end_32) = runs
+    # period 32: checkpoints at t = 0, 0.032 and at each discard that had to replay
+    assert saves_1 > 70 and saves_32 == 6
+    assert np.array_equal(end_1, end_32)
+
+
 @pytest.mark.parametrize("scheme", ["jacobi", "implicit"])
 def test_warm_up_leaves_the_coupled_run_as_it_was(scheme):
     """Coupler.warm_up takes a step and puts the participants and the coupler back: the

@@ -24,6 +24,7 @@ import numpy as np
 from pantocosim.core.errors import ConvergenceError, ParameterError, PantocosimError
 
 from .accelerators import ACCELERATORS, DEFAULT_ACCELERATOR
+from .rollback import JournaledParticipant, Rollback
 from .schemes import SCHEME_NAMES, scheme_named
 
 
@@ -38,6 +39,9 @@ class CouplingSettings:
     #: en50318-300, reuse costs iterations: 4.0 per step with 1-4 steps against 3.0 without)
     reuse_steps: int = 0
     min_step: float = 1e-6            # s, floor of the step halving after a discard
+    #: schemes that do not restore states themselves: steps between checkpoints of the
+    #: participants' states (a discarded step is rolled back by replay, :mod:`.rollback`)
+    checkpoint_steps: int = 32
     extrapolate: bool = True          # explicit schemes: linear extrapolation of the forces
 
     def validate(self):
@@ -49,6 +53,9 @@ class CouplingSettings:
                                  f"must be one of {sorted(ACCELERATORS)}")
         if not self.tolerance > 0:
             raise ParameterError("tolerance", self.tolerance, "must be > 0")
+        if not (isinstance(self.checkpoint_steps, int) and self.checkpoint_steps >= 1):
+            raise ParameterError("checkpoint_steps", self.checkpoint_steps,
+                                 "must be an integer >= 1")
 
 
 class Subsystem:
@@ -69,11 +76,13 @@ class Coupler:
     def __init__(self, catenary: Subsystem, pantographs: list[Subsystem], law,
                  settings: CouplingSettings):
         settings.validate()
-        self.cat = catenary
-        self.pans = pantographs
         self.law = law
         self.s = settings
         self.scheme = scheme_named(settings.scheme)
+        period = 1 if self.scheme.restores_states else settings.checkpoint_steps
+        self.rollback = Rollback(self._save, self.restore, self._free, period)
+        self.cat = JournaledParticipant(catenary, self.rollback.journal)
+        self.pans = [JournaledParticipant(p, self.rollback.journal) for p in pantographs]
         self.acc = ACCELERATORS[settings.accelerator](
             initial_relaxation=settings.initial_relaxation, reuse_steps=settings.reuse_steps)
         self.forces = np.zeros(len(pantographs))
@@ -148,7 +157,7 @@ class Coupler:
             p.free_state(s)
 
     #: what the coupler holds but does not own (left alone by :meth:`warm_up`)
-    _SHARED = ("cat", "pans", "law", "s", "scheme")
+    _SHARED = ("cat", "pans", "law", "s", "scheme", "rollback")
 
     def warm_up(self, t: float, h: float) -> None:
         """Take one step of h and put everything back (the participants' states and the
@@ -156,6 +165,7 @@ class Coupler:
         FMUs, the catenary's factorization for h) is paid at set-up, not inside the paced
         loop. A failing step is left for the run to report."""
         own = copy.deepcopy({k: v for k, v in vars(self).items() if k not in self._SHARED})
+        self.rollback.release()
         states = self._save()
         failed = None
         try:
@@ -170,31 +180,33 @@ class Coupler:
             raise failed from None
         finally:
             self._free(states)
+            self.rollback.release()
         vars(self).update(own)
 
     def step(self, t: float, h: float) -> int:
         """One communication step t -> t + h; returns the number of coupling iterations.
 
         When a participant discards the step (fmi2Discard, or a model's Newton failure), every
-        participant is rolled back to t and the step is retried as two halves, recursively,
-        down to ``settings.min_step``; below it the run stops with the participant's message.
+        participant is rolled back to t (:mod:`.rollback`) and the step is retried as two
+        halves, recursively, down to ``settings.min_step``; below it the run stops with the
+        participant's message.
         """
-        states = self._save()
+        rollback = self.rollback
+        rollback.begin_step()
         try:
-            iters = self._step_once(t, h, states)
-            if self._law_now is not None:
-                self._law_prev, self._law_now = self._law_now, None
-            return iters
+            iters = self._step_once(t, h, rollback.states_at_t)
         except (ConvergenceError, _Discard) as exc:
-            self.restore(states)
+            rollback.back_to_step_start()
             if h / 2.0 < self.s.min_step:
                 raise ConvergenceError(
                     f"step at t = {t:.6g} s discarded down to h = {h:.3g} s (floor "
                     f"{self.s.min_step:g} s): {exc}", time=t) from None
             self.halvings += 1
             return self.step(t, h / 2.0) + self.step(t + h / 2.0, h / 2.0)
-        finally:
-            self._free(states)
+        rollback.end_step()
+        if self._law_now is not None:
+            self._law_prev, self._law_now = self._law_now, None
+        return iters
 
     def _step_once(self, t: float, h: float, states) -> int:
         try:

@@ -12,8 +12,12 @@ class Scheme:
     #: iterative schemes converge the interface forces: the recorded force is the converged
     #: one, and the run reports coupling iterations and the interface tolerance
     iterative = False
+    #: the step restores the participants' states at t between its passes: the coupler
+    #: saves them at every step (else it keeps a checkpoint and a journal, :mod:`..rollback`)
+    restores_states = False
 
     def step(self, coupler, t: float, h: float, states) -> tuple:
         """Advance every participant from t to t + h: (interface forces, iterations);
-        ``states`` are the participants' states at t (for rollback)."""
+        ``states`` are the participants' states at t (for rollback) if the scheme
+        :attr:`restores_states`, else None."""
         raise NotImplementedError

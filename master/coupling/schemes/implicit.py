@@ -14,6 +14,7 @@ from .base import Scheme
 class Implicit(Scheme):
     name = "implicit"
     iterative = True
+    restores_states = True
 
     def step(self, coupler, t, h, states):
         """Iterate on the interface forces, restoring ``states`` (saved at t) between
