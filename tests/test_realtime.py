@@ -92,3 +92,38 @@ def test_clock_waits_for_each_deadline_and_counts_late_steps():
     assert now[0] >= 4.0  # waited for the last deadline
     assert s["step_time"]["max_ms"] == pytest.approx(2500.0, rel=1e-6)
     assert "2 missed deadlines" in describe(s)
+
+
+def test_paced_loop_collects_garbage_in_its_waits_only():
+    """Inside a paced loop the automatic collector is off; a reference cycle made in a step
+    is collected in the wait that follows, and the collector is back on after the loop."""
+    import gc
+    import weakref
+
+    class Node:
+        pass
+
+    now = [0.0]
+
+    def sleep(s):
+        now[0] += s
+
+    def clock():
+        now[0] += 1e-9
+        return now[0]
+
+    assert gc.isenabled()
+    c = StepClock(1.0, realtime=True, clock=clock, sleep=sleep, spin_s=0.0)
+    refs = []
+    for k in c.steps(3):
+        assert not gc.isenabled()
+        if k == 0:
+            for _ in range(2 * gc.get_threshold()[0]):   # young objects past the threshold
+                a, b = Node(), Node()
+                a.other, b.other = b, a
+            refs.append(weakref.ref(a))
+            del a, b
+        now[0] += 0.1
+        if k == 1:
+            assert refs[0]() is None       # collected in the wait after step 0
+    assert gc.isenabled()
