@@ -280,7 +280,8 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     # the FMU files are checked before anything is written
     plan = None if in_process else (plan or fmu_paths(prep))
     names = column_names(len(prep.pantographs), len(prep.support_x))
-    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
+    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names,
+                   rows=prep.n_steps + 1)
     with stop_on_interrupt() as stop:
         return _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
                           stop)

@@ -27,6 +27,11 @@ def reason(exc: OSError) -> str:
     return exc.strerror or str(exc) or type(exc).__name__
 
 
+def write_error(field: str, path, exc: OSError) -> OutputError:
+    """The :class:`OutputError` naming ``path`` for an OSError while writing it."""
+    return OutputError(field, path, f"cannot be written: {reason(exc)}")
+
+
 @contextmanager
 def writing(field: str, path):
     """Turn an OSError while writing ``path`` into an :class:`OutputError` naming it."""
@@ -35,7 +40,7 @@ def writing(field: str, path):
     except OutputError:
         raise
     except OSError as exc:
-        raise OutputError(field, path, f"cannot be written: {reason(exc)}") from None
+        raise write_error(field, path, exc) from None
 
 
 class OutputFolder:

@@ -14,14 +14,21 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import OutputError
-from pantocosim.master.output_folder import writing
+from pantocosim.master.output_folder import write_error, writing
+
+#: rows the in-memory columns start with when the caller does not say (doubled when full)
+INITIAL_ROWS = 1024
 
 
 class Recorder:
-    def __init__(self, path: Path | None, names: list[str], flush_every: int = 500):
+    def __init__(self, path: Path | None, names: list[str], flush_every: int = 500,
+                 rows: int = INITIAL_ROWS):
+        """``rows``: the rows the run will append (kept in memory from the start, so a long
+        paced run never stops to copy them)."""
         self.names = list(names)
         self.path = None if path is None else Path(path)
-        self._rows: list[np.ndarray] = []
+        self._data = np.zeros((max(int(rows), 1), len(self.names)))
+        self._n = 0
         self._pending = 0
         self.flush_every = flush_every
         self._format = ",".join(["%.10g"] * len(self.names)) + "\n"
@@ -33,23 +40,25 @@ class Recorder:
                 self._fh.write(",".join(self.names) + "\n")
 
     def append(self, row) -> None:
-        row = np.asarray(row, dtype=float)
-        if row.size != len(self.names):
-            raise ValueError(f"row has {row.size} values, expected {len(self.names)}")
-        self._rows.append(row)
+        if len(row) != len(self.names):
+            raise ValueError(f"row has {len(row)} values, expected {len(self.names)}")
+        if self._n == len(self._data):
+            self._data = np.concatenate([self._data, np.zeros_like(self._data)])
+        kept = self._data[self._n]
+        kept[:] = row
+        self._n += 1
         if self._fh is not None:
-            self._write(self._format % tuple(row.tolist()))
+            self._write(self._format % tuple(kept.tolist()))
             self._pending += 1
             if self._pending >= self.flush_every:
                 self.flush()
 
     def _write(self, text: str) -> None:
         try:
-            with writing("file", self.path):
-                self._fh.write(text)
-        except OutputError:
+            self._fh.write(text)
+        except OSError as exc:
             self._abandon()
-            raise
+            raise write_error("file", self.path, exc) from None
 
     def flush(self) -> None:
         self._pending = 0
@@ -77,8 +86,8 @@ class Recorder:
                 fh.close()
 
     def columns(self) -> dict[str, np.ndarray]:
-        data = np.vstack(self._rows) if self._rows else np.zeros((0, len(self.names)))
+        data = self._data[:self._n].copy()
         return {name: data[:, i] for i, name in enumerate(self.names)}
 
     def __len__(self) -> int:
-        return len(self._rows)
+        return self._n

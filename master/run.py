@@ -281,18 +281,21 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
     stepper.warm_up(sc.dt)
     n_p = len(prep.pantographs)
     names = column_names(n_p, len(prep.support_x))
-    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names)
+    rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names,
+                   rows=prep.n_steps + 1)
     t_wall = _time.perf_counter()
+
+    row = np.zeros(len(names))
 
     def record(iterations):
         contacts, uplift = stepper.observe()
         t = stepper.t
         x = prep.catenary.positions(t)
-        row = [t]
+        row[0] = t
         for k in range(n_p):
-            row += [x[k], *contacts[k]]
-        row += list(uplift)
-        row.append(iterations)
+            row[1 + 4 * k:5 + 4 * k] = (x[k], *contacts[k])
+        row[1 + 4 * n_p:-1] = uplift
+        row[-1] = iterations
         rec.append(row)
 
     error = None
