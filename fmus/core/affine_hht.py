@@ -233,9 +233,10 @@ class AffineHHT:
     def _to_write(self, buffer: np.ndarray) -> np.ndarray:
         """``buffer``, once the saved states still on it have their own copy."""
         watchers = self._on_buffer[id(buffer)]
-        for kept in list(watchers):
-            kept.detach()
-        watchers.clear()
+        if watchers:                  # (listing an empty WeakSet costs 2 us a step)
+            for kept in list(watchers):
+                kept.detach()
+            watchers.clear()
         return buffer
 
     def _form_products(self) -> None:
