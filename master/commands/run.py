@@ -36,7 +36,8 @@ def add_parser(sub):
     add_size_options(p)
     p.add_argument("--realtime", action="store_true",
                    help="pace each step to the wall clock as a hardware-in-the-loop loop "
-                   "would (step k ends no earlier than start + (k + 1) dt) and report missed "
+                   "would (step k ends no earlier than start + (k + 1) dt; the loop busy-waits, "
+                   "keeping one core, and collects garbage between steps) and report missed "
                    "deadlines; the step-time percentiles are reported either way")
     return p
 
