@@ -150,8 +150,7 @@ def in_process_subsystems(prep: Prepared):
     sc = prep.scenario
     csub = ModelSubsystem(cat, prep.q_cat0, HHTSettings.for_runs(sc.alpha, sc.newton_rtol),
                           prep.static_forces,
-                          lambda integ: (cat.wire_height(integ.t, integ.q),
-                                         cat.wire_velocity(integ.t, integ.q, integ.v)))
+                          lambda integ: cat.wire_state(integ.t, integ.q, integ.v))
     psubs = []
     for k, pan in enumerate(prep.pantographs):
         psubs.append(ModelSubsystem(

@@ -98,6 +98,7 @@ class ModalCatenary(SecondOrderModel):
 
     wire_height = CatenaryModel.wire_height
     wire_velocity = CatenaryModel.wire_velocity
+    wire_state = CatenaryModel.wire_state
 
     # ------------------------------------------------------------------ moving correction
     def _init_geometry(self):

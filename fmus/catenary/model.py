@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from numba import njit
 
 from ..core.banded import BandedCholesky
 from ..core.errors import ParameterError
@@ -114,16 +115,24 @@ class CatenaryModel(SecondOrderModel):
 
     def wire_height(self, t: float, q: np.ndarray) -> np.ndarray:
         """Height of the contact wire above the rail at each pantograph, (3.13)."""
-        return np.array([cp.weights @ q[cp.dofs] + cp.offset for cp in self.contact_points(t)])
+        return self.wire_state(t, q, q)[0]
 
     def wire_velocity(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """d/dt of :meth:`wire_height`: the wire's vertical velocity plus the convective
         term V dz/dx seen by the moving pantograph."""
-        out = []
-        for cp in self.contact_points(t):
-            dzdx = cp.dweights_dx @ q[cp.dofs] + cp.doffset_dx
-            out.append(cp.weights @ v[cp.dofs] + self.speed * dzdx)
-        return np.array(out)
+        return self.wire_state(t, q, v)[1]
+
+    def wire_state(self, t: float, q: np.ndarray, v: np.ndarray):
+        """(:meth:`wire_height`, :meth:`wire_velocity`) in one pass over the points:
+        z = w . q[dofs] + offset (3.13), dz/dt = w . v[dofs] + V (dw/dx . q[dofs] +
+        d offset/dx)."""
+        cps = self.contact_points(t)
+        z, vz = np.empty(len(cps)), np.empty(len(cps))
+        for k, cp in enumerate(cps):
+            zk, vk, slope = _wire_point(cp.dofs, cp.weights, cp.dweights_dx, q, v)
+            z[k] = zk + cp.offset
+            vz[k] = vk + self.speed * (slope + cp.doffset_dx)
+        return z, vz
 
     def contact_wire_height(self, q: np.ndarray, x) -> np.ndarray:
         """Contact-wire height at arbitrary track positions x (same interpolation)."""
@@ -274,3 +283,17 @@ class CatenaryModel(SecondOrderModel):
             self._slack_committed = np.zeros(len(self.mesh.dropper_bars), dtype=bool)
         else:
             self._slack_committed = np.array(state["slack"], dtype=bool).copy()
+
+
+@njit(cache=True)
+def _wire_point(dofs, w, dw, q, v):
+    """(w . q[dofs], w . v[dofs], dw . q[dofs]) of one contact point (3.13)."""
+    z = 0.0
+    vz = 0.0
+    slope = 0.0
+    for i in range(dofs.shape[0]):
+        j = dofs[i]
+        z += w[i] * q[j]
+        vz += w[i] * v[j]
+        slope += dw[i] * q[j]
+    return z, vz, slope

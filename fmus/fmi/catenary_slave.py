@@ -523,8 +523,7 @@ class CatenarySlave(IntegratorSlave):
         t = integ.t
         qc = integ.q[:model.n_dofs]
         vc = integ.v[:model.n_dofs]
-        zw = model.wire_height(t, qc)
-        vw = model.wire_velocity(t, qc, vc)
+        zw, vw = model.wire_state(t, qc, vc)
         if self._mode == 0:
             F = self._prev_inputs
         else:
