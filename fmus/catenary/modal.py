@@ -113,7 +113,7 @@ class ModalCatenary(SecondOrderModel):
             t=None, S_idx=np.zeros((npan, 4), np.int64), w=np.zeros((npan, 4)),
             dw=np.zeros((npan, 4)), offset=np.zeros(npan), doffset=np.zeros(npan),
             Wc=np.zeros((npan, N)), Wcx=np.zeros((npan, N)), G=np.zeros((self.nx, self.nx)),
-            Ginv=np.zeros((self.nx, self.nx)), sup=None)
+            Ginv=np.zeros((self.nx, self.nx)))
         g.phi, g.phix = g.Wc[:, :m], g.Wcx[:, :m]
         g.qd, g.qdx = g.Wc[:, m:m + nz], g.Wcx[:, m:m + nz]
         for k in range(self.nx):
@@ -122,9 +122,7 @@ class ModalCatenary(SecondOrderModel):
         self._Q_S = np.ascontiguousarray(flex.Q_S[:, :nz])
         self._Q_sup = np.ascontiguousarray(flex.Q_sup[:, :nz])
         self._inv_omega2 = 1.0 / self.omega2
-        self._sup_rows = (np.ascontiguousarray(flex.Phi_sup / self.omega2),
-                          np.ascontiguousarray(flex.Q_sup[:, :nz] / self.kbar) if nz
-                          else np.zeros((flex.sup.size, 0)))
+        self._uplift_work = (np.zeros(self.m + nz), np.zeros(self.nx))
         dofs = self.contact_dofs = np.arange(N)
         g.points = [SimpleNamespace(dofs=dofs, weights=g.Wc[k], dweights_dx=g.Wcx[k],
                                     offset=0.0, doffset_dx=0.0, element=-1)
@@ -154,7 +152,7 @@ class ModalCatenary(SecondOrderModel):
         for k, p in enumerate(g.points):
             p.offset, p.doffset_dx = float(g.offset[k]), float(g.doffset[k])
             p.element = int(self.linear.locator.elems[e[k]])
-        g.t, g.sup = t, None
+        g.t = t
         return g
 
     def contact_points(self, t: float):
@@ -248,23 +246,16 @@ class ModalCatenary(SecondOrderModel):
         N = self.droppers.N0 + self.droppers.ka * (self.T @ q)
         return np.where(self.droppers.slack(N), 0.0, N)
 
-    def _support_rows(self, g):
-        """psi(t) G^-1 at the supports (nsup, np), kept with the time's geometry."""
-        flex = self.flex
-        if g.sup is None:
-            g.sup = np.zeros((flex.sup.size, self.nx))
-            if self.nx:
-                _k.support_rows(g.S_idx, g.w, flex.C_sup, self._sup_rows[0],
-                                self._sup_rows[1], g.phi, g.qd, g.Ginv, g.sup)
-        return g.sup
-
     def support_uplift(self, q) -> np.ndarray:
         """Uplift at the supports (modes, droppers' residual, contact residual at the
         latest evaluated time)."""
         g = self._g if self._g.t is not None else self.geometry(0.0)
         out = np.empty(self.flex.sup.size)
-        _k.support_uplift(self.flex.Phi_sup, self._Q_sup, self._support_rows(g),
-                          np.ascontiguousarray(q, dtype=float), self.m, self.nz, out)
+        yt, c = self._uplift_work
+        _k.support_uplift(self.flex.Phi_sup, self._Q_sup, self.flex.C_sup, self._inv_omega2,
+                          float(self.kbar), g.S_idx, g.w, g.phi, g.qd, g.Ginv,
+                          np.ascontiguousarray(q, dtype=float), self.m, self.nz, self.nx, yt,
+                          c, out)
         return out
 
     def full_displacement(self, t, q) -> np.ndarray:

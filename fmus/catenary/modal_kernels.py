@@ -172,39 +172,6 @@ def slack_mask(N0, ka, tension_only, e, out):
 
 
 @njit(cache=True, fastmath=True)
-def support_rows(S_idx, w, C_sup, Phi_sup_w, Q_sup_k, phi, qd, Ginv, out):
-    """psi(t) G^-1 at the supports: out (nsup, np) = [C_sup N - Phi_sup Omega^-2 phi^T
-    - Q_sup qd^T / k] G^-1 (Phi_sup_w = Phi_sup Omega^-2, Q_sup_k = Q_sup / k)."""
-    nsup = C_sup.shape[0]
-    npan = S_idx.shape[0]
-    m = Phi_sup_w.shape[1]
-    nz = qd.shape[1]
-    H = np.zeros((nsup, npan))
-    for k in range(npan):
-        pk = phi[k]
-        qk = qd[k]
-        for r in range(nsup):
-            s = 0.0
-            for i in range(4):
-                if S_idx[k, i] >= 0:
-                    s += C_sup[r, S_idx[k, i]] * w[k, i]
-            acc = 0.0
-            pr = Phi_sup_w[r]
-            for j in range(m):
-                acc += pr[j] * pk[j]
-            qr = Q_sup_k[r]
-            for j in range(nz):
-                acc += qr[j] * qk[j]
-            H[r, k] = s - acc
-    for r in range(nsup):
-        for k in range(npan):
-            s = 0.0
-            for j in range(npan):
-                s += H[r, j] * Ginv[j, k]
-            out[r, k] = s
-
-
-@njit(cache=True, fastmath=True)
 def diag_woodbury(r, scale, inv_diag, K, G, c_f, UT, Ts, small_inv, s, out):
     """out = A^-1 (scale r): 1/diag on the first K rows less the Woodbury correction
     UT^T small^-1 (s * Ts x), G r / c_f on the rest (identity when c_f = 0)."""
@@ -428,18 +395,38 @@ def solve_step(rhs, q_p, v_p, c_f, T_K, N0, ka, beta, slack, committed, inv_diag
 
 
 @njit(cache=True, fastmath=True)
-def support_uplift(Phi_sup, Q_sup, rows, y, m, nz, out):
-    """Uplift at the supports: Phi_sup eta + Q_sup zeta + rows xi."""
-    nsup = Phi_sup.shape[0]
-    nx = rows.shape[1]
-    for r in range(nsup):
+def support_uplift(Phi_sup, Q_sup, C_sup, inv_omega2, kbar, S_idx, w, phi, qd, Ginv, y, m, nz,
+                   nx, yt, c, out):
+    """Uplift at the supports, Phi_sup eta + Q_sup zeta + psi_sup(t) G^-1 xi, with
+    psi_sup = C_sup N - Phi_sup Omega^-2 phi^T - Q_sup qd^T / k (the contact points' residual
+    modes at the supports): with c = G^-1 xi, the residual part is folded into the
+    coordinates, yt = (eta - Omega^-2 phi^T c, zeta - qd^T c / k), so one pass over Phi_sup
+    and Q_sup gives out = Phi_sup yt[:m] + Q_sup yt[m:] + C_sup N c."""
+    for i in range(m + nz):
+        yt[i] = y[i]
+    for j in range(nx):
+        s = 0.0
+        for k in range(nx):
+            s += Ginv[j, k] * y[m + nz + k]
+        c[j] = s
+        pj = phi[j]
+        for i in range(m):
+            yt[i] -= s * pj[i] * inv_omega2[i]
+        qj = qd[j]
+        for i in range(nz):
+            yt[m + i] -= s * qj[i] / kbar
+    for r in range(Phi_sup.shape[0]):
         acc = 0.0
-        for j in range(m):
-            acc += Phi_sup[r, j] * y[j]
-        for j in range(nz):
-            acc += Q_sup[r, j] * y[m + j]
         for j in range(nx):
-            acc += rows[r, j] * y[m + nz + j]
+            for i in range(4):
+                if S_idx[j, i] >= 0:
+                    acc += C_sup[r, S_idx[j, i]] * w[j, i] * c[j]
+        pr = Phi_sup[r]
+        for i in range(m):
+            acc += pr[i] * yt[i]
+        qr = Q_sup[r]
+        for i in range(nz):
+            acc += qr[i] * yt[m + i]
         out[r] = acc
 
 
@@ -457,8 +444,8 @@ def warm_up() -> None:
     predict_rhs(f1, f1, f1, f1, 1.0, 0.0, 0.25, 0.5, 1.0, np.zeros(1), np.ones(1), f1, 1.0,
                 0.0, 1, 1, np.zeros((0, 0)), f1.copy(), f1.copy(), f1.copy())
     slack_mask(np.ones(1), np.ones(1), b, np.zeros(1), b.copy())
-    support_rows(i4, w4, np.zeros((1, 1)), f2, np.zeros((1, 1)), f2, np.zeros((1, 1)),
-                 np.ones((1, 1)), np.zeros((1, 1)))
+    support_uplift(f2, f2.copy(), np.zeros((1, 1)), np.ones(2), 1.0, i4, w4, f2, f2.copy(),
+                   np.ones((1, 1)), np.zeros(4), 1, 1, 1, np.zeros(2), np.zeros(1), np.zeros(1))
     diag_woodbury(f1, 1.0, np.ones(1), 1, np.ones((1, 1)), 1.0, np.zeros((0, 1)),
                   np.zeros((0, 1)), np.zeros((0, 0)), np.zeros(0), f1.copy())
     solve_step(f1, f1, f1, 1.0, np.zeros((1, 2)), np.ones(1), np.ones(1), 0.0, b, b, np.ones(2),
@@ -471,4 +458,3 @@ def warm_up() -> None:
                 np.zeros(2), ref, np.zeros((2, 1)), np.zeros(2, np.float32), b, b, 1.0, 1.0,
                 1.0, 0.0, 1, f1.copy(), b.copy(), f1.copy(), f1.copy(), f1.copy(), f1.copy())
     slack_forces(np.zeros((1, 2)), np.ones(1), np.ones(1), 0.0, b, b, f1, f1, f1.copy())
-    support_uplift(f2, np.zeros((1, 0)), np.zeros((1, 0)), f1, 2, 0, np.zeros(1))

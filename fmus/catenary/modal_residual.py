@@ -58,6 +58,7 @@ class InterfaceFlexibility:
         self.Phi_S = np.ascontiguousarray(Phi[self.S])
         self.Phi_sup = np.where(supmask, Phi[sup], 0.0)
         self._droppers(lin, solve, Phi, sup, supmask, residual)
+        self.C_sup = np.zeros((sup.size, 0))
         if residual:
             self._contact(lin, solve, separations, sup, supmask)
 
