@@ -38,6 +38,9 @@ from .modal_basis import modes_below
 from .modal_residual import InterfaceFlexibility
 from .model import CatenaryModel
 
+#: coefficient sets (time steps) whose shared Woodbury pieces are kept
+KEPT_BASES = 4
+
 
 class ModalCatenary(SecondOrderModel):
     """``ModalCatenary(catenary, x0, speed, cutoff_hz=...)``, or around a ``linear`` model."""
@@ -80,6 +83,7 @@ class ModalCatenary(SecondOrderModel):
         self.T_K = np.ascontiguousarray(self.T[:, :m + self.nz])
         self.q_static = np.zeros(self.n_dofs)
         self._slack_committed = np.zeros(len(dr), dtype=bool)
+        self._bases = {}
         self._init_geometry()
         _k.warm_up()
 
@@ -195,6 +199,26 @@ class ModalCatenary(SecondOrderModel):
         out += self.r0
         return out
 
+    def woodbury_base(self, c_a, c_v, c_f) -> tuple:
+        """(1 / diag, U = T_K diag^-1, T_K diag^-1 T_K^T) of the Newton matrix's diagonal
+        part c_a + c_f (c_v zeta + omega^2) on eta, c_f k (1 + c_v beta) on zeta (1 when
+        c_f = 0): the pieces every slack set's Woodbury solve shares (the last
+        :data:`KEPT_BASES` coefficient sets kept)."""
+        key = (float(c_a), float(c_v), float(c_f))
+        kept = self._bases
+        if key in kept:
+            return kept[key]
+        m = self.m
+        d = np.empty(m + self.nz)
+        d[:m] = c_a + c_f * (c_v * self.zeta_c + self.omega2)
+        d[m:] = c_f * self.kbar * (1.0 + c_v * self.linear.beta_r) if c_f else 1.0
+        inv_diag = 1.0 / d
+        U = self.T_K * inv_diag
+        base = kept[key] = (inv_diag, U, self.T_K @ U.T)
+        if len(kept) > KEPT_BASES:
+            del kept[next(iter(kept))]
+        return base
+
     def closed_form(self, settings, keep_free_response: bool = False):
         """The closed-form HHT stepper of this model (:mod:`.modal_step`)."""
         from .modal_step import ModalHHT
@@ -303,25 +327,26 @@ class ModalCatenary(SecondOrderModel):
 
 class _ModalSolve:
     """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi (G at
-    the latest geometry)."""
+    the latest geometry). The diagonal, U = T diag^-1 and the droppers' Gram matrix
+    T diag^-1 T^T are the model's per coefficient set (:meth:`ModalCatenary.woodbury_base`),
+    so a slack set costs the inverse of its own small block only."""
 
     def __init__(self, model: ModalCatenary, c_a, c_v, c_f, rows, s):
-        self.model, self.c, self.rows, self.s = model, (c_a, c_v, c_f), rows, s
-        m, nz = model.m, model.nz
-        self.K = k = m + nz
-        d = np.empty(k)
-        d[:m] = c_a + c_f * (c_v * model.zeta_c + model.omega2)
-        d[m:] = c_f * model.kbar * (1.0 + c_v * model.linear.beta_r) if c_f else 1.0
-        self.inv_diag = 1.0 / d
-        self.Ts = np.ascontiguousarray(model.T[rows, :k])        # (ns, K); xi: zero
-        self.UT = self.Ts * self.inv_diag                        # (A0^-1 Ts^T)^T
-        self.small_inv = (np.linalg.inv(np.eye(rows.size) - s[:, None] * (self.Ts @ self.UT.T))
-                          if rows.size else np.zeros((0, 0)))
+        self.model, self.c = model, (c_a, c_v, c_f)
+        self.inv_diag, self.U, gram = model.woodbury_base(c_a, c_v, c_f)
+        self.K = model.m + model.nz
+        self.rows = np.ascontiguousarray(rows, dtype=np.int64)
         self.s = np.ascontiguousarray(s, dtype=float)
+        ns = self.rows.size
+        self.small_inv = np.empty((ns, ns))
+        if not _k.slack_block_inverse(gram, self.rows, self.s, np.empty((ns, ns)),
+                                      self.small_inv):
+            raise np.linalg.LinAlgError("modal catenary: singular slack-set correction")
+        self.y = np.zeros(ns)
 
     def __call__(self, r, out=None):
         r = np.ascontiguousarray(r, dtype=float)
         out = np.empty_like(r) if out is None else out
-        _k.diag_woodbury(r, 1.0, self.inv_diag, self.K, self.model._g.G, self.c[2], self.UT,
-                         self.Ts, self.small_inv, self.s, out)
+        _k.diag_woodbury(r, 1.0, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
+                         self.model.T_K, self.rows, self.small_inv, self.s, self.y, out)
         return out

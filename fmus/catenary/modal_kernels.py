@@ -172,9 +172,10 @@ def slack_mask(N0, ka, tension_only, e, out):
 
 
 @njit(cache=True, fastmath=True)
-def diag_woodbury(r, scale, inv_diag, K, G, c_f, UT, Ts, small_inv, s, out):
+def diag_woodbury(r, scale, inv_diag, K, G, c_f, U, T, rows, small_inv, s, y, out):
     """out = A^-1 (scale r): 1/diag on the first K rows less the Woodbury correction
-    UT^T small^-1 (s * Ts x), G r / c_f on the rest (identity when c_f = 0)."""
+    U_rows^T small^-1 (s * T_rows x) (U = T diag^-1: the rows of the slack droppers, ``y``
+    their work vector), G r / c_f on the rest (identity when c_f = 0)."""
     n = r.shape[0]
     for i in range(K):
         out[i] = (r[i] * scale) * inv_diag[i]
@@ -187,20 +188,56 @@ def diag_woodbury(r, scale, inv_diag, K, G, c_f, UT, Ts, small_inv, s, out):
             out[K + i] = acc / c_f
         else:
             out[K + i] = r[K + i] * scale
-    ns = s.shape[0]
-    if ns:
-        y = np.empty(ns)
-        for a in range(ns):
-            acc = 0.0
-            for i in range(K):
-                acc += Ts[a, i] * out[i]
-            y[a] = s[a] * acc
-        for a in range(ns):
-            z = 0.0
+    ns = rows.shape[0]
+    for a in range(ns):
+        d = rows[a]
+        acc = 0.0
+        for i in range(K):
+            acc += T[d, i] * out[i]
+        y[a] = s[a] * acc
+    for a in range(ns):
+        z = 0.0
+        for b in range(ns):
+            z += small_inv[a, b] * y[b]
+        d = rows[a]
+        for i in range(K):
+            out[i] += U[d, i] * z
+
+
+@njit(cache=True)
+def slack_block_inverse(gram, rows, s, work, out):
+    """out = (I - diag(s) gram[rows][:, rows])^-1, the small matrix of the Woodbury solve
+    (Gauss-Jordan with partial pivoting; ``work``: ns x ns). Returns False when singular."""
+    ns = rows.shape[0]
+    for a in range(ns):
+        for b in range(ns):
+            work[a, b] = -s[a] * gram[rows[a], rows[b]]
+            out[a, b] = 0.0
+        work[a, a] += 1.0
+        out[a, a] = 1.0
+    for c in range(ns):
+        p = c
+        for a in range(c + 1, ns):
+            if abs(work[a, c]) > abs(work[p, c]):
+                p = a
+        if work[p, c] == 0.0:
+            return False
+        if p != c:
             for b in range(ns):
-                z += small_inv[a, b] * y[b]
-            for i in range(K):
-                out[i] += UT[a, i] * z
+                work[c, b], work[p, b] = work[p, b], work[c, b]
+                out[c, b], out[p, b] = out[p, b], out[c, b]
+        inv = 1.0 / work[c, c]
+        for b in range(ns):
+            work[c, b] *= inv
+            out[c, b] *= inv
+        for a in range(ns):
+            if a != c:
+                f = work[a, c]
+                if f != 0.0:
+                    for b in range(ns):
+                        work[a, b] -= f * work[c, b]
+                        out[a, b] -= f * out[c, b]
+    return True
 
 
 @njit(cache=True, fastmath=True)
@@ -374,8 +411,8 @@ def slack_forces(T_K, N0, ka, beta, slack, committed, y, v, out):
 
 
 @njit(cache=True)
-def solve_step(rhs, q_p, v_p, c_f, T_K, N0, ka, beta, slack, committed, inv_diag, G, UT, Ts,
-               small_inv, s, L, sf, r, delta_free, W):
+def solve_step(rhs, q_p, v_p, c_f, T_K, N0, ka, beta, slack, committed, inv_diag, G, U, rows,
+               small_inv, s, y, L, sf, r, delta_free, W):
     """delta_free = A^-1 (rhs + c_f sf) with sf the slack and committed droppers' terms at
     (q_p, v_p) (:func:`slack_forces`), and W_k = A^-1 (c_f L_k) for each load row L_k
     (A^-1: :func:`diag_woodbury`)."""
@@ -387,11 +424,11 @@ def solve_step(rhs, q_p, v_p, c_f, T_K, N0, ka, beta, slack, committed, inv_diag
         slack_forces(T_K, N0, ka, beta, slack, committed, q_p, v_p, sf)
         for i in range(rhs.shape[0]):
             r[i] = sf[i] * c_f + rhs[i]
-        diag_woodbury(r, 1.0, inv_diag, K, G, c_f, UT, Ts, small_inv, s, delta_free)
+        diag_woodbury(r, 1.0, inv_diag, K, G, c_f, U, T_K, rows, small_inv, s, y, delta_free)
     else:
-        diag_woodbury(rhs, 1.0, inv_diag, K, G, c_f, UT, Ts, small_inv, s, delta_free)
+        diag_woodbury(rhs, 1.0, inv_diag, K, G, c_f, U, T_K, rows, small_inv, s, y, delta_free)
     for k in range(L.shape[0]):
-        diag_woodbury(L[k], c_f, inv_diag, K, G, c_f, UT, Ts, small_inv, s, W[k])
+        diag_woodbury(L[k], c_f, inv_diag, K, G, c_f, U, T_K, rows, small_inv, s, y, W[k])
 
 
 @njit(cache=True, fastmath=True)
@@ -446,11 +483,14 @@ def warm_up() -> None:
     slack_mask(np.ones(1), np.ones(1), b, np.zeros(1), b.copy())
     support_uplift(f2, f2.copy(), np.zeros((1, 1)), np.ones(2), 1.0, i4, w4, f2, f2.copy(),
                    np.ones((1, 1)), np.zeros(4), 1, 1, 1, np.zeros(2), np.zeros(1), np.zeros(1))
-    diag_woodbury(f1, 1.0, np.ones(1), 1, np.ones((1, 1)), 1.0, np.zeros((0, 1)),
-                  np.zeros((0, 1)), np.zeros((0, 0)), np.zeros(0), f1.copy())
+    i0 = np.zeros(0, dtype=np.int64)
+    slack_block_inverse(np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1),
+                        np.zeros((1, 1)), np.zeros((1, 1)))
+    diag_woodbury(f1, 1.0, np.ones(1), 1, np.ones((1, 1)), 1.0, np.zeros((1, 1)),
+                  np.zeros((1, 1)), i0, np.zeros((0, 0)), np.zeros(0), np.zeros(0), f1.copy())
     solve_step(f1, f1, f1, 1.0, np.zeros((1, 2)), np.ones(1), np.ones(1), 0.0, b, b, np.ones(2),
-               np.ones((0, 0)), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 0)), np.zeros(0),
-               f2, f1.copy(), f1.copy(), f1.copy(), f2.copy())
+               np.ones((0, 0)), np.zeros((1, 2)), i0, np.zeros((0, 0)), np.zeros(0),
+               np.zeros(0), f2, f1.copy(), f1.copy(), f1.copy(), f2.copy())
     ref = np.zeros((3, 1))
     ref[0] = np.nan
     finish_step(f1, f2, np.zeros(1), f1, f1, np.zeros((1, 2), np.float32), np.zeros((1, 2)),

@@ -150,8 +150,9 @@ class ModalHHT:
         model, dr = self.model, self.model.droppers
         ws = self._woodbury(slack)
         _k.solve_step(self._rhs, self.q_p, self.v_p, self._coef[2], model.T_K, dr.N0, dr.ka,
-                      dr.beta, slack, self.committed, ws.inv_diag, model._g.G, ws.UT, ws.Ts,
-                      ws.small_inv, ws.s, self._L, self._sf, self._r, self.delta_free, self.W)
+                      dr.beta, slack, self.committed, ws.inv_diag, model._g.G, ws.U, ws.rows,
+                      ws.small_inv, ws.s, ws.y, self._L, self._sf, self._r, self.delta_free,
+                      self.W)
         self._slack = slack
         self.passes += 1
 
