@@ -24,6 +24,7 @@ from numba import njit
 from .affine_hht import AffineHHT
 from .hht import HHTIntegrator
 from .model import Evaluation, SecondOrderModel
+from .penalty_contact import condensed_forces
 
 
 @njit(cache=True)
@@ -52,6 +53,32 @@ def _point_response(dofs, w, dw, x):
         g += w[i] * xj
         h += dw[i] * xj
     return g, h
+
+
+@njit(cache=True)
+def _bodies_on_interface(k, c, x, zf, vf, P, Pv, work, active, trial, A, F, heights, wire):
+    """The penalty law (:func:`~.penalty_contact.condensed_forces`) between bodies whose
+    contact heights are z_f + P F, v_f + P_v F and the interface x = [z0, v0, G, H] (flat),
+    into F; then the bodies' heights and the wire's, z0 + G F. ``work``: 2 m + 2 m^2."""
+    m = zf.shape[0]
+    dz, dv = work[:m], work[m:2 * m]
+    Ge = work[2 * m:2 * m + m * m].reshape((m, m))
+    He = work[2 * m + m * m:2 * m + 2 * m * m].reshape((m, m))
+    for i in range(m):
+        dz[i] = zf[i] - x[i]
+        dv[i] = vf[i] - x[m + i]
+        for j in range(m):
+            Ge[i, j] = x[2 * m + i * m + j]
+            He[i, j] = x[2 * m + m * m + i * m + j]
+        Ge[i, i] -= P[i]
+        He[i, i] -= Pv[i]
+    condensed_forces(k, c, dz, dv, Ge, He, active, trial, A, F)
+    for i in range(m):
+        heights[i] = zf[i] + P[i] * F[i]
+        acc = x[i]
+        for j in range(m):
+            acc += x[2 * m + i * m + j] * F[j]
+        wire[i] = acc
 
 
 class InterfaceContacts(SecondOrderModel):
@@ -204,6 +231,8 @@ class LinearBodies:
         self._stepped = False
         self._units, self._units_h = None, None
         self._u = np.zeros(1)
+        self._work = (np.zeros(2 * m + 2 * m * m), np.zeros(m, dtype=np.bool_),
+                      np.zeros(m, dtype=np.bool_), np.zeros((m, m + 1)))
 
     @staticmethod
     def applicable(bodies) -> bool:
@@ -250,7 +279,6 @@ class LinearBodies:
                 dq, dv = self._units[k][:2]
                 P[k] = b.contact_height(dq) - b.contact_height(np.zeros_like(dq))
                 Pv[k] = b.contact_velocity(dq, dv)
-            self._own = (np.diag(P), np.diag(Pv))     # the bodies' compliance on the diagonal
         for k, integ in enumerate(self.integs):
             self._u[0] = self._applied[k] = self.forces[k]
             integ.step(h, self._u)
@@ -259,22 +287,17 @@ class LinearBodies:
         self._stepped = True
 
     def solve(self, h, x) -> int:
-        m = len(self.bodies)
         if not self._stepped:
             self._take_steps(h)
         zf, vf, P, Pv = self._free
-        z0, v0 = x[:m], x[m:2 * m]
-        G = x[2 * m:2 * m + m * m].reshape(m, m)
-        H = x[2 * m + m * m:].reshape(m, m)
-        F, _, _ = self.contact.condensed(zf, vf, z0, v0, G - self._own[0], H - self._own[1])
+        F = self.forces
+        _bodies_on_interface(self.contact.stiffness, self.contact.damping, x, zf, vf, P, Pv,
+                             *self._work, F, self.heights, self.wire_heights)
         for k, integ in enumerate(self.integs):
             if F[k] != self._applied[k]:
                 self._u[0] = F[k]
                 integ.shift_last_step(self._units[k], F[k] - self._applied[k], self._u)
                 self._applied[k] = F[k]
-        self.heights[:] = zf + P * F
-        self.forces[:] = F
-        self.wire_heights[:] = z0 + G @ F
         return 1
 
 

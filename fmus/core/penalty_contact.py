@@ -13,12 +13,70 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .params import check_number
 
 
 #: penalty stiffness k_H of the contact [N/m] (thesis 3.2)
 DEFAULT_CONTACT_STIFFNESS = 50_000.0
+
+
+@njit(cache=True)
+def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
+    """F of the law with the wire affine in the forces (:meth:`PenaltyContact.condensed`),
+    in place: on the active set, (I + k G + c H)_AA F_A = k dz_A + c dv_A (Gauss-Jordan,
+    partial pivoting; ``A``: m x (m + 1) work), then the set of positive gaps and forces
+    (``trial``) until it repeats, at most 2 m + 2 passes. ``active`` ends as the set F was
+    solved on."""
+    m = dz.shape[0]
+    for i in range(m):
+        active[i] = dz[i] > 0.0
+    for it in range(2 * m + 2):
+        for i in range(m):                      # inactive rows: F_i = 0
+            for j in range(m):
+                A[i, j] = 0.0
+            if active[i]:
+                for j in range(m):
+                    if active[j]:
+                        A[i, j] = k * G[i, j] + c * H[i, j]
+                A[i, i] += 1.0
+                A[i, m] = k * dz[i] + c * dv[i]
+            else:
+                A[i, i] = 1.0
+                A[i, m] = 0.0
+        for col in range(m):
+            p = col
+            for r in range(col + 1, m):
+                if abs(A[r, col]) > abs(A[p, col]):
+                    p = r
+            if p != col:
+                for j in range(m + 1):
+                    A[col, j], A[p, j] = A[p, j], A[col, j]
+            inv = 1.0 / A[col, col]
+            for j in range(m + 1):
+                A[col, j] *= inv
+            for r in range(m):
+                if r != col and A[r, col] != 0.0:
+                    f = A[r, col]
+                    for j in range(m + 1):
+                        A[r, j] -= f * A[col, j]
+        for i in range(m):
+            F[i] = A[i, m]
+        changed = False
+        for i in range(m):
+            gap = dz[i]
+            rel = dv[i]
+            for j in range(m):
+                gap -= G[i, j] * F[j]
+                rel -= H[i, j] * F[j]
+            trial[i] = gap > 0.0 and k * gap + c * rel > 0.0
+            changed = changed or trial[i] != active[i]
+        if not changed or it == 2 * m + 1:
+            break
+        for i in range(m):
+            active[i] = trial[i]
+    return F
 
 
 @dataclass(frozen=True)
@@ -53,38 +111,18 @@ class PenaltyContact:
         structure condensed on its contact points, :mod:`.condensed`): (F, dF/dz_p,
         dF/dv_p). On the active set A, (I + k_H G + c_H H)_AA F_A = k_H (z_p - z0)_A
         + c_H (v_p - v0)_A; A holds the contacts whose gap and force are positive."""
-        m = len(z_p)
-        if m == 1:
-            return self._condensed_one(z_p[0] - z0[0], v_p[0] - v0[0], G[0, 0], H[0, 0])
-        dz, dv = z_p - z0, v_p - v0
-        active = dz > 0.0
-        F = np.zeros(m)
+        dz = np.asarray(z_p, float) - z0
+        dv = np.asarray(v_p, float) - v0
+        m = dz.size
+        active = np.zeros(m, dtype=np.bool_)
+        F = condensed_forces(self.stiffness, self.damping, dz, dv, np.ascontiguousarray(G),
+                             np.ascontiguousarray(H), active, active.copy(),
+                             np.empty((m, m + 1)), np.empty(m))
         Jz, Jv = np.zeros((m, m)), np.zeros((m, m))
-        for _ in range(2 * m + 2):
-            F[:] = 0.0
-            Jz[:] = 0.0
-            Jv[:] = 0.0
-            A = np.flatnonzero(active)
-            if A.size:
-                Mi = np.linalg.inv(np.eye(A.size) + self.stiffness * G[np.ix_(A, A)]
-                                   + self.damping * H[np.ix_(A, A)])
-                F[A] = Mi @ (self.stiffness * dz[A] + self.damping * dv[A])
-                Jz[np.ix_(A, A)] = self.stiffness * Mi
-                Jv[np.ix_(A, A)] = self.damping * Mi
-            gap = dz - G @ F
-            trial = self.stiffness * gap + self.damping * (dv - H @ F)
-            now = (gap > 0.0) & (trial > 0.0)
-            if np.array_equal(now, active):
-                break
-            active = now
+        A = np.flatnonzero(active)
+        if A.size:
+            Mi = np.linalg.inv(np.eye(A.size) + self.stiffness * G[np.ix_(A, A)]
+                               + self.damping * H[np.ix_(A, A)])
+            Jz[np.ix_(A, A)] = self.stiffness * Mi
+            Jv[np.ix_(A, A)] = self.damping * Mi
         return F, Jz, Jv
-
-    def _condensed_one(self, dz, dv, g, h):
-        """:meth:`condensed` of one contact."""
-        k, c = self.stiffness, self.damping
-        F = (k * dz + c * dv) / (1.0 + k * g + c * h)
-        if F > 0.0 and dz - g * F > 0.0:
-            d = 1.0 + k * g + c * h
-            return np.array([F]), np.array([[k / d]]), np.array([[c / d]])
-        z = np.zeros((1, 1))
-        return np.zeros(1), z, z.copy()
