@@ -339,7 +339,7 @@ class _ModalSolve:
         self.s = np.ascontiguousarray(s, dtype=float)
         ns = self.rows.size
         self.small_inv = np.empty((ns, ns))
-        if not _k.slack_block_inverse(gram, self.rows, self.s, np.empty((ns, ns)),
+        if not _k.slack_block_inverse(gram, self.rows, self.s, np.empty((ns, 2 * ns)),
                                       self.small_inv):
             raise np.linalg.LinAlgError("modal catenary: singular slack-set correction")
         self.y = np.zeros(ns)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..core.small_dense import gauss_jordan
 from .ancf_cable import shape, shape_dxi
 from .contact_point import _local_coordinate
 
@@ -207,36 +208,20 @@ def diag_woodbury(r, scale, inv_diag, K, G, c_f, U, T, rows, small_inv, s, y, ou
 @njit(cache=True)
 def slack_block_inverse(gram, rows, s, work, out):
     """out = (I - diag(s) gram[rows][:, rows])^-1, the small matrix of the Woodbury solve
-    (Gauss-Jordan with partial pivoting; ``work``: ns x ns). Returns False when singular."""
+    (:func:`~pantocosim.core.small_dense.gauss_jordan` on ``work``, ns x 2 ns). Returns
+    False when singular."""
     ns = rows.shape[0]
     for a in range(ns):
         for b in range(ns):
             work[a, b] = -s[a] * gram[rows[a], rows[b]]
-            out[a, b] = 0.0
+            work[a, ns + b] = 0.0
         work[a, a] += 1.0
-        out[a, a] = 1.0
-    for c in range(ns):
-        p = c
-        for a in range(c + 1, ns):
-            if abs(work[a, c]) > abs(work[p, c]):
-                p = a
-        if work[p, c] == 0.0:
-            return False
-        if p != c:
-            for b in range(ns):
-                work[c, b], work[p, b] = work[p, b], work[c, b]
-                out[c, b], out[p, b] = out[p, b], out[c, b]
-        inv = 1.0 / work[c, c]
+        work[a, ns + a] = 1.0
+    if not gauss_jordan(work, ns):
+        return False
+    for a in range(ns):
         for b in range(ns):
-            work[c, b] *= inv
-            out[c, b] *= inv
-        for a in range(ns):
-            if a != c:
-                f = work[a, c]
-                if f != 0.0:
-                    for b in range(ns):
-                        work[a, b] -= f * work[c, b]
-                        out[a, b] -= f * out[c, b]
+            out[a, b] = work[a, ns + b]
     return True
 
 
@@ -485,7 +470,7 @@ def warm_up() -> None:
                    np.ones((1, 1)), np.zeros(4), 1, 1, 1, np.zeros(2), np.zeros(1), np.zeros(1))
     i0 = np.zeros(0, dtype=np.int64)
     slack_block_inverse(np.ones((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1),
-                        np.zeros((1, 1)), np.zeros((1, 1)))
+                        np.zeros((1, 2)), np.zeros((1, 1)))
     diag_woodbury(f1, 1.0, np.ones(1), 1, np.ones((1, 1)), 1.0, np.zeros((1, 1)),
                   np.zeros((1, 1)), i0, np.zeros((0, 0)), np.zeros(0), np.zeros(0), f1.copy())
     solve_step(f1, f1, f1, 1.0, np.zeros((1, 2)), np.ones(1), np.ones(1), 0.0, b, b, np.ones(2),

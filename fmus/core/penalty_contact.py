@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from .params import check_number
+from .small_dense import gauss_jordan
 
 
 #: penalty stiffness k_H of the contact [N/m] (thesis 3.2)
@@ -25,10 +26,10 @@ DEFAULT_CONTACT_STIFFNESS = 50_000.0
 @njit(cache=True)
 def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
     """F of the law with the wire affine in the forces (:meth:`PenaltyContact.condensed`),
-    in place: on the active set, (I + k G + c H)_AA F_A = k dz_A + c dv_A (Gauss-Jordan,
-    partial pivoting; ``A``: m x (m + 1) work), then the set of positive gaps and forces
-    (``trial``) until it repeats, at most 2 m + 2 passes. ``active`` ends as the set F was
-    solved on."""
+    in place: on the active set, (I + k G + c H)_AA F_A = k dz_A + c dv_A
+    (:func:`~.small_dense.gauss_jordan`; ``A``: m x (m + 1) work), then the set of positive
+    gaps and forces (``trial``) until it repeats, at most 2 m + 2 passes. ``active`` ends as
+    the set F was solved on; F is NaN if that system is singular."""
     m = dz.shape[0]
     for i in range(m):
         active[i] = dz[i] > 0.0
@@ -45,22 +46,9 @@ def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
             else:
                 A[i, i] = 1.0
                 A[i, m] = 0.0
-        for col in range(m):
-            p = col
-            for r in range(col + 1, m):
-                if abs(A[r, col]) > abs(A[p, col]):
-                    p = r
-            if p != col:
-                for j in range(m + 1):
-                    A[col, j], A[p, j] = A[p, j], A[col, j]
-            inv = 1.0 / A[col, col]
-            for j in range(m + 1):
-                A[col, j] *= inv
-            for r in range(m):
-                if r != col and A[r, col] != 0.0:
-                    f = A[r, col]
-                    for j in range(m + 1):
-                        A[r, j] -= f * A[col, j]
+        if not gauss_jordan(A, m):
+            F[:] = np.nan
+            return F
         for i in range(m):
             F[i] = A[i, m]
         changed = False
