@@ -188,3 +188,33 @@ def test_default_cutoff_meets_the_targets_against_linear():
     assert rel("mean_n") < 0.005
     assert rel("std_n") < 0.02
     assert rel("max_n") < 0.03 and rel("min_n") < 0.03
+
+
+def test_screened_slack_set_is_the_double_precision_one(modal20):
+    """The slack check with its kept reference and single-precision rows gives the set of
+    the full double-precision product N0 + k_a T y, also for forces within 1e-8 N of zero
+    and over a drifting sequence of states (reference kept, rows taken, references
+    renewed)."""
+    from pantocosim.catenary import modal_kernels as kern
+    from pantocosim.catenary.modal_step import ModalHHT
+
+    st = ModalHHT(modal20, HHTSettings(alpha=-0.05))
+    dr, T = modal20.droppers, modal20.T_K
+    rng = np.random.default_rng(7)
+    y = np.zeros(modal20.n_dofs)
+    zero = np.zeros_like(y)
+    slack = np.zeros(len(dr), dtype=bool)
+    near, checked = 0, 0
+    for n in range(300):
+        y[:T.shape[1]] += rng.standard_normal(T.shape[1]) * 2e-4 / (1.0 + np.arange(T.shape[1]))
+        if n % 3 == 0:                  # put some droppers' forces right at the threshold
+            for d in rng.choice(len(dr), 4, replace=False):
+                target = rng.choice([-1.0, 1.0]) * 10.0 ** rng.uniform(-8, 0)
+                N = dr.N0[d] + dr.ka[d] * (T[d] @ y[:T.shape[1]])
+                y[:T.shape[1]] += (target - N) / dr.ka[d] * T[d] / (T[d] @ T[d])
+                near += 1
+        kern.screen_slack(*st._screen, y, zero, *st._screen_work, slack)
+        exact = dr.tension_only & (dr.N0 + dr.ka * (T @ y[:T.shape[1]]) < 0.0)
+        assert np.array_equal(slack, exact), n
+        checked += int(exact.any())
+    assert near >= 400 and checked > 50
