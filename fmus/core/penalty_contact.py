@@ -27,9 +27,11 @@ DEFAULT_CONTACT_STIFFNESS = 50_000.0
 def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
     """F of the law with the wire affine in the forces (:meth:`PenaltyContact.condensed`),
     in place: on the active set, (I + k G + c H)_AA F_A = k dz_A + c dv_A
-    (:func:`~.small_dense.gauss_jordan`; ``A``: m x (m + 1) work), then the set of positive
-    gaps and forces (``trial``) until it repeats, at most 2 m + 2 passes. ``active`` ends as
-    the set F was solved on; F is NaN if that system is singular."""
+    (:func:`~.small_dense.gauss_jordan`; ``A``: m x (m + 1) work, or m x (2 m + 1) to end
+    with the inverse of that matrix, the inactive rows and columns of the identity, in
+    A[:, m + 1:]), then the set of positive gaps and forces (``trial``) until it repeats, at
+    most 2 m + 2 passes. ``active`` ends as the set F was solved on; F is NaN if that
+    system is singular."""
     m = dz.shape[0]
     for i in range(m):
         active[i] = dz[i] > 0.0
@@ -46,6 +48,8 @@ def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
             else:
                 A[i, i] = 1.0
                 A[i, m] = 0.0
+            for j in range(m + 1, A.shape[1]):
+                A[i, j] = 1.0 if j == m + 1 + i else 0.0
         if not gauss_jordan(A, m):
             F[:] = np.nan
             return F
@@ -103,14 +107,8 @@ class PenaltyContact:
         dv = np.asarray(v_p, float) - v0
         m = dz.size
         active = np.zeros(m, dtype=np.bool_)
+        A = np.empty((m, 2 * m + 1))
         F = condensed_forces(self.stiffness, self.damping, dz, dv, np.ascontiguousarray(G),
-                             np.ascontiguousarray(H), active, active.copy(),
-                             np.empty((m, m + 1)), np.empty(m))
-        Jz, Jv = np.zeros((m, m)), np.zeros((m, m))
-        A = np.flatnonzero(active)
-        if A.size:
-            Mi = np.linalg.inv(np.eye(A.size) + self.stiffness * G[np.ix_(A, A)]
-                               + self.damping * H[np.ix_(A, A)])
-            Jz[np.ix_(A, A)] = self.stiffness * Mi
-            Jv[np.ix_(A, A)] = self.damping * Mi
-        return F, Jz, Jv
+                             np.ascontiguousarray(H), active, active.copy(), A, np.empty(m))
+        Mi = A[:, m + 1:] * np.outer(active, active)
+        return F, self.stiffness * Mi, self.damping * Mi
