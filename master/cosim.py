@@ -268,9 +268,11 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     [N] of the implicit coupling defaults to :func:`coupling_tolerance`; with ``realtime``
     each communication step is paced to the wall clock (:mod:`pantocosim.master.pacing`);
     ``plan``: the checked FMU files (default :func:`fmu_paths`)."""
+    from pantocosim.master import stability
     from pantocosim.master.pacing import StepClock
 
     sc = prep.scenario
+    warnings = stability.check(prep, scheme)
     clock = StepClock(sc.dt, realtime=realtime)
     if tolerance is None:
         tolerance = coupling_tolerance(prep)
@@ -282,14 +284,20 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names,
                    rows=prep.n_steps + 1)
     with stop_on_interrupt() as stop:
-        return _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
-                          stop)
+        result = _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
+                            stop)
+    result.warnings = warnings
+    return result
 
 
 def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, stop):
     """The set-up and time loop of :func:`run_cosim` (a Ctrl-C sets ``stop``: the loop ends
-    after the step in flight)."""
+    after the step in flight; a diverging run stops with
+    :class:`~pantocosim.master.stability.Diverged`)."""
+    from pantocosim.master.stability import Monitor
+
     sc = prep.scenario
+    monitor = Monitor(prep)
     error = None
     coupler = None
     t_wall = _time.perf_counter()
@@ -320,6 +328,7 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
             row[first_uplift:first_uplift + len(u)] = u
             row[-1] = iterations
             rec.append(row)
+            monitor.check(t, forces)
 
         def spec_x(k, t):
             return sc.pantographs[k].position_m + sc.speed * t

@@ -273,10 +273,13 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
                    realtime: bool = False) -> "RunResult":
     """Integrate catenary + pantographs + penalty contacts monolithically (reference); with
     ``realtime`` each step is paced to the wall clock (:mod:`pantocosim.master.pacing`)."""
+    from pantocosim.master import stability
     from pantocosim.master.pacing import StepClock
     from pantocosim.master.steppers import make_stepper
 
     sc = prep.scenario
+    warnings = stability.check(prep, "monolithic")
+    monitor = stability.Monitor(prep)
     stepper = make_stepper(prep, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
     stepper.warm_up(sc.dt)
     n_p = len(prep.pantographs)
@@ -297,6 +300,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
         row[1 + 4 * n_p:-1] = uplift
         row[-1] = iterations
         rec.append(row)
+        monitor.check(t, row[2:2 + 4 * n_p:4])
 
     error = None
     record(0)
@@ -318,7 +322,8 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
             rec.close()
     wall = _time.perf_counter() - t_wall
     result = RunResult(prep=prep, coupling="monolithic", columns=rec.columns(),
-                       wall_time_s=wall, error=error, summary=clock.summary())
+                       wall_time_s=wall, error=error, summary=clock.summary(),
+                       warnings=warnings)
     return result
 
 
@@ -337,6 +342,8 @@ class RunResult:
     coupling_tolerance: float | None = None
     #: co-simulation: the catenary's Newton iterations per step (all coupling iterations)
     newton_iterations: np.ndarray | None = None
+    #: what makes the numbers doubtful (:mod:`pantocosim.master.stability`)
+    warnings: list = field(default_factory=list)
 
     def statistics(self):
         prep = self.prep
@@ -409,6 +416,7 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "time_s": summary["simulated_time_s"],
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
+    summary["warnings"] = list(result.warnings)
     if out_dir is not None:
         out = Path(out_dir)
         shown = Path(report_dir) if report_dir is not None else out

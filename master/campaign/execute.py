@@ -35,6 +35,8 @@ class Outcome:
     total: int
     skipped: int = 0
     ok: int = 0
+    #: cases that ran with warnings (:mod:`pantocosim.master.stability`)
+    warned: int = 0
     failed: int = 0
     lost: int = 0
     interrupted: bool = False
@@ -96,14 +98,15 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
     except KeyboardInterrupt:
         outcome.interrupted = True
         _late(todo, out, outcome, table, criteria)
-        echo(f"interrupted: {outcome.skipped + outcome.ok + outcome.failed} of "
+        echo(f"interrupted: {outcome.skipped + outcome.ok + outcome.warned + outcome.failed} of "
              f"{outcome.total} cases done; run the sweep again to resume")
     finally:
         table.close()
     outcome.stats = timing_statistics(records)
     (out / "sweep.json").write_text(json.dumps(
         {"name": sweep.name, "source": sweep.source, "cases": outcome.total,
-         "skipped": outcome.skipped, "ok": outcome.ok, "failed": outcome.failed,
+         "skipped": outcome.skipped, "ok": outcome.ok, "warned": outcome.warned,
+         "failed": outcome.failed,
          "lost": outcome.lost, "interrupted": outcome.interrupted,
          "scheduler": scheduler or "local", "timing": outcome.stats,
          "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None},
@@ -245,8 +248,8 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
             outcome.collected.add(case.key)
             setattr(outcome, record["status"], getattr(outcome, record["status"]) + 1)
             if record["status"] != "ok":
-                bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: "
-                          f"{record['error']}")
+                why = record["error"] or "; ".join(record.get("warnings") or [])
+                bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: {why}")
             table.add(rows_of(record, case, criteria))
             bar.update(1)
     return records

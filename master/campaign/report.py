@@ -275,6 +275,7 @@ def summary_markdown(folder: Path, rows, cases, criteria: Criteria, axes, figure
     if sweep.get("source"):
         lines.append(f"Sweep file: `{sweep['source']}`; results: `{folder}`.")
     lines += ["", f"Cases: {len(cases) or len(done)} in the sweep, {len(status['ok'])} ok, "
+              f"{len(status['warned'])} warned (statistics doubtful, not assessed), "
               f"{len(status['failed'])} failed, {len(status['lost'])} lost, "
               f"{len(missing)} not run yet. Rows assessed against **{criteria.name}** "
               f"(`{criteria.source}`).", ""]
@@ -301,17 +302,28 @@ def summary_markdown(folder: Path, rows, cases, criteria: Criteria, axes, figure
         cells += [_fmt(r.get(_column(a))) for a in axes if a not in SHOWN]
         cells.append(_fmt(r["speed_kmh"]))
         cells.append(f"{r.get('pantograph')}: {r.get('pantograph_model')}")
-        if r.get("status") == "ok" and r.get("mean_n") is not None:
-            cells += [f"{r[k]:.1f}" for k in ("mean_n", "std_n", "stat_min_n", "max_n",
-                                              "min_n")]
-            cells.append(f"{r['loss_of_contact_percent']:.2f}")
+        if r.get("status") in ("ok", "warned") and r.get("mean_n") is not None:
+            mark = "*" if r.get("status") == "warned" else ""   # doubtful: see below
+            cells += [f"{r[k]:.1f}{mark}" for k in ("mean_n", "std_n", "stat_min_n", "max_n",
+                                                    "min_n")]
+            cells.append(f"{r['loss_of_contact_percent']:.2f}{mark}")
             cells += [_num(r.get(k)) for k in reports]
             cells += [{True: "pass", False: "**fail**"}.get(r.get(k), "n/a") for k in checks]
-            cells.append("pass" if r["assessment"] == "pass" else "**fail**")
+            cells.append("**warned**" if mark else
+                         "pass" if r["assessment"] == "pass" else "**fail**")
         else:
             cells += [r.get("status", "")] + [""] * (len(head) - len(cells) - 1)
         lines.append("| " + " | ".join(cells[:len(head)]) + " |")
-    failed = [r for r in rows if r.get("status") != "ok"]
+    warned = [r for r in rows if r.get("status") == "warned"]
+    if warned:
+        lines += ["", "## Warned cases", "", "These cases ran, but their numbers are doubtful "
+                  "(marked * above, not assessed):", ""]
+        seen = set()
+        for r in warned:
+            if r["case"] not in seen:
+                seen.add(r["case"])
+                lines.append(f"- case {r['index'] + 1} (`{r['case']}`): {r.get('warnings')}")
+    failed = [r for r in rows if r.get("status") not in ("ok", "warned")]
     if failed:
         lines += ["", "## Failed cases", ""]
         seen = set()

@@ -27,7 +27,7 @@ TIMINGS = ("case_wall_time_s", "case_cpu_time_s", "prepare_time_s", "run_time_s"
 
 def columns(axis_names: list, criteria: Criteria) -> list:
     axes = [a for a in axis_names if a not in SHOWN]
-    return (["index", "case", "status", "error", *DESCRIPTORS, *axes, "pantograph",
+    return (["index", "case", "status", "error", "warnings", *DESCRIPTORS, *axes, "pantograph",
              "pantograph_model", "target_mean_n", *STATISTICS,
              *[c.name for c in criteria.items], "assessment", *TIMINGS, "folder"])
 
@@ -36,7 +36,8 @@ def rows_of(record: dict, case, criteria: Criteria) -> list[dict]:
     """The table rows of a case's record (one per pantograph; one row if the run has no
     statistics)."""
     base = {"index": case.index, "case": case.key, "status": record["status"],
-            "error": record.get("error"), **case.descriptors,
+            "error": record.get("error"),
+            "warnings": "; ".join(record.get("warnings") or []) or None, **case.descriptors,
             "folder": record.get("folder")}
     for name, value in case.values.items():
         if name not in SHOWN:
@@ -55,7 +56,7 @@ def rows_of(record: dict, case, criteria: Criteria) -> list[dict]:
     targets = summary.get("target_mean_n") or []
     rows = []
     for k, p in enumerate(pans):
-        stats = p.get("statistics") if record["status"] == "ok" else None
+        stats = p.get("statistics") if record["status"] in ("ok", "warned") else None
         row = dict(base, pantograph=p["index"], pantograph_model=_model(p["model"]),
                    target_mean_n=targets[k] if k < len(targets) else None)
         for s in STATISTICS:

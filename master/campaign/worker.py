@@ -41,8 +41,11 @@ def run_case(task: dict) -> dict:
     try:
         summary = _run(folder, task["run"], times)
         record["summary"] = _essentials(summary)
+        record["warnings"] = list(summary.get("warnings") or [])
         if summary.get("error"):
             record.update(status="failed", error=summary["error"])
+        elif record["warnings"]:
+            record["status"] = "warned"   # ran, but its numbers are doubtful
     except PantocosimError as exc:
         record.update(status="failed", error=str(exc))
     except Exception as exc:  # noqa: BLE001 - any failure of one case is recorded
@@ -87,7 +90,7 @@ def _essentials(summary: dict) -> dict:
     """What the results table needs of a run's summary."""
     keys = ("wall_time_s", "setup_time_s", "simulated_time_s", "steps", "catenary_dofs",
             "target_mean_n", "analysis_window_m", "newton_iterations_mean",
-            "coupling_iterations_mean")
+            "coupling_iterations_mean", "warnings")
     out = {k: summary[k] for k in keys if k in summary}
     out["pantographs"] = [{"index": p["index"], "model": p["model"],
                            "statistics": p["statistics"]} for p in summary["pantographs"]]

@@ -58,11 +58,13 @@ def print_statistics(summary: dict) -> None:
     print(f"scenario {summary['scenario']} ({summary['coupling']}), "
           f"{summary['speed_kmh']:g} km/h on {summary['catenary']}, window "
           f"{summary['analysis_window_m'][0]:g}-{summary['analysis_window_m'][1]:g} m")
+    warnings = summary.get("warnings") or []
+    flag = " [FLAGGED: see the warnings below]" if warnings else ""
     for p in summary["pantographs"]:
         s = p["statistics"]
         if s is None:
             continue
-        print(f"  pantograph {p['index']} ({p['model']}): mean {s['mean_n']:.2f} N, "
+        print(f"  pantograph {p['index']} ({p['model']}){flag}: mean {s['mean_n']:.2f} N, "
               f"sigma {s['std_n']:.2f} N, stat max {s['stat_max_n']:.1f} N, stat min "
               f"{s['stat_min_n']:.1f} N, max {s['max_n']:.1f} N, min {s['min_n']:.1f} N, "
               f"loss of contact {s['loss_of_contact_percent']:.2f} %, max uplift at "
@@ -79,6 +81,8 @@ def print_statistics(summary: dict) -> None:
     timing = describe(summary)
     if timing:
         print(timing)
+    for w in warnings:
+        print(f"  WARNING: {w}")
     if "files" in summary:
         print(f"  results in {Path(summary['files']['summary']).parent}")
 

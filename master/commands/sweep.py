@@ -44,7 +44,8 @@ def run(args) -> int:
                         retry_failed=args.retry_failed,
                         progress=False if args.quiet else None)
     t = outcome.stats
-    print(f"done: {outcome.ok} ok, {outcome.failed} failed, {outcome.lost} lost, "
+    print(f"done: {outcome.ok} ok, {outcome.warned} warned (doubtful numbers: see the "
+          f"warnings column), {outcome.failed} failed, {outcome.lost} lost, "
           f"{outcome.skipped} from earlier runs; results in {out}/results.csv")
     if t:
         print(f"  wall {t['wall_time_s']:.1f} s for {t['cases_run']} cases of "
@@ -54,4 +55,4 @@ def run(args) -> int:
               f"({t['overhead_percent_of_case']:.2f} % of a case)")
     if outcome.interrupted:
         return 130
-    return 1 if outcome.failed or outcome.lost else 0
+    return 1 if outcome.failed or outcome.lost or outcome.warned else 0
