@@ -274,9 +274,10 @@ def summary_markdown(folder: Path, rows, cases, criteria: Criteria, axes, figure
     lines = [f"# Campaign {sweep.get('name', folder.name)}", ""]
     if sweep.get("source"):
         lines.append(f"Sweep file: `{sweep['source']}`; results: `{folder}`.")
+    warned = (f"{len(status['warned'])} warned (statistics doubtful, not assessed), "
+              if status["warned"] else "")
     lines += ["", f"Cases: {len(cases) or len(done)} in the sweep, {len(status['ok'])} ok, "
-              f"{len(status['warned'])} warned (statistics doubtful, not assessed), "
-              f"{len(status['failed'])} failed, {len(status['lost'])} lost, "
+              f"{warned}{len(status['failed'])} failed, {len(status['lost'])} lost, "
               f"{len(missing)} not run yet. Rows assessed against **{criteria.name}** "
               f"(`{criteria.source}`).", ""]
     ok_rows = _ok(rows)
