@@ -20,7 +20,7 @@ import numpy as np
 
 from pantocosim.core.errors import Interrupted, ParameterError, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.penalty_contact import PenaltyContact
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS, PenaltyContact
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.output_folder import writing
 from pantocosim.master.recorder import Recorder
@@ -234,7 +234,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     from pantocosim.core.coupled import CoupledSystem
 
     system = CoupledSystem(catenary, pantographs, contact)
-    q0 = system.static_solve(np.concatenate([q_cat_guess] + q_pan_guess))
+    q0 = static_start(sc, system, np.concatenate([q_cat_guess] + q_pan_guess))
     q_cat0, q_pan0 = system.split(q0)
     q_pan0 = [x.copy() for x in q_pan0]
     static = system.contact_forces(0.0, q0, np.zeros_like(q0))
@@ -249,6 +249,31 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
                     support_x=np.asarray(support_x, float), dropper_x=dropper_x,
                     extra={"actuation_height": actuation_height, "mean_wire_height": z_mean})
+
+
+def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
+    """The start state of the scenario (:meth:`CoupledSystem.static_solve`); a failure names
+    the scenario, the start (static start in contact, or the ramp start's lowered
+    pantographs) and the setting that makes it hard."""
+    from pantocosim.core.errors import ConvergenceError
+
+    try:
+        return system.static_solve(q_guess)
+    except ConvergenceError as exc:
+        starts = [f"pantograph {k + 1}: " + ("static start, in contact" if p.start == "static"
+                                             else "ramp start, lowered")
+                  for k, p in enumerate(sc.pantographs)]
+        in_contact = any(p.start == "static" for p in sc.pantographs)
+        what = (f"the start state ({'; '.join(starts)}) did not converge: residual "
+                f"{exc.residual:.3g} N against the tolerance {exc.tolerance:.3g} N")
+        if in_contact:
+            raise ConvergenceError(
+                f"{sc.source}: contact.stiffness = {sc.contact_stiffness:g}: {what}; a softer "
+                f"contact (default {DEFAULT_CONTACT_STIFFNESS:g} N/m) starts",
+                residual=exc.residual) from None
+        raise ConvergenceError(f"{sc.source}: catenary = {sc.catenary!r}: {what} (the "
+                               "catenary under its weight with the pantographs lowered)",
+                               residual=exc.residual) from None
 
 
 def column_names(n_pantographs: int, n_supports: int) -> list[str]:

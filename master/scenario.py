@@ -3,14 +3,16 @@
 A scenario is a TOML file (presets in ``master/scenarios/``)::
 
     name = "dsa380-ave-300"
-    catenary = "ave64"             # catenary preset or definition file
+    catenary = "ave64"             # catenary preset or definition file (a relative path is
+                                   # taken from this file's folder, as every file named here)
     spans = 10                     # optional: override the catenary's number of spans
     speed_kmh = 300.0
 
     [[pantographs]]
     model = "dsa380-rigid"         # pantograph preset or parameter file
     fmu = "dist/fmus/dsa380-rigid.fmu"   # optional, used by the co-simulation couplings: a
-                                   # pantocosim FMU of this model (checked); a model given by
+                                   # pantocosim FMU of this model (checked; relative to the
+                                   # working folder, else to this file's); a model given by
                                    # a parameter file runs in any pantograph FMU (default
                                    # dist/fmus/dsa380-rigid.fmu), which gets the file
     position_m = 32.0              # x of the contact point at t = 0 (pantographs at least
@@ -139,11 +141,33 @@ def check_spacing(specs: list[PantographSpec], source: str) -> None:
 
 def load_scenario(name_or_path: str | Path | None = None) -> Scenario:
     path = scenario_path(name_or_path)
-    return parse_scenario(load_toml(path), str(path), path.stem)
+    return parse_scenario(load_toml(path), str(path), path.stem, base=path.parent)
 
 
-def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> Scenario:
-    """Validate the parsed TOML table of a scenario (``source`` names it in errors)."""
+def looks_like_file(name: str) -> bool:
+    """A catenary or pantograph named by a file (a path or a ``.toml`` name), not a preset."""
+    return "/" in name or "\\" in name or name.endswith(".toml")
+
+
+def scenario_file(value: str, base: Path | None, field: str, source: str) -> str:
+    """A file named in a scenario, as an absolute path: relative paths are taken from the
+    scenario's folder ``base`` (the working folder when the scenario is not a file); preset
+    names stay as they are."""
+    if not looks_like_file(value):
+        return value
+    path = Path(value).expanduser()
+    if not path.is_absolute():
+        path = (base if base is not None else Path.cwd()) / path
+    if not path.is_file():
+        where = "" if base is None else " (relative paths are taken from the scenario's folder)"
+        raise ParameterError(field, value, f"no such file: {path}{where}", source)
+    return str(path.resolve())
+
+
+def parse_scenario(data: dict, source: str, default_name: str = "scenario",
+                   base: Path | None = None) -> Scenario:
+    """Validate the parsed TOML table of a scenario (``source`` names it in errors); files it
+    names are taken from the folder ``base`` (:func:`scenario_file`)."""
     root = Table(data, source)
     root.unknown_keys({"name", "description", "catenary", "spans", "speed_kmh", "pantographs",
                        "analysis", "simulation", "contact"})
@@ -177,7 +201,8 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> S
         if fmu is not None and not fmu.strip():
             raise ParameterError(f"pantographs[{i}].fmu", fmu, "empty; give an .fmu file or "
                                  "leave the field out (default: the model's FMU)", source)
-        specs.append(PantographSpec(model=t.string("model"), position_m=position,
+        model = scenario_file(t.string("model"), base, f"pantographs[{i}].model", source)
+        specs.append(PantographSpec(model=model, position_m=position,
                                     start=start, ramp=ramp, fmu=fmu, options=dict(opts)))
     check_spacing(specs, source)
     analysis = root.sub("analysis")
@@ -208,7 +233,7 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario") -> S
     sc = Scenario(
         name=root.string("name", default_name), source=source,
         description=root.string("description", ""),
-        catenary=root.string("catenary"),
+        catenary=scenario_file(root.string("catenary"), base, "catenary", source),
         spans=root.integer("spans", minimum=2) if root.has("spans") else None,
         speed_kmh=root.number("speed_kmh", positive=True),
         pantographs=specs, window_supports=window_supports, window_m=window_m,

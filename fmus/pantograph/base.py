@@ -63,6 +63,9 @@ class PantographOptions:
         check_number("speed_kmh", self.speed_kmh, source=source, nonnegative=True)
         check_number("friction_force", self.friction_force, source=source, nonnegative=True)
         check_number("friction_smoothing", self.friction_smoothing, source=source, positive=True)
+        if self.aero_force < 0.0 and self.mean_uplift <= 0.0:
+            field = "aero_c2" if self.aero_c2 < 0.0 else "aero_c1"
+            raise ParameterError(field, getattr(self, field), self.uplift_lost(), source)
         if self.ramp is not None:
             check_number("ramp.start", self.ramp.start, source=source, nonnegative=True)
             check_number("ramp.duration", self.ramp.duration, source=source, nonnegative=True)
@@ -90,6 +93,23 @@ class PantographOptions:
     def mean_uplift(self) -> float:
         """Static plus aerodynamic uplift: the mean contact force the pantograph aims for."""
         return self.static_force + self.aero_force
+
+    def uplift_lost(self, speed_kmh: float | None = None) -> str:
+        """Why the options are unusable at ``speed_kmh`` (default: theirs): the mean uplift
+        is not positive there."""
+        v = self.speed_kmh if speed_kmh is None else speed_kmh
+        mean = self.static_force + self.aero_c1 * v + self.aero_c2 * v * v
+        return (f"the mean uplift static_force + aero_c1 v + aero_c2 v^2 = {mean:.1f} N at "
+                f"{v:g} km/h: the pantograph does not press on the wire (must be > 0)")
+
+    def highest_speed_kmh(self) -> float | None:
+        """The speed [km/h] above which the mean uplift is not positive (None: none)."""
+        a, b, c = self.aero_c2, self.aero_c1, self.static_force
+        if a < 0.0:
+            return (-b - math.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
+        if a == 0.0 and b < 0.0:
+            return -c / b
+        return None
 
     @classmethod
     def from_table(cls, table: Table) -> "PantographOptions":

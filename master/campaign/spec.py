@@ -205,19 +205,16 @@ def _combinations(axes: list, combine: str):
 
 def _base_inputs(path: Path, run: dict) -> CaseInputs:
     """The base scenario's table with every file path made absolute: catenary and pantograph
-    files relative to the working folder (as ``pantocosim run`` reads them), else to the
-    scenario file; FMUs as the co-simulation finds them (master/cosim.py ``fmu_paths``)."""
+    files as ``pantocosim run`` reads them (relative to the scenario file), FMUs as the
+    co-simulation finds them (master/cosim.py ``fmu_paths``)."""
     from pantocosim.master.scenario import parse_scenario
 
     data = load_toml(path)
-    parse_scenario(copy.deepcopy(data), str(path), path.stem)
+    sc = parse_scenario(copy.deepcopy(data), str(path), path.stem, base=path.parent)
     data.setdefault("name", path.stem)
-    cat = data.get("catenary")
-    if isinstance(cat, str):
-        data["catenary"] = _absolute(cat, path.parent)
-    for p in data.get("pantographs", []):
-        if isinstance(p, dict) and isinstance(p.get("model"), str):
-            p["model"] = _absolute(p["model"], path.parent)
+    data["catenary"] = sc.catenary
+    for p, spec in zip(data.get("pantographs", []), sc.pantographs):
+        p["model"] = spec.model
         if isinstance(p, dict) and isinstance(p.get("fmu"), str):
             p["fmu"] = _absolute(p["fmu"], path.parent)
     return CaseInputs(scenario=data, run={k: run[k] for k in ("coupling", "accelerator")})

@@ -49,11 +49,13 @@ def run(args) -> int:
                    "contact_height_m": model.contact_height(q0),
                    "q": {name: float(x) for name, x in zip(model.dof_names, q0)}}
     equilibrium.update(getattr(model, "equilibrium_info", lambda: {})())
+    note = uplift_note(args.pantograph, model.options)
     if args.json:
         print(json.dumps({"pantograph": model.name,
                           "frequencies_hz": [float(x) for x in res.frequencies_hz[:n]],
                           "damping_ratios": [float(x) for x in res.damping_ratios[:n]],
-                          "mode_labels": labels, "equilibrium": equilibrium}, indent=2))
+                          "mode_labels": labels, "equilibrium": equilibrium,
+                          "warnings": [note] if note else []}, indent=2))
         return 0
     print(f"{model.name}: linearised about F = {args.force:g} N at contact height "
           f"{model.contact_height(q0):.4f} m")
@@ -63,4 +65,21 @@ def run(args) -> int:
               f"{labels[r]}")
     if n < len(res.frequencies_hz):
         print(f"({len(res.frequencies_hz) - n} more modes above; --count N lists them)")
+    if note:
+        print(f"WARNING: {note}")
     return 0
+
+
+def uplift_note(name: str, options) -> str | None:
+    """The speed above which the file's aerodynamic law leaves no uplift (``run`` refuses
+    such a scenario), or None."""
+    from pantocosim.pantograph.presets import preset_path
+
+    top = options.highest_speed_kmh()
+    if top is None:
+        return None
+    field = "aero_c2" if options.aero_c2 < 0.0 else "aero_c1"
+    return (f"{preset_path(name).name}: options.{field} = {getattr(options, field)!r}: the "
+            f"mean uplift static_force + aero_c1 v + aero_c2 v^2 is zero at {top:.0f} km/h "
+            "and negative above: the pantograph does not press on the wire there, and "
+            "pantocosim run refuses it at those speeds")
