@@ -193,7 +193,10 @@ def fmu_paths(prep, build: bool = True):
         pans.append(p)
     cat = dist / "catenary.fmu"
     if build:
-        ensure_fmus(pans + [cat], dist)
+        from pantocosim.master.folder_lock import FolderLock
+
+        with FolderLock(dist, "dist/fmus", wait=True, required=False):   # one build at a time in that folder
+            ensure_fmus(pans + [cat], dist)
     return check_fmus(sc, n_supports, cat, pans)
 
 

@@ -152,7 +152,10 @@ def _prebuild_fmus(cases) -> None:
             if not p.get("fmu"):
                 p["fmu"] = str((dist / f"{Path(p['model']).stem}.fmu").resolve())
                 wanted.add(dist / f"{Path(p['model']).stem}.fmu")
-    ensure_fmus(sorted(wanted), dist)
+    from pantocosim.master.folder_lock import FolderLock
+
+    with FolderLock(dist, "dist/fmus", wait=True, required=False):   # one build at a time in that folder
+        ensure_fmus(sorted(wanted), dist)
 
 
 def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):

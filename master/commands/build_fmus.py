@@ -12,6 +12,8 @@ def add_parser(sub):
     p.add_argument("--out", default=None, help="output folder (default dist/fmus)")
     p.add_argument("--only", nargs="*", help="build only these FMUs (no scenario files)")
     p.add_argument("--no-ssp", action="store_true", help="skip the scenario FMUs and SSP file")
+    p.add_argument("--wait", action="store_true",
+                   help="if another build writes --out, wait for it to end (default: stop)")
     return p
 
 
@@ -28,5 +30,8 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError("--out", out, f"cannot create the folder: {reason(exc)}") from None
-    build_all(out, only=args.only, ssp=not args.no_ssp)
+    from pantocosim.master.folder_lock import FolderLock
+
+    with FolderLock(out, "--out", wait=args.wait):
+        build_all(out, only=args.only, ssp=not args.no_ssp)
     return 0

@@ -24,6 +24,8 @@ def add_parser(sub):
                    help="run the cases that failed in an earlier run again")
     p.add_argument("--list", action="store_true", help="list the cases and stop")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--wait", action="store_true",
+                   help="if another sweep writes --out, wait for it to end (default: stop)")
     return p
 
 
@@ -40,9 +42,12 @@ def run(args) -> int:
             print(f"{c.index + 1:4d}  {c.key}  {c.run['coupling']:12s} {c.label}")
         return 0
     out = Path(args.out) if args.out else Path("out") / f"sweep-{sweep.name}"
-    outcome = run_sweep(sweep, out, scheduler=args.scheduler, workers=args.workers,
-                        retry_failed=args.retry_failed,
-                        progress=False if args.quiet else None)
+    from pantocosim.master.folder_lock import FolderLock
+
+    with FolderLock(out, "--out", wait=args.wait):
+        outcome = run_sweep(sweep, out, scheduler=args.scheduler, workers=args.workers,
+                            retry_failed=args.retry_failed,
+                            progress=False if args.quiet else None)
     t = outcome.stats
     print(f"done: {outcome.ok} ok, {outcome.warned} warned (doubtful numbers: see the "
           f"warnings column), {outcome.failed} failed, {outcome.lost} lost, "
