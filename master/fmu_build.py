@@ -25,6 +25,7 @@ import textwrap
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.fmu_export import compile_export_library, install_export_library
 
 #: pantograph FMU name (the preset) -> slave class name
 PANTOGRAPH_FMUS = {
@@ -93,7 +94,7 @@ def slave_source(module: str, base_module: str, base_class: str, class_name: str
 
 
 def _build_one(module: str, source: str, project_files: list[Path], dest: Path,
-               work: Path) -> Path:
+               work: Path, library: Path | None) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     script_dir = work / module
@@ -106,6 +107,7 @@ def _build_one(module: str, source: str, project_files: list[Path], dest: Path,
         tmp.unlink()
     FmuBuilder.build_FMU(script, dest=tmp, project_files=project_files,
                          canGetAndSetFMUstate=True, canSerializeFMUstate=True)
+    install_export_library(tmp, library)
     tmp.replace(dest)
     return dest
 
@@ -135,6 +137,7 @@ def build_fmus(out: Path | None = None, only=None, quiet: bool = False,
     with tempfile.TemporaryDirectory(prefix="pantocosim_fmus_") as tmp:
         work = Path(tmp)
         pkg, stamp = stage_package(work / "stage")
+        library = compile_export_library(work, quiet)
         for name in names:
             attrs = {} if name == CATENARY_FMU else {"preset": name}
             attrs.update({"start_values": start_values[name]} if start_values else {})
@@ -145,7 +148,7 @@ def build_fmus(out: Path | None = None, only=None, quiet: bool = False,
             else:
                 src = slave_source(module, "pantograph_slave", "PantographSlave",
                                    PANTOGRAPH_FMUS[name], attrs)
-            path = _build_one(module, src, [pkg, stamp], out / f"{name}.fmu", work)
+            path = _build_one(module, src, [pkg, stamp], out / f"{name}.fmu", work, library)
             built.append(path)
             if not quiet:
                 print(f"built {path}")

@@ -70,7 +70,7 @@ class Probe:
 
 
 def state_machine(fmu, args):
-    """Every case of issue 13 item 4 and the typed-set part of item 2 on one FMU."""
+    """Every FMI 2.0 state-machine case and the typed sets and gets on one FMU."""
     calls: list = []
     params, inputs = args["params"], args["inputs"]
     h = 1e-3
@@ -97,8 +97,8 @@ def state_machine(fmu, args):
     state_b, _ = b.call(b.s.getFMUstate)
     out["foreign_instance_set"] = a.call(s.setFMUstate, state_b)[1]
     out["foreign_instance_next_step"] = a.step(t, h, inputs)
-    out["foreign_instance_after"] = a.step(t, h, inputs)
-    t += h
+    out["foreign_instance_after"] = a.step(t + h, h, inputs)
+    t += 2 * h
 
     # rollback in the same instance; then serialized into a fresh instance
     state_a, _ = a.call(s.getFMUstate)
@@ -147,16 +147,16 @@ def state_machine(fmu, args):
     out["n_substeps_after_2.5"] = e.s.getInteger([ivr])[0]
     out["string_after_real"] = e.s.getString([svr])[0].decode()
     out["refused_sets_next_step"] = e.step(0.0, h, inputs)
-    out["refused_sets_step_after"] = e.step(0.0, h, inputs)
+    out["refused_sets_step_after"] = e.step(h, h, inputs)
     value, out["unknown_vr_get"] = e.call(e.s.getReal, [99999])
     out["unknown_vr_get_value"] = repr(value[0]) if value else None
-    out["unknown_vr_get_next_step"] = e.step(h, h, inputs)
+    out["unknown_vr_get_next_step"] = e.step(2 * h, h, inputs)
     speed = vr["speed_kmh"]
     out["fixed_after_init"] = e.call(e.s.setReal, [speed], [123.0])[1]
     out["fixed_after_init_value"] = e.s.getReal([speed])[0]
-    out["fixed_after_init_next_step"] = e.step(h, h, inputs)
-    out["fixed_after_init_step_after"] = e.step(h, h, inputs)
-    t_e = 2 * h
+    out["fixed_after_init_next_step"] = e.step(3 * h, h, inputs)
+    out["fixed_after_init_step_after"] = e.step(4 * h, h, inputs)
+    t_e = 5 * h
 
     # fmi2Reset keeps the instance (an in-memory state from before the reset is its own)
     state_e, _ = e.call(e.s.getFMUstate)
@@ -184,10 +184,10 @@ def foreign_model(fmu, args):
     p.init(args["params"])
     out = {"set": p.call(p.s.setFMUstate, state)[1],
            "next_step": p.step(0.0, 1e-3, args["inputs"]),
-           "step_after": p.step(0.0, 1e-3, args["inputs"])}
+           "step_after": p.step(1e-3, 1e-3, args["inputs"])}
     restored, _ = p.call(p.s.deSerializeFMUstate, blob)
     out["deserialized_set"] = p.call(p.s.setFMUstate, restored)[1]
-    out["deserialized_next_step"] = p.step(1e-3, 1e-3, args["inputs"])
+    out["deserialized_next_step"] = p.step(2e-3, 1e-3, args["inputs"])
     out["statuses"] = sorted(set(calls))
     return out
 

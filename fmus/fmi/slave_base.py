@@ -104,7 +104,7 @@ def package_stamp(package_dir: str | Path | None = None) -> str:
         rel = f.relative_to(root)
         if rel.parts[0] == "master":
             continue
-        if f.suffix in (".py", ".toml") and "__pycache__" not in f.parts and f.is_file():
+        if f.suffix in (".py", ".toml", ".c") and "__pycache__" not in f.parts and f.is_file():
             h.update(rel.as_posix().encode())
             h.update(b"\0")
             h.update(f.read_bytes())
@@ -305,9 +305,16 @@ class GuardedSlave(Fmi2Slave):
             self._error = message
         self.log(message, status)
 
+    #: True when the FMU's export library gives each call its own status (pantocosim's
+    #: library, ``pantocosim.fmi.native``): a refused call then returns fmi2Error itself.
+    #: pythonfmu's library returns fmi2OK for it, so the next doStep also reports it.
+    statuses_per_call = False
+
     def refuse(self, message: str) -> None:
-        """A call that is not applied: logged (fmi2Error), reported by the next do_step only."""
-        self._refused.append(message)
+        """A call that is not applied: logged (fmi2Error); with pythonfmu's library also
+        reported by the next do_step (fmi2Discard)."""
+        if not self.statuses_per_call:
+            self._refused.append(message)
         self.log(message, Fmi2Status.error)
 
     # ------------------------------------------------------------------ FMI state machine
@@ -548,7 +555,7 @@ class GuardedSlave(Fmi2Slave):
         try:
             state = {"model": self._model_id, "instance": self._instance_id,
                      "instance_name": self.instance_name, "deserialized": False,
-                     "time": self._time,
+                     "time": self._time, "initialised": self.initialised,
                      "vars": self._variable_values(),
                      "error": self._error}
             for name in self._state_attributes:
@@ -571,6 +578,10 @@ class GuardedSlave(Fmi2Slave):
             return "not a pantocosim FMU state"
         if state["model"] != self._model_id:
             return f"the state is one of model {state['model']}; this FMU is {self._model_id}"
+        if state.get("initialised") is False and self.initialised:
+            return ("the state was taken before fmi2ExitInitializationMode and this instance "
+                    "is initialised (its model is built): set it before initialisation, or "
+                    "take the state after it")
         if not state.get("deserialized") and state.get("instance") != self._instance_id:
             return (f"in-memory state of another instance ({state.get('instance_name')!r}; "
                     f"this is {self.instance_name!r}); copy a state between instances with "
@@ -667,8 +678,8 @@ class GuardedSlave(Fmi2Slave):
         try:
             state = pickle.loads(data)
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            return {"invalid": f"fmi2DeSerializeFMUstate: the bytes are not a pantocosim FMU "
-                               f"state ({type(exc).__name__}: {exc})"}
+            return {"invalid": f"the bytes are not a pantocosim FMU state "
+                               f"({type(exc).__name__}: {exc})"}
         if isinstance(state, dict):
             state["deserialized"] = True
         return state
