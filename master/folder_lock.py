@@ -29,7 +29,7 @@ class FolderBusy(PantocosimError):
 
 
 def holder_of(folder) -> dict:
-    """Who holds (or last held) the lock of ``folder`` (empty if nobody wrote one)."""
+    """Who holds, or last held, the lock of ``folder`` (empty if nobody wrote one)."""
     try:
         return json.loads((Path(folder) / LOCK_NAME).read_text() or "{}")
     except (OSError, ValueError):
@@ -90,11 +90,7 @@ class FolderLock:
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._fd is not None:
-            try:
-                os.ftruncate(self._fd, 0)
-            except OSError:
-                pass
+        if self._fd is not None:   # the file keeps the last holder's description
             fcntl.flock(self._fd, fcntl.LOCK_UN)
             os.close(self._fd)
             self._fd = None

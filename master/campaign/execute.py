@@ -8,7 +8,9 @@ finish. A task lost with its worker is recorded as ``lost`` (and run again next 
 
 from __future__ import annotations
 
+import asyncio
 import json
+import logging
 import os
 import shutil
 import sys
@@ -22,6 +24,7 @@ from pantocosim.master.campaign.assessment import load_criteria
 from pantocosim.master.campaign.spec import Sweep
 from pantocosim.master.campaign.table import ResultsTable, columns, rows_of
 from pantocosim.master.campaign.worker import CASE_FILE, run_case
+from pantocosim.master.output_folder import writing
 
 #: seconds to wait for ``--workers N`` workers to join a given scheduler
 WAIT_FOR_WORKERS_S = 120.0
@@ -74,7 +77,8 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     criteria = load_criteria(sweep.criteria, base=Path(sweep.source).parent)
-    _keep_inputs(sweep, criteria, out)
+    with writing("--out", out):
+        _keep_inputs(sweep, criteria, out)
     table = ResultsTable(out, columns([n for n, _ in sweep.axes], criteria))
     outcome = Outcome(folder=out, total=len(sweep.cases))
     todo = []
@@ -103,14 +107,15 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
     finally:
         table.close()
     outcome.stats = timing_statistics(records)
-    (out / "sweep.json").write_text(json.dumps(
-        {"name": sweep.name, "source": sweep.source, "cases": outcome.total,
-         "skipped": outcome.skipped, "ok": outcome.ok, "warned": outcome.warned,
-         "failed": outcome.failed,
-         "lost": outcome.lost, "interrupted": outcome.interrupted,
-         "scheduler": scheduler or "local", "timing": outcome.stats,
-         "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None},
-        indent=2) + "\n")
+    with writing("file", out / "sweep.json"):
+        (out / "sweep.json").write_text(json.dumps(
+            {"name": sweep.name, "source": sweep.source, "cases": outcome.total,
+             "skipped": outcome.skipped, "ok": outcome.ok, "warned": outcome.warned,
+             "failed": outcome.failed,
+             "lost": outcome.lost, "interrupted": outcome.interrupted,
+             "scheduler": scheduler or "local", "timing": outcome.stats,
+             "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None},
+            indent=2) + "\n")
     return outcome
 
 
@@ -195,6 +200,10 @@ def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):
 def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, outcome):
     """Submit the cases and collect them as they finish; returns their records."""
     client, cluster = make_client(scheduler, workers, len(todo), echo)
+    quiet = _QuietReconnect()
+    logging.getLogger("distributed.client").addFilter(quiet)
+    if cluster is not None:   # our own workers: no warning for the tasks a stop cancels
+        client.run(_quiet_cancellations)
     try:
         _describe(client, echo)
         token = uuid.uuid4().hex[:8]
@@ -210,9 +219,13 @@ def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, out
             for _, f in futures.values():
                 f.cancel()
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        try:
+            client.close(timeout=10)
+            if cluster is not None:
+                cluster.close()
+        except Exception:  # noqa: BLE001 - closing a client whose scheduler is gone
+            pass
+        logging.getLogger("distributed.client").removeFilter(quiet)
 
 
 def _describe(client, echo) -> None:
@@ -243,9 +256,19 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
             try:
                 record = f.result()
             except Exception as exc:  # noqa: BLE001 - the worker or the task was lost
+                if "scheduler-connection-lost" in str(exc):
+                    done = outcome.skipped + outcome.ok + outcome.warned + outcome.failed
+                    raise SweepStopped(f"the connection to the Dask scheduler was lost (it "
+                                       f"stopped or is unreachable): {done} of "
+                                       f"{outcome.total} cases done, kept in {out}; run the "
+                                       "sweep again to resume") from None
                 record = {"key": case.key, "status": "lost",
                           "error": f"{type(exc).__name__}: {exc}",
                           "folder": str(case_folder(out, case.key))}
+            if record.get("fatal"):
+                raise SweepStopped(f"case {case.index + 1} ({case.label}) could not write its "
+                                   f"results: {record['fatal']}; the sweep stopped, the cases "
+                                   f"done are kept in {out}: run it again to resume")
             record.update(submitted_at=submitted, received_at=time.time())
             records.append(record)
             outcome.collected.add(case.key)
@@ -256,6 +279,25 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
             table.add(rows_of(record, case, criteria))
             bar.update(1)
     return records
+
+
+def _quiet_cancellations() -> None:
+    logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)
+
+
+class SweepStopped(PantocosimError):
+    """The sweep cannot go on (the scheduler is gone, a case cannot write); says why."""
+
+
+class _QuietReconnect(logging.Filter):
+    """Drops the Dask client's tracebacks of a failed reconnection (the sweep says it in one
+    line)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        if record.levelno < logging.ERROR or exc is None:
+            return True
+        return not isinstance(exc, (OSError, asyncio.CancelledError))   # CommClosedError too
 
 
 def _dashboard(client) -> str | None:

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from pantocosim.master.campaign.assessment import STATISTICS, Criteria, assess
+from pantocosim.master.output_folder import writing
 
 #: columns that describe every case, whatever its axes
 DESCRIPTORS = ("scenario", "speed_kmh", "catenary", "catenary_model", "coupling")
@@ -81,15 +82,17 @@ class ResultsTable:
         self._last = 0.0
         self.csv_path = self.folder / "results.csv"
         self.parquet_path = self.folder / "results.parquet"
-        self._fh = open(self.csv_path, "w", newline="")
-        self._csv = csv.DictWriter(self._fh, fieldnames=names, extrasaction="ignore")
-        self._csv.writeheader()
-        self._fh.flush()
+        with writing("file", self.csv_path):
+            self._fh = open(self.csv_path, "w", newline="")
+            self._csv = csv.DictWriter(self._fh, fieldnames=names, extrasaction="ignore")
+            self._csv.writeheader()
+            self._fh.flush()
 
     def add(self, rows: list) -> None:
-        for r in rows:
-            self._csv.writerow({k: _cell(r.get(k)) for k in self.names})
-        self._fh.flush()
+        with writing("file", self.csv_path):
+            for r in rows:
+                self._csv.writerow({k: _cell(r.get(k)) for k in self.names})
+            self._fh.flush()
         self.rows += rows
         if time.monotonic() - self._last >= self.every:
             self.write_parquet()
@@ -101,13 +104,18 @@ class ResultsTable:
         data = {k: [_value(r.get(k)) for r in self.rows] for k in self.names}
         table = pa.table(data)
         tmp = self.parquet_path.with_suffix(".parquet.tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, self.parquet_path)
+        try:
+            with writing("file", self.parquet_path):
+                pq.write_table(table, tmp)
+                os.replace(tmp, self.parquet_path)
+        finally:
+            tmp.unlink(missing_ok=True)
         self._last = time.monotonic()
 
     def close(self) -> None:
         if not self._fh.closed:
-            self._fh.close()
+            with writing("file", self.csv_path):
+                self._fh.close()
         self.write_parquet()
 
 

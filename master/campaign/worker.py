@@ -5,6 +5,12 @@ The case writes its own run folder as ``pantocosim run`` does (``timeseries.csv`
 changes catenary fields), which ``pantocosim run`` runs again as they are, and last
 ``case.json``: status, error, timings, worker memory. ``case.json`` marks the case done, so a
 sweep run again skips it. Any error of the run is caught and recorded: the sweep goes on.
+
+The files are written into a staging folder beside the case folder
+(:class:`~pantocosim.master.output_folder.OutputFolder`) and moved in when the run is done, so
+the case folder never holds a half-written file. A case that cannot write its files (a full
+disk) leaves its folder as it was, writes no ``case.json`` (it runs again on resume) and
+returns its record with ``fatal``: the message naming the file, which stops the sweep.
 """
 
 from __future__ import annotations
@@ -21,47 +27,84 @@ CASE_FILE = "case.json"
 def run_case(task: dict) -> dict:
     """Run one case (``task`` from :func:`pantocosim.master.campaign.execute.task_of`) and
     return its record (also written to ``case.json`` in its folder)."""
-    import tomli_w
-
-    from pantocosim.core.errors import PantocosimError
+    from pantocosim.core.errors import OutputError, PantocosimError
+    from pantocosim.master.output_folder import OutputFolder
 
     folder = Path(task["folder"])
-    folder.mkdir(parents=True, exist_ok=True)
     started = time.time()
     t0, cpu0 = time.perf_counter(), time.process_time()
-    scenario = dict(task["scenario"])
-    if task.get("catenary") is not None:
-        cat = folder / "catenary.toml"
-        cat.write_text(tomli_w.dumps(task["catenary"]))
-        scenario["catenary"] = str(cat)
-    (folder / "scenario.toml").write_text(tomli_w.dumps(scenario))
     record = {"key": task["key"], "index": task["index"], "values": task["values"],
               "folder": str(folder), "status": "ok", "error": None, "summary": None}
     times = {}
+    stage = None
     try:
-        summary = _run(folder, task["run"], times)
+        stage = OutputFolder(folder, known=CASE_FILES, field="case folder")
+        _write_inputs(task, stage.path, stage.path)
+        summary = _run(stage.path, task["run"], times, report_dir=folder)
         record["summary"] = _essentials(summary)
         record["warnings"] = list(summary.get("warnings") or [])
         if summary.get("error"):
             record.update(status="failed", error=summary["error"])
         elif record["warnings"]:
             record["status"] = "warned"   # ran, but its numbers are doubtful
+    except (OutputError, OSError) as exc:   # cannot write: stop the sweep, keep the folder
+        return _fatal(record, stage, exc)
     except PantocosimError as exc:
         record.update(status="failed", error=str(exc))
     except Exception as exc:  # noqa: BLE001 - any failure of one case is recorded
         record.update(status="failed", error=f"{type(exc).__name__}: {exc}")
-        (folder / "error.txt").write_text(traceback.format_exc())
+        try:
+            (stage.path / "error.txt").write_text(traceback.format_exc())
+        except (OSError, AttributeError):
+            pass
     record.update(times)
     record.update(case_wall_time_s=time.perf_counter() - t0,
                   case_cpu_time_s=time.process_time() - cpu0, started_at=started,
                   finished_at=time.time(), **_worker())
-    tmp = folder / (CASE_FILE + ".tmp")
-    tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")
-    os.replace(tmp, folder / CASE_FILE)
+    try:
+        if task.get("catenary") is not None:   # the inputs as they are in the case folder
+            _write_inputs(task, stage.path, folder)
+        stage.commit()
+        tmp = folder / (CASE_FILE + ".tmp")
+        try:
+            tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")
+            os.replace(tmp, folder / CASE_FILE)
+        finally:
+            tmp.unlink(missing_ok=True)
+    except (OutputError, OSError) as exc:
+        return _fatal(record, stage, exc)
     return record
 
 
-def _run(folder: Path, run: dict, times: dict) -> dict:
+#: the files a case writes into its folder (``case.json`` apart)
+CASE_FILES = ("scenario.toml", "catenary.toml", "error.txt", "timeseries.csv", "summary.json",
+              "contact_force.png", "spectrum.png", "support_uplift.png")
+
+
+def _write_inputs(task: dict, into: Path, named: Path) -> None:
+    """``scenario.toml`` (and ``catenary.toml``) into ``into``, the scenario naming the
+    catenary file in the folder ``named``."""
+    import tomli_w
+
+    scenario = dict(task["scenario"])
+    if task.get("catenary") is not None:
+        (into / "catenary.toml").write_text(tomli_w.dumps(task["catenary"]))
+        scenario["catenary"] = str(named / "catenary.toml")
+    (into / "scenario.toml").write_text(tomli_w.dumps(scenario))
+
+
+def _fatal(record: dict, stage, exc: Exception) -> dict:
+    """The record of a case that could not write its files: nothing of it is kept, no
+    ``case.json`` (the case runs again on resume)."""
+    if stage is not None:
+        stage.discard()
+    what = str(exc) if not getattr(exc, "filename", None) else \
+        f"{exc.filename}: {exc.strerror or exc}"
+    record.update(status="lost", error=what, fatal=what)
+    return record
+
+
+def _run(folder: Path, run: dict, times: dict, report_dir: Path | None = None) -> dict:
     from pantocosim.master.campaign.axes import COUPLINGS
     from pantocosim.master.run import finish, prepare, run_monolithic
     from pantocosim.master.scenario import load_scenario
@@ -79,9 +122,13 @@ def _run(folder: Path, run: dict, times: dict) -> dict:
         result = run_cosim(prep, folder, scheme=scheme, accelerator=run["accelerator"],
                            progress=False)
     times["run_time_s"] = time.perf_counter() - t
+    from pantocosim.core.errors import OutputError
+
+    if isinstance(result.error, OutputError):   # a full disk while the run wrote
+        raise result.error
     result.coupling = run["coupling"]
     t = time.perf_counter()
-    summary = finish(result, folder, plots=run["plots"])
+    summary = finish(result, folder, plots=run["plots"], report_dir=report_dir)
     times["finish_time_s"] = time.perf_counter() - t
     return summary
 

@@ -49,8 +49,9 @@ def run(args) -> int:
                             retry_failed=args.retry_failed,
                             progress=False if args.quiet else None)
     t = outcome.stats
-    print(f"done: {outcome.ok} ok, {outcome.warned} warned (doubtful numbers: see the "
-          f"warnings column), {outcome.failed} failed, {outcome.lost} lost, "
+    warned = (f"{outcome.warned} warned (doubtful numbers: see the warnings column), "
+              if outcome.warned else "")
+    print(f"done: {outcome.ok} ok, {warned}{outcome.failed} failed, {outcome.lost} lost, "
           f"{outcome.skipped} from earlier runs; results in {out}/results.csv")
     if t:
         print(f"  wall {t['wall_time_s']:.1f} s for {t['cases_run']} cases of "
