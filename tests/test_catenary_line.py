@@ -56,8 +56,10 @@ def test_static_cli_json_and_plot(en, tmp_path, capsys):
     z, zd = np.array(r["contact_wire_height_at_droppers_m"]), np.array(
         r["design_height_at_droppers_m"])
     assert r["max_height_error_m"] < 1e-3
-    assert np.max(np.abs(z - zd)) == pytest.approx(r["max_height_error_m"], abs=1e-15)
-    # design: pre-sag parabola, 55 mm at mid-span, first/last dropper at 5.3 m
+    # the report's formula on the same (reported) heights: equal bit for bit
+    assert np.max(np.abs(z - zd)) == r["max_height_error_m"]
+    # design: pre-sag parabola, 55 mm at mid-span, first/last dropper at 5.3 m (a few
+    # roundings of 5.3 m: 1e-12 m is 1100 ulp)
     assert zd[4] == pytest.approx(5.3 - 0.055, abs=1e-12) and zd[0] == pytest.approx(5.3)
     assert abs(r["contact_wire_tension_n"] / 20000 - 1) < 0.005
     assert abs(r["messenger_tension_n"] / 16000 - 1) < 0.005
@@ -86,6 +88,7 @@ def test_equilibrium_and_tensions(en):
     assert np.all(en.dropper_forces(en.q_static) > 0)
     # droppers keep the defined axial stiffness k = EA / l0 = 1e5 N/m at their final length
     db = en.mesh.dropper_bars
+    # EA = k l0 divided by l0: two roundings, within 2 ulp of k
     assert np.allclose(S.bars.EA[db] / S.bars.l0[db], 1.0e5, rtol=1e-12)
     # an independent static solve from the *initial guess* geometry with the found
     # dropper lengths and pre-tensions (droppers tension-only) lands on the same state
@@ -170,6 +173,7 @@ def test_rayleigh_coefficients_hit_target_ratios():
     a, b = d.rayleigh()
     for f, z in zip(d.damping_frequencies_hz, d.damping_ratios):
         w = 2 * np.pi * f
+        # a 2 x 2 solve of condition 800 (1 and 20 Hz): error <= ~800 ulp = 1.8e-13
         assert a / (2 * w) + b * w / 2 == pytest.approx(z, rel=1e-12)
 
 

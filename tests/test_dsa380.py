@@ -66,6 +66,8 @@ def test_loops_close_and_inertia_matches_numerical_velocities(model):
     for th in np.linspace(p.theta_min, p.theta_max, 5):
         pts = kin.mechanism_points(P, th)
         p1, p2, p3, p4, p5, p6, p5b, p1p = pts
+        # bar lengths of 0.3-2 m recomputed from closed-form points: a few ulp(2 m) = 4.4e-16
+        # each, amplified by the loop's angles; 1e-12 m is over 2000 ulp(2 m)
         assert np.hypot(*(p4 - p1)) == pytest.approx(L[0], abs=1e-12)
         assert np.hypot(*(p3 - p2)) == pytest.approx(L[1], abs=1e-12)
         assert np.hypot(*(p4 - p3)) == pytest.approx(L[2], abs=1e-12)
@@ -111,7 +113,7 @@ def test_head_moves_nearly_vertically_with_a_nearly_constant_lever(model):
         q = model.static_equilibrium(120.0, h)
         xs.append(q[1])
         levers.append(model.point5(q[0])[3])
-        assert q[2] == pytest.approx(h, abs=1e-12)
+        assert q[2] == pytest.approx(h, abs=1e-12)      # 1100 ulp(6.5 m)
     assert np.ptp(xs) < 0.05
     assert np.ptp(levers) < 0.05 * np.mean(levers)
     model.static_equilibrium(120.0)
@@ -165,6 +167,7 @@ def test_one_way_damper_acts_only_while_moving_down():
     ev_u = m.evaluate(0.0, q, up, z, np.array([120.0]))
     la, la1, _ = kin.damper_geometry(m._P, q[0])
     A1 = m.generalized_inertia(q[0])[1]
+    # the model's formula evaluated from the same geometry in another order: a few ulp
     assert ev_d.damping[0, 0] == pytest.approx(m.params.c * la1**2 + A1 * down[0], rel=1e-12)
     assert ev_u.damping[0, 0] == pytest.approx(A1 * up[0], rel=1e-12)
 
@@ -177,7 +180,7 @@ def test_static_equilibrium_residual_is_zero(force, speed, lock):
     """(2.11)-(2.14): q0 with the stored torque is an equilibrium (aero uplift included)."""
     m = load_dsa380(None, PantographOptions(speed_kmh=speed), pitch_lock=lock)
     q0 = m.static_equilibrium(force, 5.5)
-    assert m.contact_height(q0) == pytest.approx(5.5, abs=1e-12)
+    assert m.contact_height(q0) == pytest.approx(5.5, abs=1e-12)    # 1100 ulp(5.5 m)
     n = m.n_dofs
     ev = m.evaluate(0.0, q0, np.zeros(n), np.zeros(n), np.array([force]))
     scale = max(abs(m.torque), sum(b.m for b in m.params.bars) * 9.81)
@@ -213,6 +216,7 @@ def test_linearised_frequencies_match_table_2_2(model):
         assert lab == name
         assert fr == pytest.approx(target, rel=0.005)
     # linearised M, K are symmetric, C = damper only (B.16)
+    # symmetric up to the rounding of sums of a few products: 4500 ulp of the largest entry
     assert np.allclose(M, M.T, atol=1e-12 * np.max(np.abs(M)))
     assert np.allclose(K, K.T, atol=1e-9 * np.max(np.abs(K)))
     assert np.count_nonzero(C) == 1 and C[0, 0] > 0

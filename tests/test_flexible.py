@@ -91,6 +91,7 @@ def test_element_forces_and_tangents_match_central_differences():
     for k in range(ne):
         assert np.max(np.abs(Fn[k] - F[k])) <= 1e-6 * np.max(np.abs(F[k]))
         assert np.max(np.abs(Kn[k] - K[k])) <= 1e-6 * np.max(np.abs(K[k]))
+        # symmetric up to rounding: 4500 ulp of the largest entry
         assert np.allclose(K[k], K[k].T, rtol=0, atol=1e-12 * np.max(np.abs(K[k])))
     # a rigid motion of the reference is strain-free: no force
     R = np.array([[np.cos(0.7), -np.sin(0.7)], [np.sin(0.7), np.cos(0.7)]])
@@ -209,6 +210,7 @@ def test_mass_and_inertia_equal_the_rigid_bars(steel):
     coll = np.zeros(n)
     for g, _ in steel.node_pos[6]:
         coll[g + 1] = 1.0
+    # sums of the element masses' entries (tens of terms): 1e-12 is 4500 ulp
     assert np.isclose(coll @ steel.M @ coll, rp.bars[6].m, rtol=1e-12)
     # gravity: total weight of bars 1-7 (+ the nominal links) equals sum m g
     W = -np.sum(steel._Qe[:, 1::2])
@@ -280,6 +282,7 @@ def test_ramp_friction_and_one_way_damper_options():
     assert abs(m.torque_lowered - m.rigid.torque_lowered) < 20.0
     assert abs(m.torque - m.rigid.torque) < 20.0
     assert m.actuation_torque(0.0) == m.torque_lowered
+    # the ramp's end: torque_lowered + (torque - torque_lowered) 1.0, terms of one size: 45 ulp
     assert np.isclose(m.actuation_torque(1.0), m.torque, rtol=1e-14)
     q0 = m.lowered_equilibrium(5.0)
     assert abs(m.contact_height(q0) - 5.0) < 1e-9
