@@ -143,3 +143,21 @@ def test_a_lost_scheduler_stops_the_sweep_with_one_line(tmp_path, sweep, monkeyp
                        r"\(it stopped or is unreachable\): 0 of 2 cases done, kept in .*; run "
                        r"the sweep again to resume$"):
         _collect(sweep, tmp_path, futures, monkeypatch)
+
+
+def test_staging_folders_of_a_killed_sweep_are_removed_on_resume(tmp_path, sweep):
+    """Every case done already: nothing runs, and what a killed worker staged is gone."""
+    from pantocosim.master.campaign.execute import run_sweep
+
+    out = tmp_path / "out"
+    for case in sweep.cases:
+        folder = case_folder(out, case.key)
+        folder.mkdir(parents=True)
+        (folder / CASE_FILE).write_text(json.dumps({"key": case.key, "status": "failed",
+                                                    "error": "x", "folder": str(folder)}))
+    staged = out / "cases" / ".abc.x1y2.partial"
+    staged.mkdir()
+    (staged / "timeseries.csv").write_text("time\n")
+    outcome = run_sweep(sweep, out, scheduler="tcp://127.0.0.1:1", echo=lambda *a: None)
+    assert (outcome.skipped, outcome.ok) == (2, 0)
+    assert not staged.exists()

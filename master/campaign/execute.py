@@ -79,6 +79,8 @@ def run_sweep(sweep: Sweep, out: Path, scheduler: str | None = None,
     criteria = load_criteria(sweep.criteria, base=Path(sweep.source).parent)
     with writing("--out", out):
         _keep_inputs(sweep, criteria, out)
+    for staged in (out / "cases").glob(".*.partial"):   # of cases a killed sweep left
+        shutil.rmtree(staged, ignore_errors=True)
     table = ResultsTable(out, columns([n for n, _ in sweep.axes], criteria))
     outcome = Outcome(folder=out, total=len(sweep.cases))
     todo = []
