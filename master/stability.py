@@ -12,7 +12,8 @@ its contact height). The lag of ``1.5 dt`` turns the dashpot's -90 degrees into 
 
     G = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2) < 1.
 
-Measured on en50318 (3 spans, 250 km/h, en50318-2mass, dt = 1 ms; ``tests/test_stability.py``):
+Measured on en50318 (3 spans, 250 km/h, en50318-2mass; ``scripts/stability_breakpoints.py``,
+checked in ``tests/test_stability.py``):
 the Jacobi and Gauss-Seidel couplings break between k_c = 3e5 (G = 0.87) and 4e5 N/m
 (G = 1.16) at 1 ms, between 8e4 (G = 1.2) and 1.2e5 N/m at 5 ms and between 8e4 (G = 2.6)
 and 1e5 N/m at 10 ms: at longer steps the catenary is stiffer than a wire alone, so the limit
