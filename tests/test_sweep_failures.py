@@ -161,3 +161,19 @@ def test_staging_folders_of_a_killed_sweep_are_removed_on_resume(tmp_path, sweep
     outcome = run_sweep(sweep, out, scheduler="tcp://127.0.0.1:1", echo=lambda *a: None)
     assert (outcome.skipped, outcome.ok) == (2, 0)
     assert not staged.exists()
+
+
+def test_the_clients_reconnect_tracebacks_are_dropped():
+    import asyncio
+    import logging
+
+    quiet = execute._QuietReconnect()
+
+    def record(level, exc):
+        info = (type(exc), exc, None) if exc else None
+        return logging.LogRecord("distributed.client", level, "x", 1, "", None, info)
+
+    assert not quiet.filter(record(logging.ERROR, asyncio.CancelledError()))
+    assert not quiet.filter(record(logging.ERROR, ConnectionRefusedError(111, "refused")))
+    assert quiet.filter(record(logging.ERROR, ValueError("a bug")))      # kept
+    assert quiet.filter(record(logging.WARNING, None))
