@@ -189,3 +189,83 @@ def test_pantocosim_python_names_the_runtime(host, fmus, tmp_path):
     proc = run_host(host, script, tmp_path, PANTOCOSIM_PYTHON=sys.executable)
     assert_clean_exit(proc)
     assert [v[0] for v in results(proc.stdout).values()] == [OK] * len(results(proc.stdout))
+
+
+# ----------------------------------------------------------------------- bad inputs
+#: (FMU, parameters, input value or None) -> what must happen, and a text of the message
+GUARDS = {
+    "pantograph_substeps": ("en50318-2mass", {"n_substeps": 10 ** 9}, None, "n_substeps"),
+    "catenary_substeps": ("catenary", {"n_substeps": 10 ** 9}, None, "n_substeps"),
+    "tiny_elements": ("catenary", {"element_size": 1e-4}, None, "element_size = 0.0001"),
+    "small_elements": ("catenary", {"element_size": 1e-2}, None, "max_dofs ="),
+    "endless_line": ("catenary", {"spans": 100000}, None, "spans = 100000"),
+    "more_spans_than_outputs": ("catenary", {"spans": 70}, None, "at most 63 spans"),
+    "catenary_beyond_wave_speed": ("catenary", {"speed_kmh": 1e5}, None,
+                                   "must be below the contact wire's wave speed"),
+}
+
+
+@pytest.mark.parametrize("case", list(GUARDS))
+def test_parameters_the_model_cannot_represent_are_refused_at_initialisation(host, fmus,
+                                                                             tmp_path, case):
+    name, params, _, text = GUARDS[case]
+    base = CATENARY_RUN[0] if name == "catenary" else PANTOGRAPH_RUN[0]
+    s = Script(tmp_path)
+    s.load("A", fmus[name])
+    s.start("A", "guard", {**base, **params})
+    exit_line = len(s.lines)
+    step = s.call("step", "A", 0.0, 1e-3)
+    proc = run_host(host, s, tmp_path)             # answers at once: nothing is built
+    assert_clean_exit(proc)
+    r = results(proc.stdout)
+    assert r[exit_line][0] == ERROR and r[step][0] == DISCARD
+    assert text in proc.stdout
+
+
+def test_a_collector_driven_out_of_the_mechanism_is_discarded(host, fmus, tmp_path):
+    """dsa380-rigid under 1e7 N: the step that leaves the mechanism's heights is discarded
+    and undone; the collector never reads far off."""
+    s = Script(tmp_path)
+    s.load("A", fmus["dsa380-rigid"])
+    s.start("A", "far", PANTOGRAPH_RUN[0])
+    s.set("A", "contact_force", 1e7)
+    steps = [s.call("step", "A", repr(k * 1e-3), 1e-3) for k in range(30)]
+    read = s.get("A", "contact_height")
+    proc = run_host(host, s, tmp_path)
+    assert_clean_exit(proc)
+    r = results(proc.stdout)
+    assert DISCARD in [r[line][0] for line in steps]
+    assert "outside the heights pantograph 'dsa380-rigid' represents" in proc.stdout
+    assert 4.0 < r[read][1] < 7.0
+
+
+def test_a_speed_beyond_the_pantograph_is_refused(host, fmus, tmp_path):
+    """dsa380-rigid at 1e6 km/h: the aerodynamic uplift no spring carries."""
+    s = Script(tmp_path)
+    s.load("A", fmus["dsa380-rigid"])
+    s.start("A", "fast", {**PANTOGRAPH_RUN[0], "speed_kmh": 1e6})
+    exit_line = len(s.lines)
+    step = s.call("step", "A", 0.0, 1e-3)
+    proc = run_host(host, s, tmp_path)
+    assert_clean_exit(proc)
+    r = results(proc.stdout)
+    assert r[exit_line][0] == ERROR and r[step][0] == DISCARD
+    assert "cannot carry the load" in proc.stdout
+
+
+def test_a_state_taken_before_initialisation_is_refused_after_it(host, fmus, tmp_path):
+    s = Script(tmp_path)
+    s.load("A", fmus["en50318-2mass"])
+    s.call("instantiate", "A", "early")
+    s.call("setup", "A", 0.0)
+    s.call("enter", "A")
+    s.call("getstate", "A", 0)
+    s.call("exit", "A")
+    s.call("step", "A", 0.0, 1e-3)
+    refused = s.call("setstate", "A", 0)
+    step = s.call("step", "A", 1e-3, 1e-3)
+    proc = run_host(host, s, tmp_path)
+    assert_clean_exit(proc)
+    r = results(proc.stdout)
+    assert r[refused][0] == ERROR and r[step][0] == OK
+    assert "taken before fmi2ExitInitializationMode" in proc.stdout

@@ -47,6 +47,11 @@ class Wire:
     tension: float
     length: float = 0.0  # stitch wire only
 
+    @property
+    def wave_speed(self) -> float:
+        """Transverse wave speed c = sqrt(T / m) [m/s] of the wire under its tension."""
+        return float(np.sqrt(self.tension / self.mass_per_length))
+
 
 @dataclass
 class CatenaryDefinition:

@@ -150,6 +150,10 @@ class CatenarySlave(IntegratorSlave):
                   "run behind the operating-height law")
         self.integer("n_substeps", 1, "integration steps per communication step (inputs "
                      "interpolated linearly)")
+        self.integer("max_dofs", 0, "largest catenary model the FMU builds (degrees of "
+                     "freedom); 0 = the default limit (the size guard refuses larger models "
+                     "before building them)")
+
         self.integer("factorization", 2, "Newton matrix policy of the HHT solver: 0 = full "
                      "Newton (refactorize every iteration), 1 = factorize once per step "
                      "(chord), 2 = reuse across steps (refreshed when droppers change state "
@@ -222,6 +226,35 @@ class CatenarySlave(IntegratorSlave):
                 return load_catenary(cand)
         return load_catenary(name)
 
+    def _check_line(self, definition, spans: int, esize: float, speed: float) -> None:
+        """What the FMU can represent, checked before anything is built: the model's size
+        (DOFs), the support outputs, the train speed below the contact wire's wave speed."""
+        import dataclasses
+
+        from pantocosim.catenary.size_guard import check_catenary_size, culprit
+        from pantocosim.core.errors import ParameterError
+
+        finer = 0 < esize < definition.element_size
+        if esize > 0:
+            definition = dataclasses.replace(definition, element_size=esize)
+        field, value = (("element_size", esize) if finer else ("spans", spans) if spans
+                        else culprit(definition))
+        limit = int(self.max_dofs)
+        check_catenary_size(definition, field, value, None, limit if limit > 0 else None,
+                            lift="max_dofs =")
+        supports = len(definition.support_x)
+        if supports > MAX_SUPPORTS:
+            raise ParameterError("spans", definition.n_spans, f"the line has {supports} "
+                                 f"supports; the FMU outputs the uplift of {MAX_SUPPORTS} "
+                                 f"(support_uplift_0..{MAX_SUPPORTS - 1}): at most "
+                                 f"{MAX_SUPPORTS - 1} spans")
+        wave = definition.contact.wave_speed
+        if speed >= wave:
+            raise ParameterError("speed_kmh", speed * 3.6, f"must be below the contact wire's "
+                                 f"wave speed c = {wave * 3.6:.0f} km/h (catenary "
+                                 f"'{definition.name}'): at or above it the wire cannot carry "
+                                 "the moving load")
+
     def _build_model(self):
         """The catenary model of the current parameters (checked; cached)."""
         from pantocosim.catenary.definition import with_spans
@@ -250,6 +283,7 @@ class CatenarySlave(IntegratorSlave):
             definition = self._catenary_source()
             if spans:
                 definition = with_spans(definition, spans)
+            self._check_line(definition, spans, esize, speed)
             length = float(definition.support_x[-1])
             for k, x in enumerate(x0, start=1):
                 if not 0.0 < x < length:
@@ -349,8 +383,7 @@ class CatenarySlave(IntegratorSlave):
         if mode not in (0, 1):
             raise ParameterError("contact_mode", mode, "must be 0 (force inputs) or 1 "
                                  "(built-in penalty)")
-        if int(self.n_substeps) < 1:
-            raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
+        self.substeps()
         self._settings = self._run_settings()
         model = self._model = self._build_model()
         n = len(model.x0)
@@ -378,11 +411,6 @@ class CatenarySlave(IntegratorSlave):
                 self._set_law_outputs(self._laws(model))
             self._start_penalty(model, contact, F0, self._input_heights(n, F0))
         self.n_supports = float(len(model.support_x))
-        if len(model.support_x) > MAX_SUPPORTS:
-            from pythonfmu.enums import Fmi2Status
-
-            self.log(f"the line has {len(model.support_x)} supports: support_uplift_j gives "
-                     f"the uplift of supports 0..{MAX_SUPPORTS - 1} only", Fmi2Status.warning)
         self.apply_pending_state()
         self._update_outputs(initial=True)
 

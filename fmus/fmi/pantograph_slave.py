@@ -138,8 +138,7 @@ class PantographSlave(IntegratorSlave):
             raise ParameterError("start_mode", self.start_mode, "must be 0 (static at "
                                  "initial_height), 1 (ramp) or 2 (static on the catenary's "
                                  "start laws)")
-        if self.n_substeps < 1:
-            raise ParameterError("n_substeps", self.n_substeps, "must be >= 1")
+        self.substeps()
         if self.start_mode == 1:
             overrides["ramp"] = Ramp(start=self.finite("ramp_start_time", self.ramp_start_time),
                                      duration=self.finite("ramp_duration", self.ramp_duration),
@@ -201,6 +200,7 @@ class PantographSlave(IntegratorSlave):
         integ = HHTIntegrator(model, settings)
         integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
         self._model, self._integ = model, integ
+        self._height_range = model.height_range()
         self._force_prev = F0
         self._input_prev = F0
         self.contact_force = F0
@@ -235,6 +235,14 @@ class PantographSlave(IntegratorSlave):
             for i in range(1, n + 1):
                 buf[0] = F0 + (F - F0) * i / n
                 iters += integ.step(h, buf).iterations
+            problem = self._outside_range(current_time, step_size)
+            if problem:
+                if saved is not None:
+                    integ.set_state(saved)
+                else:  # a closed-form step kept no state: only a rollback recovers
+                    self._error = f"{problem}; roll back with fmi2SetFMUstate"
+                self.log(problem, Fmi2StatusDiscard())
+                return False
             self._force_prev = F
             self._input_prev = u
             self.newton_iterations = float(iters)
@@ -246,6 +254,17 @@ class PantographSlave(IntegratorSlave):
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: {exc}",
                      Fmi2StatusDiscard())
             return False
+
+    def _outside_range(self, t: float, h: float) -> str | None:
+        """Why the step just taken left the heights the model represents, or None."""
+        z = float(self._model.contact_height(self._integ.q))
+        lo, hi = self._height_range
+        if lo <= z <= hi:
+            return None
+        return (f"doStep(t = {t:.6g}, h = {h:.3g}): the contact point would be at {z:.4g} m, "
+                f"outside the heights pantograph '{self.preset}' represents ({lo:.3g} .. "
+                f"{hi:.3g} m): contact_force = {float(self.contact_force):.6g} N and "
+                f"speed_kmh = {float(self.speed_kmh):.6g} km/h are beyond what it can take")
 
     def _update_outputs(self):
         q, v = self._integ.q, self._integ.v

@@ -50,6 +50,10 @@ STEP_RTOL = 1e-6
 
 _INT32 = 2 ** 31
 
+#: most integration steps in one communication step (``n_substeps``): a doStep answers in
+#: bounded time
+MAX_SUBSTEPS = 10_000
+
 
 _FMI_TYPES: dict = {}
 
@@ -540,6 +544,16 @@ class GuardedSlave(Fmi2Slave):
             self.fail(f"this FMU was built with pantocosim {built} but the process imported "
                       f"pantocosim {here} from {Path(pantocosim.__file__).parent}: rebuild the "
                       f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
+
+    def substeps(self) -> int:
+        """``n_substeps``, checked: 1 .. :data:`MAX_SUBSTEPS`."""
+        n = int(self.n_substeps)
+        if not 1 <= n <= MAX_SUBSTEPS:
+            from pantocosim.core.errors import ParameterError
+
+            raise ParameterError("n_substeps", n, f"must be 1..{MAX_SUBSTEPS} (integration "
+                                 "steps per communication step)")
+        return n
 
     @staticmethod
     def finite(name: str, value: float) -> float:

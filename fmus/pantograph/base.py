@@ -165,6 +165,11 @@ class PantographModel(SecondOrderModel):
     def contact_velocity(self, q: np.ndarray, v: np.ndarray) -> float:
         return float(self.contact_height_gradient(q) @ v)
 
+    def height_range(self) -> tuple[float, float]:
+        """Contact heights [m above the rail] the model represents. Default: above the rail
+        and below twice the working height (a lumped chain is linear about it)."""
+        return (0.0, 2.0 * self.working_height)
+
     # --- initial states ------------------------------------------------------------------
     def static_equilibrium(self, contact_force: float | None = None,
                            height: float | None = None) -> np.ndarray:

@@ -318,6 +318,16 @@ class Dsa380Model(TorqueActuatedPantograph):
         ok, A, V, p5 = kin.mechanism_terms(self._P, float(theta))
         return A
 
+    #: travel [m] allowed beyond the mechanism's reachable heights (the collector's springs)
+    HEIGHT_MARGIN = 0.5
+
+    def height_range(self) -> tuple[float, float]:
+        """The mechanism's reachable heights between its stops, unloaded and under twice the
+        mean uplift, widened by :attr:`HEIGHT_MARGIN`."""
+        lo0, hi0 = self.reachable_heights(0.0)
+        lo1, hi1 = self.reachable_heights(2.0 * self.options.mean_uplift)
+        return (min(lo0, lo1) - self.HEIGHT_MARGIN, max(hi0, hi1) + self.HEIGHT_MARGIN)
+
     def reachable_heights(self, contact_force: float | None = None) -> tuple[float, float]:
         """Range of contact heights the mechanism can reach between its stops."""
         F = self.options.mean_uplift if contact_force is None else float(contact_force)

@@ -89,6 +89,11 @@ class LumpedPantograph(PantographModel):
         self.lowered_reference = params.working_height
 
     # --- port contract -------------------------------------------------------------------
+    @property
+    def working_height(self) -> float:
+        """Contact height of the parameter file [m] (the chain is linear about it)."""
+        return self.params.working_height
+
     def contact_height(self, q):
         return float(q[0])
 
