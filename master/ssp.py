@@ -11,6 +11,11 @@ sets its actuation and start on them (:mod:`pantocosim.pantograph.static_start`)
 catenary settles its static state against the pantograph's height at t0. So replacing the
 pantograph FMU in the SSP by any other pantograph FMU is a file swap.
 
+Any pantograph FMU with the three required ports (:data:`REQUIRED_PORTS`) couples with the
+catenary FMU: :func:`write_pantograph_ssp` (``pantocosim ssp --pantograph FMU``) writes the
+SSP of a user's FMU with the catenary FMU baked for a scenario, connecting the optional ports
+the FMU has (:data:`OPTIONAL_INPUTS`: the start laws and the train speed).
+
 The SSD is written with ElementTree and validated against the SSP 1.0 schemas fmpy ships;
 names are identifiers (letters, digits, underscores); String parameters stay in the FMUs'
 start values (fmpy's SSP support and OMSimulator do not take them from an SSD).
@@ -28,6 +33,7 @@ import numpy as np
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.catenary_slave import MAX_SUPPORTS
+from pantocosim.fmi.pantograph_slave import LAW_INPUTS, SPEED_INPUT
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -40,13 +46,16 @@ for _prefix, _uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("oms", OMS)):
 PARAMETER_SET = "default"
 #: the scenarios written by ``build-fmus``
 DEFAULT_SCENARIOS = ("dsa380-ave-300",)
+#: the ports every pantograph FMU has: name -> causality (all Real)
+REQUIRED_PORTS = {"contact_force": "input", "contact_height": "output",
+                  "contact_velocity": "output"}
+#: the optional pantograph inputs (Real) -> the catenary output each is connected to
+OPTIONAL_INPUTS = {**{law: f"{law}_1" for law in LAW_INPUTS}, SPEED_INPUT: SPEED_INPUT}
 #: connections of the pantograph and the catenary FMU (pantograph k = 1)
 PORTS = [("pantograph", "contact_height", "catenary", "pantograph_height_1"),
          ("pantograph", "contact_velocity", "catenary", "pantograph_velocity_1"),
          ("catenary", "contact_force_out_1", "pantograph", "contact_force")] + [
-    ("catenary", f"{law}_1", "pantograph", law)
-    for law in ("operating_height", "operating_height_slope", "static_height",
-                "static_height_slope")]
+    ("catenary", out, "pantograph", port) for port, out in OPTIONAL_INPUTS.items()]
 
 
 def identifier(name: str) -> str:
@@ -177,18 +186,65 @@ def _oms_annotation(system: ET.Element, stop_time: float, step_size: float) -> N
          absoluteTolerance="0.0001", relativeTolerance="0.0001")
 
 
-def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
-    from fmpy import read_model_description
+def fmu_variables(fmu: Path) -> dict:
+    """{name: (causality, type)} of an FMI 2.0 co-simulation FMU's model description (read
+    with ElementTree); a file that is not one raises ParameterError naming it."""
+    fmu = Path(fmu)
+    try:
+        with zipfile.ZipFile(fmu) as z:
+            text = z.read("modelDescription.xml")
+    except (OSError, zipfile.BadZipFile, KeyError) as exc:
+        why = ("no modelDescription.xml in it" if isinstance(exc, KeyError)
+               else getattr(exc, "strerror", None) or str(exc))
+        raise ParameterError("fmu", str(fmu), f"not an FMU ({why}); accepted: an FMI 2.0 "
+                             "co-simulation FMU (a zip file with modelDescription.xml)",
+                             ) from None
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise ParameterError("modelDescription.xml", str(exc), "not well-formed XML; "
+                             "accepted: an FMI 2.0 model description", str(fmu)) from None
+    version = root.get("fmiVersion")
+    if root.tag != "fmiModelDescription" or version != "2.0":
+        raise ParameterError("fmiVersion", version, "accepted: 2.0 (an FMI 2.0 co-simulation "
+                             "FMU)", str(fmu))
+    if root.find("CoSimulation") is None:
+        raise ParameterError("CoSimulation", None, "the FMU has no co-simulation interface; "
+                             "accepted: an FMI 2.0 co-simulation FMU", str(fmu))
+    out = {}
+    for v in root.iterfind("ModelVariables/ScalarVariable"):
+        kind = next((c.tag for c in v if c.tag in ("Real", "Integer", "Boolean", "String",
+                                                    "Enumeration")), None)
+        out[v.get("name")] = (v.get("causality", "local"), kind)
+    return out
 
-    variables = read_model_description(str(fmu)).modelVariables
-    types = {v.name: v.type for v in variables}
-    causality = {v.name: v.causality for v in variables}
-    missing = [n for n in list(parameters) + ports if n not in types]
+
+def pantograph_connections(fmu: Path) -> list[tuple]:
+    """The connections (:data:`PORTS`) of a pantograph FMU: the required ports, checked
+    (a missing one raises ParameterError naming the file and the port), and the optional
+    inputs it has."""
+    variables = fmu_variables(fmu)
+    for name, causality in REQUIRED_PORTS.items():
+        if variables.get(name) != (causality, "Real"):
+            found = variables.get(name)
+            what = ("missing" if found is None
+                    else f"a {found[1]} {found[0]}, not a Real {causality}")
+            raise ParameterError(name, None if found is None else found[0], f"required port "
+                                 f"{what}; accepted: a pantograph FMU with the Real input "
+                                 "contact_force [N] and the Real outputs contact_height [m], "
+                                 "contact_velocity [m/s]", str(fmu))
+    return [c for c in PORTS if c[2] != "pantograph" or c[3] in REQUIRED_PORTS
+            or variables.get(c[3]) == ("input", "Real")]
+
+
+def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
+    variables = fmu_variables(fmu)
+    missing = [n for n in list(parameters) + ports if n not in variables]
     if missing:
         raise ParameterError("fmu", str(fmu), f"has no variable {missing[0]!r}: not a "
                              "pantocosim FMU of this version (rebuild the FMUs)")
-    return ([(n, "parameter", types[n]) for n in parameters]
-            + [(n, causality[n], types[n]) for n in ports])
+    return ([(n, "parameter", variables[n][1]) for n in parameters]
+            + [(n, variables[n][0], variables[n][1]) for n in ports])
 
 
 def _ssp_parameters(values: dict) -> dict:
@@ -200,31 +256,38 @@ def _ssp_parameters(values: dict) -> dict:
 def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
               values: dict, step_size: float) -> Path:
     """The SSP file of one pantograph FMU on the catenary FMU (see the module docstring);
-    validated against the SSP 1.0 schema."""
+    validated against the SSP 1.0 schema. A pantocosim pantograph FMU gets the scenario's
+    pantograph parameters and every port; another one its required ports and the optional
+    inputs it has, and no parameter."""
     from pantocosim.fmi.slave_base import bundled_stamp
 
     stamps = {Path(f).name: bundled_stamp(f) for f in (pantograph_fmu, catenary_fmu)}
-    if None in stamps.values() or len(set(stamps.values())) != 1:
+    ours = stamps[Path(pantograph_fmu).name] is not None
+    if stamps[Path(catenary_fmu).name] is None or (ours and len(set(stamps.values())) != 1):
         raise ParameterError("fmu", str(pantograph_fmu), f"the FMUs come from different "
                              f"builds (stamps {stamps}): they bundle different pantocosim "
                              "copies and cannot run in one process; rebuild them together")
-    pan_params = _ssp_parameters(values["pantograph"])
+    connections = PORTS if ours else pantograph_connections(pantograph_fmu)
+    pan_params = _ssp_parameters(values["pantograph"]) if ours else {}
     cat_params = _ssp_parameters(values["catenary"])
-    pan_ports = sorted({p for a, ap, b, bp in PORTS for el, p in ((a, ap), (b, bp))
+    pan_ports = sorted({p for a, ap, b, bp in connections for el, p in ((a, ap), (b, bp))
                         if el == "pantograph"})
-    cat_ports = sorted({p for a, ap, b, bp in PORTS for el, p in ((a, ap), (b, bp))
+    cat_ports = sorted({p for a, ap, b, bp in connections for el, p in ((a, ap), (b, bp))
                         if el == "catenary"})
     # unconnected outputs a master records with the connectors (fmpy, OMSimulator)
     n_sup = min(len(scenario_support_x(values["catenary"])), MAX_SUPPORTS)
     cat_ports += ["wire_height_1"] + [f"support_uplift_{j}" for j in range(n_sup)]
+    pan_entry = Path(pantograph_fmu).name
+    if pan_entry == Path(catenary_fmu).name:
+        pan_entry = f"pantograph_{pan_entry}"
     components = [
-        {"name": "pantograph", "source": f"resources/{Path(pantograph_fmu).name}",
+        {"name": "pantograph", "source": f"resources/{pan_entry}",
          "connectors": _connectors(pantograph_fmu, pan_params, pan_ports),
          "parameters": pan_params},
         {"name": "catenary", "source": f"resources/{Path(catenary_fmu).name}",
          "connectors": _connectors(catenary_fmu, cat_params, cat_ports),
          "parameters": cat_params}]
-    tree = system_structure(identifier(name), components, PORTS, values["stop_time"],
+    tree = system_structure(identifier(name), components, connections, values["stop_time"],
                             step_size)
     dest = Path(dest)
     dest.parent.mkdir(parents=True, exist_ok=True)
@@ -232,7 +295,7 @@ def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("SystemStructure.ssd", ET.tostring(tree.getroot(), encoding="unicode",
                                                       xml_declaration=True) + "\n")
-        z.write(pantograph_fmu, f"resources/{Path(pantograph_fmu).name}")
+        z.write(pantograph_fmu, f"resources/{pan_entry}")
         z.write(catenary_fmu, f"resources/{Path(catenary_fmu).name}")
     try:
         validate_ssp(tmp)
@@ -294,6 +357,28 @@ def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
                   f"{values['stop_time']:g} s, window {values['window'][0]:g}.."
                   f"{values['window'][1]:g} m, start height {cat['pantograph_height_1']:.6f} m")
     return written
+
+
+def write_pantograph_ssp(fmu: Path, scenario, dest: Path | None = None) -> tuple[Path, dict]:
+    """The SSP file of a user's pantograph FMU on the catenary FMU baked for ``scenario``
+    (preset name or file; its pantograph's model gives the catenary's start values only):
+    (path, the scenario's start values). ``dest`` defaults to ``<fmu stem>-<scenario>.ssp``
+    beside the FMU. The FMU's required ports are checked before anything is built."""
+    import tempfile
+
+    from pantocosim.master.fmu_build import CATENARY_FMU, build_fmus
+
+    fmu = Path(fmu)
+    pantograph_connections(fmu)
+    values = scenario_start_values(scenario)
+    sc = values["scenario"]
+    dest = Path(dest) if dest else fmu.with_name(f"{fmu.stem}-{sc.name}.ssp")
+    with tempfile.TemporaryDirectory(prefix="pantocosim_ssp_") as tmp:
+        (catenary,) = build_fmus(Path(tmp), only=[CATENARY_FMU], quiet=True,
+                                 start_values={CATENARY_FMU: values["catenary"]},
+                                 scenario=sc.name)
+        write_ssp(dest, sc.name, fmu, catenary, values, sc.dt)
+    return dest, values
 
 
 def scenario_support_x(values: dict) -> np.ndarray:

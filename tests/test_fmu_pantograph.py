@@ -58,7 +58,8 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
                      ("contact_velocity", "output", "m/s"),
                      ("operating_height", "input", "m"),
                      ("operating_height_slope", "input", "m/N"),
-                     ("static_height", "input", "m"), ("static_height_slope", "input", "m/N")]
+                     ("static_height", "input", "m"), ("static_height_slope", "input", "m/N"),
+                     ("train_speed_kmh", "input", "km/h")]
 
 
 @pytest.mark.parametrize("name", ALL)

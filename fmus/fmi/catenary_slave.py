@@ -46,11 +46,16 @@ import numpy as np
 from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import DEFAULT_ALPHA
 
+from .given import track_sets
 from .slave_base import IntegratorSlave
 
 MAX_PANTOGRAPHS = 4
 #: a pantograph height at t0 that differs from the settled one by more settles it again [m]
 HEIGHT_TOL_M = 1e-9
+#: a pantograph height first delivered after t0 may differ from the height the start was
+#: settled against by at most the height of this static contact force [N] (a pantograph that
+#: started on this catenary moves micrometres in a step; one that did not is centimetres off)
+START_FORCE_TOL_N = 1.0
 #: support_uplift_j outputs: the FMU's port limit (a longer line reports the first ones)
 MAX_SUPPORTS = 64
 #: model field -> this FMU's parameter, for errors raised by the model side
@@ -194,6 +199,9 @@ class CatenarySlave(IntegratorSlave):
                       f"uplift of the contact wire at support {j} relative to the unloaded "
                       "static configuration (0 beyond the last support)")
         self.real("n_supports", 0.0, "output", "1", "number of supports of the line (spans + 1)")
+        self.real("train_speed_kmh", 0.0, "output", "km/h", "the train speed (speed_kmh; "
+                  "available in initialisation mode): pantograph FMUs take it as their input "
+                  "of the same name")
         self.real("newton_iterations", 0.0, "local", None,
                   "Newton iterations of the last communication step")
         self._model = None       # CatenaryModel
@@ -205,7 +213,12 @@ class CatenarySlave(IntegratorSlave):
         self._prev_inputs = None  # mode 0: forces at t; mode 1: (z_p, v_p) at t
         self._port_names = PortNames.of(1)   # of the active pantographs (initialise)
         self._prepared = False    # the structure's prepare ran (the first step)
-        self._state_attributes = ["_integ_state", "_prev_inputs"]
+        self._state_attributes = ["_integ_state", "_prev_inputs", "_given", "_delivered"]
+        #: the inputs a master set; per pantograph, whether a master delivered its height
+        #: (at t0, or later: :meth:`_check_late_heights`)
+        self._given: set = set()
+        self._delivered = np.zeros(0, bool)
+        track_sets(self, ports.heights)
         self._cache: dict = {}    # model and start laws by the parameters they depend on
         self.apply_start_values()
 
@@ -342,7 +355,8 @@ class CatenarySlave(IntegratorSlave):
 
     def update_initial_outputs(self):
         """In initialisation mode the start laws are outputs as soon as the parameters are
-        set (pantograph FMUs in start_mode 2 read them there)."""
+        set (pantograph FMUs in start_mode 2 read them there), and the train speed."""
+        self.train_speed_kmh = self.finite("speed_kmh", self.speed_kmh)
         self._set_law_outputs(self._laws(self._build_model()))
 
     def _set_law_outputs(self, laws):
@@ -409,7 +423,11 @@ class CatenarySlave(IntegratorSlave):
             if np.all(F0 == 0.0):
                 # the handshake: the start laws are outputs, the pantographs' heights inputs
                 self._set_law_outputs(self._laws(model))
+            self._delivered = np.array([F0[k - 1] > 0 or (
+                f"pantograph_height_{k}" in self._given
+                and getattr(self, f"pantograph_height_{k}") > 0.0) for k in range(1, n + 1)])
             self._start_penalty(model, contact, F0, self._input_heights(n, F0))
+        self.train_speed_kmh = self.finite("speed_kmh", self.speed_kmh)
         self.n_supports = float(len(model.support_x))
         self.apply_pending_state()
         self._update_outputs(initial=True)
@@ -443,9 +461,11 @@ class CatenarySlave(IntegratorSlave):
             q0 = model.static_state(F0)
         else:
             guess = F0.copy()
+            self._late_height_tol = np.zeros(len(F0))
             for k in np.flatnonzero(F0 == 0):
                 off, slope = static_height_law(model, k)
                 guess[k] = max(0.0, (heights[k, 0] - off) / (slope + 1.0 / contact.stiffness))
+                self._late_height_tol[k] = START_FORCE_TOL_N * (slope + 1.0 / contact.stiffness)
             q0 = self._settle(model, heights[:, 0], contact, guess)
         standins = [PrescribedPantograph(z, v) for z, v in heights]
         for k, (z, v) in enumerate(heights, start=1):
@@ -494,6 +514,12 @@ class CatenarySlave(IntegratorSlave):
         try:
             if self._mode == 1 and self.extrapolate_heights and self._integ.t == 0.0:
                 new = self._first_step_heights(new)
+            elif self._mode == 1 and not self._delivered.all():
+                problem = self._check_late_heights(new, current_time)
+                if problem:
+                    self._error = problem
+                    self.log(problem, _discard())
+                    return False
             h = step_size / n
             self._prepare_once(h)
             old = self._prev_inputs
@@ -540,11 +566,33 @@ class CatenarySlave(IntegratorSlave):
         F0 = self._settled_forces
         held = self._prev_inputs.copy()
         given = (F0 == 0.0) & (new[:, 0] > 0.0)
+        self._delivered = self._delivered | given
         if np.any(given & (np.abs(new[:, 0] - held[:, 0]) > HEIGHT_TOL_M)):
             held[given] = new[given]
             self._start_penalty(self._build_model(), self._contact(), F0, held)
             self._update_outputs(initial=True)
         return held
+
+    def _check_late_heights(self, new, t: float) -> str | None:
+        """The pantograph heights a master delivers first after t0 (it passed none at t0:
+        fmpy's simulate_ssp and CoFmuPy pass 0 at the first step): the start was settled
+        against the height the FMU had (its start value), so a pantograph that is not there
+        did not start on this catenary. Why the run cannot go on, or None."""
+        for k in np.flatnonzero(~self._delivered & (new[:, 0] > 0.0)):
+            self._delivered[k] = True
+            z, held = float(new[k, 0]), float(self._prev_inputs[k, 0])
+            if abs(z - held) > self._late_height_tol[k]:
+                name = f"pantograph_height_{k + 1}"
+                return (f"{name} = {z:.6g} m at t = {t:.6g} s: the pantograph is "
+                        f"{(z - held) * 1e3:+.1f} mm from the height this catenary settled "
+                        f"against at t0 ({held:.6g} m, the start value of {name}; more than "
+                        f"{START_FORCE_TOL_N:g} N of static force). The master passed no "
+                        f"pantograph height at t0 (it exchanges nothing in initialisation "
+                        f"mode), so the pantograph did not start on this catenary: run the "
+                        f"SSP in a master that exchanges values in initialisation mode "
+                        f"(libcosim, ecos), or use the pantograph FMU this catenary FMU was "
+                        f"built with")
+        return None
 
     def _update_outputs(self, initial: bool = False):
         model, integ = self._model, self._integ

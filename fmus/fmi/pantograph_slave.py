@@ -27,6 +27,7 @@ from pantocosim.core.hht import DEFAULT_ALPHA
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
 
+from .given import track_sets
 from .slave_base import IntegratorSlave
 
 #: 0 = static at initial_height under initial_contact_force, 1 = ramp raising (3.3.1),
@@ -35,6 +36,8 @@ START_MODES = (0, 1, 2)
 #: inputs carrying the catenary's start laws (catenary.operating_height.ContactHeightLaws)
 LAW_INPUTS = ("operating_height", "operating_height_slope", "static_height",
               "static_height_slope")
+#: the input carrying the catenary's train speed (its output of the same name)
+SPEED_INPUT = "train_speed_kmh"
 
 FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
                 "force at t is the previous accepted step's (kept in the FMU state).")
@@ -65,7 +68,9 @@ class PantographSlave(IntegratorSlave):
                   "aerodynamic uplift, linear coefficient: F = c1 v + c2 v^2, v in km/h")
         self.real("aero_c2", opts.aero_c2, "parameter", "N.h2/km2",
                   "aerodynamic uplift, quadratic coefficient")
-        self.real("speed_kmh", opts.speed_kmh, "parameter", "km/h", "train speed (aerodynamic law)")
+        self.real("speed_kmh", opts.speed_kmh, "parameter", "km/h", "train speed (aerodynamic "
+                  f"law); not set: the input {SPEED_INPUT} if given, else (start_mode 0, 1) "
+                  "this start value")
         self.real("friction_force", opts.friction_force, "parameter", "N",
                   "collector friction amplitude f_r (thesis 2.16)")
         self.real("friction_smoothing", opts.friction_smoothing, "parameter", "m/s",
@@ -102,6 +107,8 @@ class PantographSlave(IntegratorSlave):
                 ("static_height_slope", "m/N", "slope of the static-height law")):
             self.real(name, 0.0, "input", unit, f"start_mode 2: the catenary's start law, "
                       f"read in initialisation mode: {text}")
+        self.real(SPEED_INPUT, 0.0, "input", "km/h", "the catenary's train speed, read in "
+                  "initialisation mode where speed_kmh was not set")
         self.string("parameter_file", "", "parameter file (TOML) replacing the preset; a path "
                     "or a file name in the FMU resources")
         self.real("newton_iterations", 0.0, "local", None,
@@ -110,7 +117,10 @@ class PantographSlave(IntegratorSlave):
         self._u = np.zeros(1)   # the step's input (reused: a step allocates nothing)
         self._force_prev = 0.0
         self._input_prev = 0.0
-        self._state_attributes = ["_integ_state", "_force_prev", "_input_prev"]
+        self._state_attributes = ["_integ_state", "_force_prev", "_input_prev", "_given"]
+        #: the variables a master set (or the build baked): what the start may rely on
+        self._given = set(self.start_values)
+        track_sets(self, ("speed_kmh", SPEED_INPUT, *LAW_INPUTS))
         self.apply_start_values()
 
     # ------------------------------------------------------------------ lifecycle
@@ -129,7 +139,7 @@ class PantographSlave(IntegratorSlave):
             "static_force": self.finite("static_force", self.static_force),
             "aero_c1": self.finite("aero_c1", self.aero_c1),
             "aero_c2": self.finite("aero_c2", self.aero_c2),
-            "speed_kmh": self.finite("speed_kmh", self.speed_kmh),
+            "speed_kmh": self._speed_kmh(),
             "friction_force": self.finite("friction_force", self.friction_force),
             "friction_smoothing": self.finite("friction_smoothing", self.friction_smoothing),
             "one_way_damper": bool(self.one_way_damper),
@@ -146,13 +156,57 @@ class PantographSlave(IntegratorSlave):
                                                                 self.lowered_height))
         return load_pantograph(source, **overrides)
 
-    def _laws(self) -> tuple[float, float, float, float]:
-        """The catenary's start laws: the inputs, or their start values where the master
-        passed none (a slope is > 0)."""
+    def _speed_input(self) -> float | None:
+        """The catenary's train speed where a master gave it (a positive value set)."""
+        v = float(getattr(self, SPEED_INPUT))
+        return v if SPEED_INPUT in self._given and math.isfinite(v) and v > 0.0 else None
+
+    def _speed_kmh(self) -> float:
+        """The train speed: speed_kmh where a master set it (or the build baked it), else the
+        catenary's train_speed_kmh input where given, else speed_kmh's start value."""
+        given = self._speed_input()
+        if "speed_kmh" not in self._given and given is not None:
+            return given
+        return self.finite("speed_kmh", self.speed_kmh)
+
+    def _check_given(self) -> None:
+        """Refuse a start that lacks what it needs, naming all of it: a start on the
+        catenary's laws (start_mode 2) needs the laws and the train speed (a master that
+        exchanges nothing in initialisation mode gives neither to a pantograph whose start
+        values do not carry them); a given train speed must be speed_kmh's."""
+        from pantocosim.core.errors import ParameterError
+
+        problems = []
+        given = self._speed_input()
+        if self.start_mode == 2 and "speed_kmh" not in self._given and given is None:
+            problems.append(f"speed_kmh was never set and the input {SPEED_INPUT} was not "
+                            "given: set speed_kmh to the train speed, or connect "
+                            f"{SPEED_INPUT} to the catenary FMU's output {SPEED_INPUT}")
+        elif "speed_kmh" in self._given and given is not None \
+                and abs(self.speed_kmh - given) > 1e-9 * max(1.0, given):
+            problems.append(f"speed_kmh = {self.speed_kmh!r} but the catenary's "
+                            f"{SPEED_INPUT} = {given!r}: the pantograph and the catenary "
+                            "run at one train speed")
+        if self.start_mode == 2 and min(self._law_values()[1::2]) <= 0.0:
+            problems.append("the start-law inputs " + ", ".join(LAW_INPUTS) + " were not "
+                            "given in initialisation mode (their slopes are 0): connect them "
+                            "to the catenary FMU's outputs operating_height_1, ... in a "
+                            "master that exchanges values in initialisation mode, or use "
+                            "start_mode 0 with initial_height")
+        if problems:
+            raise ParameterError("start_mode", self.start_mode, "the pantograph's start lacks "
+                                 "what this master did not give: " + "; ".join(problems))
+
+    def _law_values(self) -> tuple[float, ...]:
+        """The law inputs, or their baked start values where the master passed none."""
         if min(self.operating_height_slope, self.static_height_slope) > 0.0:
-            return tuple(self.finite(name, getattr(self, name)) for name in LAW_INPUTS)
-        return tuple(self.finite(name, self.given_or_start(name, lambda v: False))
-                     for name in LAW_INPUTS)
+            return tuple(float(getattr(self, name)) for name in LAW_INPUTS)
+        return tuple(float(self.given_or_start(name, lambda v: False)) for name in LAW_INPUTS)
+
+    def _laws(self) -> tuple[float, float, float, float]:
+        """The catenary's start laws (:meth:`_law_values`), checked finite."""
+        return tuple(self.finite(name, value)
+                     for name, value in zip(LAW_INPUTS, self._law_values()))
 
     def _start(self, model):
         """(q0, F0): the start shape and the contact force at t0 of ``start_mode``."""
@@ -172,11 +226,12 @@ class PantographSlave(IntegratorSlave):
     def update_initial_outputs(self):
         """In initialisation mode the contact height of the start is an output as soon as
         the parameters (and, for start_mode 2, the catenary's laws) are set."""
-        key = (self._laws(), self.start_mode, self.initial_height, self.speed_kmh)
+        key = (self._laws(), self.start_mode, self.initial_height, self._speed_kmh())
         if key == getattr(self, "_preview_key", None):
             return
-        if self.start_mode == 2 and min(key[0][1], key[0][3]) <= 0.0:
-            return  # the catenary's laws are not there yet
+        if self.start_mode == 2 and (min(key[0][1], key[0][3]) <= 0.0 or (
+                "speed_kmh" not in self._given and self._speed_input() is None)):
+            return  # the catenary's laws or speed are not there yet
         self._preview_key = key
         model = self._load_model()
         q0, _ = self._start(model)
@@ -190,6 +245,7 @@ class PantographSlave(IntegratorSlave):
         self.check_build_stamp()
         if self._error:
             return
+        self._check_given()
         model = self._load_model()
         settings = HHTSettings(alpha=self.finite("hht_alpha", self.hht_alpha))
         try:
