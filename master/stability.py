@@ -192,13 +192,14 @@ class Monitor:
         off = t - np.maximum(self.touched, self.raised)
         if (off > SEPARATION_LIMIT_S).any():
             k = int(np.argmax(off))
-            raise Diverged(f"the run diverged: pantograph {k + 1} left the wire at t = "
-                           f"{self.touched[k]:.6g} s and has not come back by t = {t:.6g} s "
-                           f"(under its uplift force it would within tens of ms)")
+            raise Diverged(f"the numerics failed at t = {t:.6g} s: pantograph {k + 1} left "
+                           f"the wire at t = {self.touched[k]:.6g} s and has not come back "
+                           "(under its uplift force it would within tens of ms)")
         bad = ~np.isfinite(F) | (np.abs(F) > self.cap)
         if bad.any():
             k = int(np.argmax(bad))
             why = ("is not finite" if not np.isfinite(F[k]) else
                    f"exceeds {FORCE_CAP_FACTOR:g} times the static force ({self.cap[k]:.0f} N)")
-            raise Diverged(f"the run diverged at t = {t:.6g} s: the contact force of "
-                           f"pantograph {k + 1} ({F[k]:.4g} N) {why}")
+            raise Diverged(f"the numerics failed at t = {t:.6g} s: the contact force of "
+                           f"pantograph {k + 1} ({F[k]:.4g} N) {why} (a diverging coupling, "
+                           "or impacts the step does not resolve)")
