@@ -28,7 +28,7 @@ def run_case(task: dict) -> dict:
     """Run one case (``task`` from :func:`pantocosim.master.campaign.execute.task_of`) and
     return its record (also written to ``case.json`` in its folder)."""
     from pantocosim.core.errors import OutputError, PantocosimError
-    from pantocosim.master.output_folder import OutputFolder
+    from pantocosim.master.output_folder import OutputFolder, writing
 
     folder = Path(task["folder"])
     started = time.time()
@@ -47,7 +47,7 @@ def run_case(task: dict) -> dict:
             record.update(status="failed", error=summary["error"])
         elif record["warnings"]:
             record["status"] = "warned"   # ran, but its numbers are doubtful
-    except (OutputError, OSError) as exc:   # cannot write: stop the sweep, keep the folder
+    except OutputError as exc:   # cannot write: stop the sweep, keep the folder as it was
         return _fatal(record, stage, exc)
     except PantocosimError as exc:
         record.update(status="failed", error=str(exc))
@@ -67,11 +67,12 @@ def run_case(task: dict) -> dict:
         stage.commit()
         tmp = folder / (CASE_FILE + ".tmp")
         try:
-            tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")
-            os.replace(tmp, folder / CASE_FILE)
+            with writing("file", folder / CASE_FILE):
+                tmp.write_text(json.dumps(record, indent=2, default=str) + "\n")
+                os.replace(tmp, folder / CASE_FILE)
         finally:
             tmp.unlink(missing_ok=True)
-    except (OutputError, OSError) as exc:
+    except OutputError as exc:
         return _fatal(record, stage, exc)
     return record
 
@@ -86,11 +87,15 @@ def _write_inputs(task: dict, into: Path, named: Path) -> None:
     catenary file in the folder ``named``."""
     import tomli_w
 
+    from pantocosim.master.output_folder import writing
+
     scenario = dict(task["scenario"])
     if task.get("catenary") is not None:
-        (into / "catenary.toml").write_text(tomli_w.dumps(task["catenary"]))
+        with writing("file", into / "catenary.toml"):
+            (into / "catenary.toml").write_text(tomli_w.dumps(task["catenary"]))
         scenario["catenary"] = str(named / "catenary.toml")
-    (into / "scenario.toml").write_text(tomli_w.dumps(scenario))
+    with writing("file", into / "scenario.toml"):
+        (into / "scenario.toml").write_text(tomli_w.dumps(scenario))
 
 
 def _fatal(record: dict, stage, exc: Exception) -> dict:
@@ -98,9 +103,7 @@ def _fatal(record: dict, stage, exc: Exception) -> dict:
     ``case.json`` (the case runs again on resume)."""
     if stage is not None:
         stage.discard()
-    what = str(exc) if not getattr(exc, "filename", None) else \
-        f"{exc.filename}: {exc.strerror or exc}"
-    record.update(status="lost", error=what, fatal=what)
+    record.update(status="lost", error=str(exc), fatal=str(exc))
     return record
 
 
