@@ -234,3 +234,20 @@ def test_run_command_refuses_the_issue_rows(tmp_path, capsys, monkeypatch, built
     assert code == 2
     assert len(err) == 1 and f"s.toml: {field} = " in err[0] and "unstable" in err[0], err
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_run_command_warns_the_near_limit_case(tmp_path, capsys, monkeypatch, built):
+    """Explicit through the FMUs, default contact at dt = 5 ms (G = 0.74): it runs, exit 0,
+    the statistics flagged and the warning in summary.json."""
+    monkeypatch.chdir(built.parent.parent)
+    path = scenario_file(tmp_path, dt=0.005)
+    code = main(["run", str(path), "--coupling", "explicit", "--no-plots", "--quiet",
+                 "--out", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "[FLAGGED" in out and "near its stability limit at dt = 0.005 s (exchange gain " \
+        "0.74, refused at 1)" in out
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert len(summary["warnings"]) == 1
+    assert summary["pantographs"][0]["statistics"]["mean_n"] == pytest.approx(116.1, abs=0.5)
