@@ -251,3 +251,19 @@ def test_run_command_warns_the_near_limit_case(tmp_path, capsys, monkeypatch, bu
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert len(summary["warnings"]) == 1
     assert summary["pantographs"][0]["statistics"]["mean_n"] == pytest.approx(116.1, abs=0.5)
+
+
+def test_breakpoint_script_runs_a_short_case(monkeypatch, capsys):
+    import importlib.util
+    import sys
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "stability_breakpoints.py"
+    spec = importlib.util.spec_from_file_location("stability_breakpoints", path)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    monkeypatch.setattr(stability, "check", stability.check)   # the script replaces it
+    monkeypatch.setattr(sys, "argv", ["x", "jacobi", "0.001", "5e4", "--duration", "0.05"])
+    script.main()
+    out = capsys.readouterr().out
+    assert out.startswith("jacobi dt = 0.001 s, k = 5e+04 N/m: G = 0.15, max force ")
+    assert "out of contact 0.0 % of the steps" in out
