@@ -442,6 +442,8 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
     summary["warnings"] = list(result.warnings)
+    #: the statistics are doubtful (see the warnings)
+    summary["flagged"] = bool(result.warnings)
     if out_dir is not None:
         out = Path(out_dir)
         shown = Path(report_dir) if report_dir is not None else out

@@ -209,6 +209,7 @@ def test_run_command_warns_the_monolithic_1e7_case(tmp_path, capsys, monkeypatch
     assert "WARNING: the pantograph: contact frequency 188 Hz" in out
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert len(summary["warnings"]) == 1 and "188 Hz" in summary["warnings"][0]
+    assert summary["flagged"] is True
 
 
 def test_run_command_summary_has_an_empty_warnings_list(tmp_path, capsys, monkeypatch):
@@ -216,7 +217,8 @@ def test_run_command_summary_has_an_empty_warnings_list(tmp_path, capsys, monkey
     path = scenario_file(tmp_path)
     assert main(["run", str(path), "--no-plots", "--quiet", "--out", str(tmp_path / "o")]) == 0
     assert "WARNING" not in capsys.readouterr().out
-    assert json.loads((tmp_path / "o" / "summary.json").read_text())["warnings"] == []
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["warnings"] == [] and summary["flagged"] is False
 
 
 @pytest.mark.slow
