@@ -22,7 +22,8 @@ outputs
   seen by the moving pantograph), ``contact_force_out_k`` [N], ``support_uplift_j`` [m]
   (j = 0..63; uplift of the contact wire at support j relative to the unloaded static
   configuration; 0 beyond the last support; a line of more supports logs a warning at
-  initialisation) and ``n_supports``.
+  initialisation) and ``n_supports``; ``train_speed_kmh`` (the speed, for pantograph FMUs) and
+  the start laws ``operating_height_k``, ... are available in initialisation mode.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
 ``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
@@ -31,8 +32,9 @@ as in the monolithic solver; at t0 the force is ``static_force_k``. In mode 1 th
 the penalty contact F = max(0, k_H (z_p - z_w) + c_H (v_p - v_w)) implicitly with the wire,
 with the pantograph's height/velocity at t + h from the inputs (at t0 the pantograph is taken
 at z_w + static_force_k / k_H, so the contact force at t0 is ``static_force_k``; with a zero
-static force the inputs set during initialisation are used). With ``n_substeps`` > 1 the
-inputs are interpolated linearly inside the communication step.
+static force the inputs set during initialisation are used, else their start values; a
+height first delivered after t0 that is off the settled one is refused). With
+``n_substeps`` > 1 the inputs are interpolated linearly inside the communication step.
 """
 
 from __future__ import annotations

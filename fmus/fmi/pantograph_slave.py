@@ -2,7 +2,11 @@
 
 Ports (identical for all variants; README.md, "The FMUs and their ports"):
   input  ``contact_force`` [N] >= 0: pushes the collector down;
-  output ``contact_height`` [m] above the rail, ``contact_velocity`` [m/s].
+  output ``contact_height`` [m] above the rail, ``contact_velocity`` [m/s];
+  optional inputs (read in initialisation mode) the catenary's start laws
+  (``operating_height``, ...; start_mode 2) and ``train_speed_kmh`` (where ``speed_kmh`` was
+  not set). A start on the laws that lacks them or the speed is refused at
+  fmi2ExitInitializationMode, naming what the master did not give.
 
 Timing of the force input: the value set before ``doStep(t, h)`` is the contact force at
 ``t + h``; the force at ``t`` is the one of the previous accepted step, kept in the FMU state
