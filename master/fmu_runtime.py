@@ -41,7 +41,9 @@ def cache_dir() -> Path:
 
 
 def extract_cached(fmu_path: str | Path) -> Path:
-    """Extract ``fmu_path`` into a folder named after its content hash (reused across runs)."""
+    """Extract ``fmu_path`` into a folder named after its content hash (reused across runs).
+    The folder appears whole (extracted beside it, then renamed), so processes sharing the
+    cache never see or remove one another's half-extracted folder."""
     from fmpy import extract
 
     fmu_path = Path(fmu_path)
@@ -51,12 +53,26 @@ def extract_cached(fmu_path: str | Path) -> Path:
     target = cache_dir() / f"{fmu_path.stem}-{digest}"
     marker = target / ".complete"
     if not marker.exists():
-        if target.exists():
-            shutil.rmtree(target)
         target.parent.mkdir(parents=True, exist_ok=True)
-        extract(str(fmu_path), unzipdir=str(target))
-        marker.write_text("ok\n")
+        part = target.parent / f".{target.name}.{os.getpid()}.partial"
+        shutil.rmtree(part, ignore_errors=True)
+        extract(str(fmu_path), unzipdir=str(part))
+        (part / ".complete").write_text("ok\n")
+        _move_into_place(part, target)
     return target
+
+
+def _move_into_place(part: Path, target: Path) -> None:
+    """Rename the extracted folder ``part`` to ``target``; where another process got there
+    first, keep its folder (same content) and drop ours; an incomplete leftover is replaced."""
+    if target.exists() and not (target / ".complete").exists():
+        shutil.rmtree(target, ignore_errors=True)
+    try:
+        os.rename(part, target)
+    except OSError:
+        shutil.rmtree(part, ignore_errors=True)
+        if not (target / ".complete").exists():
+            raise
 
 
 _LOGS: dict[str, list[tuple[int, str]]] = {}

@@ -8,6 +8,7 @@ FMUs run in child processes (the recipes), never in the pytest process."""
 import dataclasses
 import os
 import re
+import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -152,28 +153,13 @@ def test_fmpy_simulate_ssp_runs_the_shipped_ssp_unpatched(fmpy_default_1s,
     assert np.mean(F) == pytest.approx(np.mean(F_mono), rel=2e-3)
 
 
-def cofmupy_python() -> str:
-    """The Python of a venv holding CoFmuPy 1.0 (it pins pythonfmu 0.6.3, this project 0.7.0,
-    so it cannot share the test venv); made once and kept in ~/.cache/pantocosim."""
-    venv = Path(os.environ.get("PANTOCOSIM_COFMUPY_VENV",
-                               Path.home() / ".cache" / "pantocosim" / "cofmupy-venv"))
-    py = venv / "bin" / "python"
-    if subprocess.run([str(py), "-c", "import cofmupy, numba"],
-                      capture_output=True).returncode != 0:
-        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
-        pip = subprocess.run([str(py), "-m", "pip", "install", "-q", "cofmupy==1.0.0",
-                              "numba"], capture_output=True, text=True, timeout=1800)
-        assert pip.returncode == 0, pip.stdout[-3000:] + pip.stderr[-3000:]
-    return str(py)
-
-
 @pytest.mark.slow
-def test_cofmupy_runs_the_shipped_config(built, fmpy_default_1s, tmp_path):
+def test_cofmupy_runs_the_shipped_config(built, fmpy_default_1s, cofmupy_python, tmp_path):
     """CoFmuPy with the shipped configuration (Jacobi, no start values set): the same run as
     fmpy's SSP support (both pass 0 at the first step and couple by Jacobi)."""
     out = tmp_path / "cofmupy.csv"
     stats, _ = run_recipe("cofmupy_json", "--ssp", built / "dsa380-ave-300.ssp", "--python",
-                          cofmupy_python(), "--stop", 1.0, "--window", 40.0, 110.0,
+                          cofmupy_python, "--stop", 1.0, "--window", 40.0, 110.0,
                           "--out", out)
     c = read_csv(out)
     ref, ref_stats = fmpy_default_1s
@@ -254,9 +240,13 @@ def test_non_editable_install_builds_and_runs_from_any_folder(tmp_path):
     """``pip install .`` (not editable) in a fresh venv: build-fmus, a co-simulation through
     the FMUs and a recipe work from a folder outside the checkout."""
     venv = tmp_path / "venv"
+    source = tmp_path / "source"           # pip builds in the source tree: a copy of it
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "dist", "out", "build", "*.egg-info", "__pycache__"))
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
     pip = subprocess.run([str(venv / "bin" / "python"), "-m", "pip", "install", "-q",
-                          str(ROOT)], capture_output=True, text=True, timeout=1800)
+                          "--no-cache-dir", str(source)], capture_output=True, text=True,
+                         timeout=1800)
     assert pip.returncode == 0, pip.stdout[-3000:] + pip.stderr[-3000:]
     work = tmp_path / "work"
     work.mkdir()
