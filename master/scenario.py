@@ -160,7 +160,7 @@ def scenario_file(value: str, base: Path | None, field: str, source: str) -> str
         path = (base if base is not None else Path.cwd()) / path
     if not path.is_file():
         where = "" if base is None else " (relative paths are taken from the scenario's folder)"
-        raise ParameterError(field, value, f"no such file: {path}{where}", source)
+        raise ParameterError(field, value, f"no such file: {path.absolute()}{where}", source)
     return str(path.resolve())
 
 

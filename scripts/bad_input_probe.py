@@ -699,6 +699,31 @@ def cases(tmpfs: Path | None) -> list[Case]:
         out_case("build-fmus --out under /proc", ["build-fmus", "--only", "catenary",
                                                   "--out", "/proc/p"], ("--out", "/proc/p")),
     ]
+    # --------------------------------------------------------------- numerics and files
+    def unstable(name, changes, names, coupling="explicit"):
+        return S(name, changes, names, kind="stability", argv_extra=("--coupling", coupling))
+
+    negative_aero = dump_toml(mutate(pantograph_base(), {"options.aero_c2": -0.01}))
+    C += [
+        unstable("explicit 1e7 N/m at 1 ms", {"contact.stiffness": 1e7},
+                 ("contact.stiffness", "10000000")),
+        unstable("explicit 1e6 N/m at 10 ms", {"contact.stiffness": 1e6, "simulation.dt": 0.01},
+                 ("contact.stiffness", "1000000")),
+        unstable("explicit 1e7 N/m at 10 ms", {"contact.stiffness": 1e7, "simulation.dt": 0.01},
+                 ("contact.stiffness", "10000000")),
+        unstable("explicit 5e6 N/m at 5 ms", {"contact.stiffness": 5e6, "simulation.dt": 0.005},
+                 ("contact.stiffness", "5000000")),
+        unstable("gauss-seidel 1e7 N/m at 10 ms",
+                 {"contact.stiffness": 1e7, "simulation.dt": 0.01},
+                 ("contact.stiffness", "10000000"), coupling="gauss-seidel"),
+        unstable("explicit damping 1e5 N s/m at 10 ms",
+                 {"contact.damping": 1e5, "simulation.dt": 0.01},
+                 ("contact.damping", "100000")),
+        S("catenary file beside the scenario's folder", {"catenary": "../cat.toml"},
+          ("catenary", "../cat.toml", "scenario's folder")),
+        S("pantograph without uplift at the speed", {"pantographs.0.model": "pan.toml"},
+          ("aero_c2", "-0.01", "250 km/h"), files_extra={"pan.toml": negative_aero}),
+    ]
     # --------------------------------------------------------------- lost results
     def lost_case(name, changes, names, coupling="jacobi", files=None, **kw):
         text = dump_toml(mutate(SCENARIO, changes))
