@@ -16,6 +16,7 @@ import signal
 import subprocess
 import sys
 import time
+import tracemalloc
 import zipfile
 from pathlib import Path
 
@@ -58,6 +59,21 @@ def edited(text: str, *pairs) -> str:
 
 def error_lines(err: str) -> list[str]:
     return [l for l in err.splitlines() if l.strip() and not l.startswith("building FMUs")]
+
+
+@pytest.fixture
+def no_long_work(monkeypatch):
+    """The long work of a command (the catenary's static solves, time stepping) fails the
+    test if it starts: refusals must come before it, on a machine of any speed."""
+    import pantocosim.catenary.model as catenary_model
+    from pantocosim.core.hht import HHTIntegrator
+
+    def started(*args, **kwargs):
+        raise AssertionError("the long work started before the refusal")
+
+    for name in ("solve_static", "solve_initial_configuration"):
+        monkeypatch.setattr(catenary_model, name, started)
+    monkeypatch.setattr(HHTIntegrator, "step", started)
 
 
 def run_cli(capsys, *argv) -> tuple[int, list[str]]:
@@ -108,13 +124,12 @@ def leftovers(folder: Path) -> list[str]:
     ([('start = "static"', 'start = "static"\noptions = { static_force = -5.0 }')],
      ["pantographs[0].options.static_force = -5.0"]),
 ])
-def test_bad_scenario_is_one_line_naming_field_and_value(tmp_path, capsys, pairs, names):
+def test_bad_scenario_is_one_line_naming_field_and_value(tmp_path, capsys, pairs, names,
+                                                          no_long_work):
     sc = tmp_path / "bad.toml"
     sc.write_text(edited(SCENARIO, *pairs))
-    t0 = time.perf_counter()
     code, lines = run_cli(capsys, "run", sc, "--quiet", "--no-plots", "--out", tmp_path / "o")
     assert_one_line_error(code, lines, "bad.toml", *names)
-    assert time.perf_counter() - t0 < 10.0          # refused before anything is built
     assert not (tmp_path / "o").exists() and not leftovers(tmp_path)
 
 
@@ -144,13 +159,11 @@ def test_unreadable_scenario_file(tmp_path, capsys, content, names):
     ([("gravity = 9.81", "gravity = -9.81")], ["gravity = -9.81"]),
     ([('type = "steady_arm"', 'type = "magic"')], ["type", "magic"]),
 ])
-def test_bad_catenary_file_is_one_line(tmp_path, capsys, pairs, names):
+def test_bad_catenary_file_is_one_line(tmp_path, capsys, pairs, names, no_long_work):
     cat = tmp_path / "cat.toml"
     cat.write_text(edited(CATENARY.read_text(), *pairs))
-    t0 = time.perf_counter()
     code, lines = run_cli(capsys, "static", cat)
     assert_one_line_error(code, lines, "cat.toml", *names)
-    assert time.perf_counter() - t0 < 10.0
     # the same file through a scenario names the catenary file too
     sc = tmp_path / "sc.toml"
     sc.write_text(edited(SCENARIO, ('catenary = "en50318"', f'catenary = "{cat}"'),
@@ -219,12 +232,10 @@ PAN = ["pantograph", "en50318-2mass", "--force", "120"]
     (["regress", "--only", "nope"], ["--only = 'nope'", "pantograph-en50318-2mass"]),
     (["build-fmus", "--only", "nope"], ["--only = 'nope'", "catenary"]),
 ])
-def test_bad_flag_is_one_line(tmp_path, capsys, monkeypatch, argv, names):
+def test_bad_flag_is_one_line(tmp_path, capsys, monkeypatch, argv, names, no_long_work):
     monkeypatch.chdir(tmp_path)
-    t0 = time.perf_counter()
     code, lines = run_cli(capsys, *argv)
     assert_one_line_error(code, lines, *names)
-    assert time.perf_counter() - t0 < 10.0
     assert not (tmp_path / "out").exists()
 
 
@@ -251,13 +262,19 @@ def test_bad_flag_is_one_line(tmp_path, capsys, monkeypatch, argv, names):
 def test_bad_force_formula_is_refused_quickly(formula, reason):
     from pantocosim.master.standalone import force_expression
 
-    t0 = time.perf_counter()
-    with pytest.raises(ParameterError) as exc:
-        f = force_expression(formula)
-        for t in (0.0, 0.05, 0.1):
-            f(t)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ParameterError) as exc:
+            f = force_expression(formula)
+            for t in (0.0, 0.05, 0.1):
+                f(t)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
     assert exc.value.field == "--force" and reason in str(exc.value)
-    assert time.perf_counter() - t0 < 1.0
+    # refused before any work: no big number or string was made (9**9**9 takes 150 MB,
+    # 'a' * 10**9 1 GB); memory, not time, so the machine's speed does not matter
+    assert peak < 10e6
 
 
 def test_force_formula_values():
@@ -288,7 +305,8 @@ def _short(tmp_path) -> Path:
 
 @pytest.mark.parametrize("kind", ["file", "under a file", "proc", "plot proc", "plot folder",
                                   "plot suffix", "plot missing folder", "pantograph file"])
-def test_unwritable_output_is_one_line(tmp_path, capsys, monkeypatch, kind):
+def test_unwritable_output_is_one_line(tmp_path, capsys, monkeypatch, kind,
+                                      no_long_work):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "afile").write_text("keep me\n")
     (tmp_path / "adir").mkdir()
@@ -310,10 +328,8 @@ def test_unwritable_output_is_one_line(tmp_path, capsys, monkeypatch, kind):
         "pantograph file": (PAN + ["--duration", "0.05", "--out", "afile"],
                             ["--out = 'afile'"]),
     }[kind]
-    t0 = time.perf_counter()
     code, lines = run_cli(capsys, *argv, *(["--quiet"] if argv[0] == "run" else []))
     assert_one_line_error(code, lines, *names)
-    assert time.perf_counter() - t0 < 5.0           # before the long work
     assert (tmp_path / "afile").read_text() == "keep me\n"
     assert not leftovers(tmp_path)
 
@@ -575,7 +591,6 @@ def _check_interrupted(proc, out, err, waited, folder):
     lines = error_lines(err)
     assert len(lines) == 1 and "interrupted" in lines[0], lines
     assert "FATAL" not in err and "doStep" not in err and "Traceback" not in err
-    assert waited < 10.0
     summary = json.loads((folder / "summary.json").read_text())
     stop = summary["stopped"]
     assert summary["completed"] is False and stop["interrupted"] is True
