@@ -27,8 +27,7 @@ from .penalty_contact import PenaltyContact
 
 
 
-#: relative round-off of the penalty law's force, k_H * |z| * STATIC_ROUNDOFF [N]: the floor of
-#: the static start's residual tolerance
+#: relative round-off of the coordinates: a static Newton update below it has converged
 STATIC_ROUNDOFF = 16.0 * np.finfo(float).eps
 
 
@@ -212,10 +211,11 @@ class CoupledSystem(SecondOrderModel):
 
     def static_solve(self, q0, t: float = 0.0, tol: float = 1e-10, max_iter: int = 60):
         """Static equilibrium f_rest(t, q, 0) = 0 of the coupled system by Newton-Raphson
-        (the static start: pantographs and catenary in equilibrium in contact). The residual
-        tolerance is ``tol`` times the catenary's largest internal force, and never below the
-        round-off of the penalty law (``STATIC_ROUNDOFF * k_H * max |q|``: a stiff contact
-        cannot balance forces more finely than that)."""
+        (the static start: pantographs and catenary in equilibrium in contact). Converged
+        when the residual is below ``tol`` times the catenary's largest internal force, or
+        when the Newton update is at the round-off of the coordinates
+        (``STATIC_ROUNDOFF * max |q|``: the residual of a stiff contact or a long line cannot
+        get smaller than its own round-off)."""
         from pantocosim.core.errors import ConvergenceError
 
         q = np.array(q0, dtype=float)
@@ -225,13 +225,15 @@ class CoupledSystem(SecondOrderModel):
             R = ev.f_rest
             scale = max(float(np.max(np.abs(ev.parts[0].f_rest + self.catenary.weight)))
                         if hasattr(self.catenary, "weight") else 1.0, 1.0)
-            limit = max(tol * scale, STATIC_ROUNDOFF * self.contact.stiffness
-                        * float(np.max(np.abs(q), initial=1.0)))
+            limit = tol * scale
             if float(np.max(np.abs(R))) <= limit:
                 return q
             dq = -self.newton_solve(self.factorize(self.effective_matrix(ev, 0.0, 0.0, 1.0)),
                                     ev, R)
             q = q + dq
+            if float(np.max(np.abs(dq))) <= STATIC_ROUNDOFF * float(np.max(np.abs(q),
+                                                                         initial=1.0)):
+                return q
         exc = ConvergenceError(f"static start did not converge: residual "
                                f"{float(np.max(np.abs(R))):.3e} N against the tolerance "
                                f"{limit:.3e} N after {max_iter} iterations",
