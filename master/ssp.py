@@ -197,7 +197,7 @@ def fmu_variables(fmu: Path) -> dict:
         why = ("no modelDescription.xml in it" if isinstance(exc, KeyError)
                else getattr(exc, "strerror", None) or str(exc))
         raise ParameterError("fmu", str(fmu), f"not an FMU ({why}); accepted: an FMI 2.0 "
-                             "co-simulation FMU (a zip file with modelDescription.xml)",
+                             "co-simulation FMU (a zip file with modelDescription.xml)"
                              ) from None
     try:
         root = ET.fromstring(text)
@@ -225,14 +225,14 @@ def pantograph_connections(fmu: Path) -> list[tuple]:
     inputs it has."""
     variables = fmu_variables(fmu)
     for name, causality in REQUIRED_PORTS.items():
-        if variables.get(name) != (causality, "Real"):
-            found = variables.get(name)
-            what = ("missing" if found is None
-                    else f"a {found[1]} {found[0]}, not a Real {causality}")
-            raise ParameterError(name, None if found is None else found[0], f"required port "
-                                 f"{what}; accepted: a pantograph FMU with the Real input "
-                                 "contact_force [N] and the Real outputs contact_height [m], "
-                                 "contact_velocity [m/s]", str(fmu))
+        found = variables.get(name)
+        if found != (causality, "Real"):
+            what = ("missing from the model description" if found is None
+                    else f"a {found[1]} {found[0]} instead of a Real {causality}")
+            raise ParameterError("port", name, f"a required port, {what}; accepted: a "
+                                 "pantograph FMU with the Real input contact_force [N] and the "
+                                 "Real outputs contact_height [m], contact_velocity [m/s]",
+                                 str(fmu))
     return [c for c in PORTS if c[2] != "pantograph" or c[3] in REQUIRED_PORTS
             or variables.get(c[3]) == ("input", "Real")]
 

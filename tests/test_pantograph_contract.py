@@ -142,8 +142,9 @@ def fake_fmu(path: Path, ports: dict, version: str = "2.0") -> Path:
 
 
 @pytest.mark.parametrize("case, texts", [
-    ("missing", ["no_velocity.fmu", "contact_velocity", "required port missing"]),
-    ("causality", ["wrong.fmu", "contact_height", "not a Real output"]),
+    ("missing", ["no_velocity.fmu", "port = 'contact_velocity'", "missing"]),
+    ("causality", ["wrong.fmu", "port = 'contact_height'", "a Real input instead of a Real "
+                   "output"]),
     ("text", ["notes.fmu", "not an FMU", "accepted"]),
     ("fmi3", ["fmi3.fmu", "fmiVersion = '3.0'", "accepted: 2.0"]),
 ])
@@ -280,3 +281,21 @@ def test_generic_pantograph_in_libcosim_runs_its_model(swapped, monolithic_2mass
     stats, _ = run_recipe("libcosim", "--ssp", swapped, "--out", tmp_path / "lc.csv")
     assert stats["mean_n"] == pytest.approx(monolithic_2mass.mean_n, rel=2e-3)
     assert stats["std_n"] == pytest.approx(monolithic_2mass.std_n, rel=0.01)
+
+
+@pytest.mark.slow
+def test_ssp_command_on_our_pantograph_fmu_connects_every_port(fmus, tmp_path):
+    """A pantocosim pantograph FMU: every optional input connected (start laws, train
+    speed) and the scenario's pantograph parameters bound, as in build-fmus' SSP."""
+    from fmpy.ssp.ssd import read_ssd
+
+    ssp = tmp_path / "ours.ssp"
+    proc = cli("--pantograph", fmus["en50318-2mass"], "--scenario", SHORT, "--out", ssp)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    ssd = read_ssd(str(ssp), validate=True)
+    inputs = {c.endConnector for c in ssd.system.connections if c.endElement == "pantograph"}
+    assert inputs == {"contact_force", "operating_height", "operating_height_slope",
+                      "static_height", "static_height_slope", "train_speed_kmh"}
+    (pan,) = [e for e in ssd.system.elements if e.name == "pantograph"]
+    bound = {p.name for b in pan.parameterBindings for p in b.parameterValues[0].parameters}
+    assert bound == {"speed_kmh", "hht_alpha", "start_mode", "force_extrapolation"}
