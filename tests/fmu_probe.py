@@ -117,7 +117,11 @@ def pantograph_bad_input(fmu, args):
     out["after_discard_height"] = s.getReal([vr["contact_height"]])[0]
     msgs2: list = []
     s3 = _open(fmu, "C")[0]
-    _init(s3, [(vr["parameter_file"], "String", args["bad_file"])], msgs2)
+    try:
+        _init(s3, [(vr["parameter_file"], "String", args["bad_file"])], msgs2)
+        out["bad_file_init_status"] = 0
+    except Exception as exc:  # fmi2ExitInitializationMode: fmi2Error
+        out["bad_file_init_status"] = getattr(exc, "status", -1)
     try:
         s3.setReal([vr["contact_force"]], [120.0])
         s3.doStep(0.0, 1e-3)

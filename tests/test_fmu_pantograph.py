@@ -82,5 +82,6 @@ def test_bad_input_is_discarded_with_a_message(fmus, tmp_path):
     assert res["nan_status"] == 2  # fmi2Discard
     assert any("contact_force = nan" in m for m in res["nan_messages"])
     assert res["after_discard_height"] == pytest.approx(5.3, abs=0.01)
+    assert res["bad_file_init_status"] == 3  # fmi2Error from fmi2ExitInitializationMode
     assert res["bad_file_status"] == 2
     assert any("chain.masses[0] = -7.2" in m for m in res["bad_file_messages"])

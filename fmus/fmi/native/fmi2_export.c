@@ -254,7 +254,9 @@ static void read_key(const char *file, const char *key, char *out, size_t size)
     if (f == NULL) return;
     while (fgets(line, sizeof line, f)) {
         if (strncmp(line, key, n) == 0 && line[n] == '=') {
-            snprintf(out, size, "%s", line + n + 1);
+            size_t len = strnlen(line + n + 1, size - 1);
+            memcpy(out, line + n + 1, len);
+            out[len] = '\0';
             out[strcspn(out, "\r\n")] = '\0';
             break;
         }
@@ -429,12 +431,15 @@ static void forward_log(Component *c)
     }
     for (Py_ssize_t i = 0; i < py.ListSize(messages); i++) {
         PyObject *m = py.ListGetItem(messages, i); /* (status, category, text) */
-        fmi2Status status = (fmi2Status)py.LongAsLong(py.TupleGetItem(m, 0));
-        const char *category = py.UnicodeAsUTF8(py.TupleGetItem(m, 1));
-        const char *text = py.UnicodeAsUTF8(py.TupleGetItem(m, 2));
+        PyObject *s = m ? py.TupleGetItem(m, 0) : NULL, *k = m ? py.TupleGetItem(m, 1) : NULL;
+        PyObject *t = m ? py.TupleGetItem(m, 2) : NULL;
+        const char *category = k ? py.UnicodeAsUTF8(k) : NULL, *text = t ? py.UnicodeAsUTF8(t) : NULL;
+        fmi2Status status = s ? (fmi2Status)py.LongAsLong(s) : fmi2Error;
+        if (py.ErrOccurred()) py.ErrClear();
         if (status == fmi2OK && !c->loggingOn) continue;
-        log_to(&c->callbacks, c->instanceName, status, category, text);
+        log_to(&c->callbacks, c->instanceName, status, category, text ? text : "(no text)");
     }
+    if (py.ErrOccurred()) py.ErrClear();
     py.DecRef(messages);
 }
 
@@ -708,6 +713,7 @@ EXPORT fmi2Status fmi2Reset(fmi2Component comp)
             PyObject *values = py.TupleGetItem(result, 1);                             \
             for (size_t i = 0; values && status < fmi2Discard && i < nvr; i++) {       \
                 PyObject *item = py.ListGetItem(values, (Py_ssize_t)i);                \
+                if (item == NULL) break;                                               \
                 value[i] = convert;                                                    \
             }                                                                          \
             if (py.ErrOccurred()) {                                                    \
@@ -736,8 +742,17 @@ EXPORT fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[
     fmi2Status status = status_of(c, result, "fmi2GetString");
     if (result != NULL) {
         PyObject *values = py.TupleGetItem(result, 1);
-        for (size_t i = 0; values && status < fmi2Discard && i < nvr; i++)
-            value[i] = py.UnicodeAsUTF8(py.ListGetItem(values, (Py_ssize_t)i));
+        for (size_t i = 0; values && status < fmi2Discard && i < nvr; i++) {
+            PyObject *item = py.ListGetItem(values, (Py_ssize_t)i);
+            value[i] = item ? py.UnicodeAsUTF8(item) : NULL;
+            if (value[i] == NULL) {
+                py.ErrClear();
+                value[i] = "";
+                status = fmi2Error;
+                LOGF(c, fmi2Error, "fmi2GetString: the slave returned no string for vr %u",
+                     vr[i]);
+            }
+        }
         py.DecRef(result);
     }
     LEAVE(status);
