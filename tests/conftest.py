@@ -4,7 +4,8 @@ Every cache the project keeps in the user's home (extracted FMUs, generated kern
 folder of this run instead, shared by its pytest-xdist workers: suites started side by side do
 not meet, and a fresh home behaves like any other. The FMUs are built once per run, as
 ``pantocosim build-fmus`` builds them (generic FMUs, the default scenario's FMUs, SSP file and
-CoFmuPy configuration): the first worker builds them under a file lock, the others reuse them."""
+CoFmuPy configuration): the first worker builds them under a file lock, the others reuse them.
+Tests that use them are part of the full suite (marked slow here)."""
 
 import os
 from pathlib import Path
@@ -15,6 +16,14 @@ from filelock import FileLock
 #: the project's cache variables and the base folder each one names under the run's folder
 CACHE_VARIABLES = {"XDG_CACHE_HOME": "cache", "PANTOCOSIM_FMU_CACHE": "cache/pantocosim/fmus",
                    "PANTOCOSIM_KERNEL_DIR": "cache/pantocosim/kernels"}
+
+
+def pytest_collection_modifyitems(items):
+    """Tests that need the built FMUs (the ``built`` fixture, directly or through another)
+    belong to the full suite: they are marked slow."""
+    for item in items:
+        if "built" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.slow)
 
 
 def run_folder(tmp_path_factory) -> Path:

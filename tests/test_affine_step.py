@@ -43,6 +43,7 @@ def _affine_step(aff, model, F):
         pass
 
 
+@pytest.mark.slow
 def test_closed_form_step_equals_newton_with_exact_slackening(line4):
     newton, closed, ref, aff = _pair(line4)
     err, slack_steps, switches = 0.0, 0, 0

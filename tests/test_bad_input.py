@@ -336,13 +336,10 @@ def test_unwritable_output_is_one_line(tmp_path, capsys, monkeypatch, kind,
 
 # ----------------------------------------------------------------------------- FMU files
 @pytest.fixture(scope="module")
-def generic_fmus(tmp_path_factory):
-    """The generic FMUs (built, never loaded here: the checks read model descriptions)."""
-    from pantocosim.master.fmu_build import build_fmus
-
-    out = tmp_path_factory.mktemp("dist") / "fmus"
-    build_fmus(out, quiet=True)
-    return out
+def generic_fmus(built):
+    """The folder of the generic FMUs, the run's (never loaded here: the checks read model
+    descriptions)."""
+    return built
 
 
 def _bad_fmu(kind: str, path: Path, real: Path) -> Path:

@@ -55,6 +55,7 @@ def _newton(model, steps, load=_load):
     return np.array(out), integ
 
 
+@pytest.mark.slow
 def test_modal_with_every_mode_equals_linear():
     line2 = with_spans(load_catenary("en50318"), 2)
     li = LinearCatenary(line2, x0=[20.0], speed=V)
