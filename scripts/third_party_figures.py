@@ -4,11 +4,12 @@ scenario in each third-party master, and with its pantograph FMU swapped for eve
 pantograph FMU (a file swap inside the SSP, nothing else edited), against ``pantocosim run``
 of the same scenario with that pantograph (monolithic).
 
-    python scripts/third_party_figures.py [--work DIR] [--masters libcosim ecos fmpy cofmupy]
+    python scripts/third_party_figures.py [--work DIR]
+        [--masters libcosim ecos fmpy cofmupy omsimulator]
         [--models dsa380-rigid en50318-2mass dsa380-lumped3] [--docs docs/third-party.md]
 
 Writes the table between the markers ``<!-- figures:start -->`` and ``<!-- figures:end -->``
-of the docs page and prints it.
+of the docs page and prints it; the page's rows of masters and models not run stay.
 """
 
 from __future__ import annotations
@@ -26,7 +27,10 @@ from _tables import put_between
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- figures:start -->", "<!-- figures:end -->"
 MASTERS = {"libcosim": "libcosim", "ecos": "ecos", "fmpy": "fmpy_ssp",
-           "cofmupy": "cofmupy_json"}
+           "cofmupy": "cofmupy_json", "omsimulator": "omsimulator"}
+#: masters run by default (OMSimulator is built by hand: --masters omsimulator, with
+#: $OMSIMULATOR or OMSimulator on PATH)
+DEFAULT_MASTERS = ["libcosim", "ecos", "fmpy", "cofmupy"]
 
 
 def reference(scenario: str, model: str) -> dict:
@@ -83,13 +87,30 @@ def table(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def _key(line: str) -> tuple[str, str]:
+    cells = [c.strip() for c in line.strip().strip("|").split("|")]
+    return cells[0], cells[1]
+
+
+def merged(old: str, new: str, models: list[str]) -> str:
+    """The table ``new`` with the rows of ``old`` (the page's) it does not replace, ordered
+    by pantograph and master."""
+    head = new.splitlines()[:2]
+    rows = {_key(l): l for l in old.strip().splitlines()[2:] if l.startswith("|")}
+    rows.update({_key(l): l for l in new.splitlines()[2:]})
+    order = list(dict.fromkeys(models + [k[1] for k in rows]))
+    keys = sorted(rows, key=lambda k: (order.index(k[1]), list(MASTERS).index(k[0])
+                                       if k[0] in MASTERS else len(MASTERS)))
+    return "\n".join(head + [rows[k] for k in keys])
+
+
 def main(argv=None) -> int:
     from pantocosim.master.fmu_build import build_all
     from pantocosim.master.thirdparty.common import swap_pantograph
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", type=Path, default=ROOT / "out" / "third-party")
-    ap.add_argument("--masters", nargs="*", default=list(MASTERS), choices=list(MASTERS))
+    ap.add_argument("--masters", nargs="*", default=DEFAULT_MASTERS, choices=list(MASTERS))
     ap.add_argument("--models", nargs="*",
                     default=["dsa380-rigid", "en50318-2mass", "dsa380-lumped3"])
     ap.add_argument("--scenario", default="dsa380-ave-300")
@@ -122,11 +143,13 @@ def main(argv=None) -> int:
                 if (r["master"], r["model"]) not in done] + rows
         models = list(dict.fromkeys([r["model"] for r in rows]))
         rows.sort(key=lambda r: (models.index(r["model"]), list(MASTERS).index(r["master"])))
-    text = table(rows)
-    print(text)
     page = a.docs.read_text()
+    text = table(rows)
     if START in page and END in page:
+        text = merged(page[page.index(START) + len(START):page.index(END)], text,
+                      list(dict.fromkeys(a.models)))
         a.docs.write_text(put_between(page, (START, END), text))
+    print(text)
     (a.work / "figures.json").write_text(json.dumps(rows, indent=2) + "\n")
     return 0
 

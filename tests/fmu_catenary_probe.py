@@ -153,11 +153,12 @@ def catenary_bad_input(fmu, args):
     for i, (case, (params, inp)) in enumerate(cases.items()):
         msgs: list = []
         s, vr = _open(fmu, f"I{i}")
-        _init(s, dict(base, **params), msgs)
+        init = _status(lambda: _init(s, dict(base, **params), msgs))
         if inp is not None:
             s.setReal([vr[inp[0]]], [inp[1]])
         st = _status(lambda: s.doStep(0.0, 1e-3))
-        res = {"status": st, "messages": [m for lvl, m in msgs if lvl >= 2]}
+        res = {"init_status": init, "status": st,
+               "messages": [m for lvl, m in msgs if lvl >= 2]}
         if case == "nan_force":
             # still usable after a discard
             s.setReal([vr["contact_force_1"]], [100.0])

@@ -72,7 +72,7 @@ def test_catenary_fmu_validates_and_has_the_port_contract(fmus):
                      (f"wire_velocity_{k}", "output", "m/s"),
                      (f"contact_force_out_{k}", "output", "N")}
     expected |= {(f"support_uplift_{j}", "output", "m") for j in range(64)}
-    expected |= {("n_supports", "output", "1")}
+    expected |= {("n_supports", "output", "1"), ("train_speed_kmh", "output", "km/h")}
     for k in range(1, 5):
         expected |= {(f"operating_height_{k}", "output", "m"),
                      (f"operating_height_slope_{k}", "output", "m/N"),
@@ -136,8 +136,11 @@ def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
               "bad_factorization": "factorization", "bad_rtol": "newton_rtol = 0.5",
               "bad_stiffness": "contact_stiffness = -1.0",
               "nan_height_mode1": "pantograph_height_1 = nan"}
+    inputs = {"nan_force", "negative_force", "nan_height_mode1"}
     for case, text in expect.items():
         r = res[case]
+        # a bad parameter fails fmi2ExitInitializationMode (fmi2Error), a bad input its step
+        assert r["init_status"] == (0 if case in inputs else 3), (case, r)
         assert r["status"] == 2, (case, r)   # fmi2Discard
         assert any(text in m for m in r["messages"]), (case, r["messages"])
     assert any("no-such-catenary.toml" in m for m in res["unknown_catenary"]["messages"])

@@ -86,28 +86,33 @@ def test_bad_pantograph_option_names_the_field(tmp_path):
 
 
 def test_master_reports_the_fmu_message(tmp_path):
-    """A bad parameter set through FMI: the FMU discards the step with a message naming the
-    parameter, the master's FMU layer raises it as an FmuError, the process survives."""
+    """A bad parameter set through FMI: fmi2ExitInitializationMode returns fmi2Error with a
+    message naming the parameter, the master's FMU layer raises it as an FmuError, a later
+    step is discarded, the process survives."""
     code = (
         "from pantocosim.master.fmu_build import build_fmus\n"
         "from pantocosim.master.fmu_runtime import FmuInstance, FmuError\n"
         "import os\n"
         f"p = build_fmus({str(tmp_path)!r}, only=['en50318-2mass'], quiet=True)[0]\n"
         "i = FmuInstance(p, 'pan')\n"
-        "i.initialize({'start_mode': 7, 'speed_kmh': float('nan')})\n"
         "try:\n"
-        "    i.do_step(0.0, 1e-3)\n"
+        "    i.initialize({'start_mode': 7, 'speed_kmh': float('nan')})\n"
         "    print('NO ERROR')\n"
         "except FmuError as e:\n"
         "    print('STATUS', e.status)\n"
         "    print('MESSAGE', e)\n"
+        "try:\n"
+        "    i.do_step(0.0, 1e-3)\n"
+        "except FmuError as e:\n"
+        "    print('STEP', e.status)\n"
         "i.terminate()\n"
         "print('ALIVE', flush=True)\n"
         "os._exit(0)\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=600)
-    assert "STATUS 2" in proc.stdout, proc.stdout + proc.stderr
+    assert "STATUS 3" in proc.stdout, proc.stdout + proc.stderr
     assert "speed_kmh = nan" in proc.stdout
+    assert "STEP 2" in proc.stdout
     assert "ALIVE" in proc.stdout
 
 
