@@ -1,21 +1,27 @@
-"""Joints, contact and the HHT-alpha integrator on pendulums (issue 18, steps 2 and 4), with
-seed 004's Lagrange equations (9.8, Example 1) as the rigid-body oracle."""
+"""Joints, contact and the HHT-alpha integrator on pendulums, with seed 004's Lagrange
+equations (9.8, Example 1) as the rigid-body oracle; the double pendulum of seed 002: its data
+file, the readings of its illegible data, and its out-of-plane maxima against the paper."""
+
+import argparse
+import math
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from pantocosim.core.errors import ParameterError
+
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.multibody.beam3d import Section, straight_beam
-from pantocosim.multibody.double_pendulum import PendulumSpec, build, simulate
+from pantocosim.master.commands.pendulum import spec_from_args
+from pantocosim.multibody.double_pendulum import (CASES, DATA_FILE, PULSE_SHAPES, PendulumSpec,
+                                                  build, load_spec, simulate)
 from pantocosim.multibody.joints import Revolute
 from pantocosim.multibody.linearize import natural_frequencies
 from pantocosim.multibody.loads import Gravity
 from pantocosim.multibody.statics import solve_static
 from pantocosim.multibody.system import System
 
-#: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
-pytestmark = pytest.mark.slow
 
 G = 9.81
 RIGID = Section(E=2.1e15, A=9e-4, I1=8.3e-8, I2=8.3e-8, J=4.15e-8, rho=7800.0)
@@ -65,6 +71,7 @@ def lagrange_rhs(m, l, I):
     return rhs
 
 
+@pytest.mark.slow
 def test_equilibrium_joint_forces_and_linearisation_seed004():
     """9.5: from a displaced start the static solver finds the book's stable equilibrium
     q_eq = {0, 0} (dE_p/dq = 0 with the multipliers, eq. 102); 9.7: the pivot
@@ -85,6 +92,7 @@ def test_equilibrium_joint_forces_and_linearisation_seed004():
     assert np.allclose(w, w_book, rtol=1e-4)
 
 
+@pytest.mark.slow
 def test_rigid_limit_against_lagrange_equations():
     """E = 2.1e15 bars released from rest at (phi1, phi2) = (90, 60) degrees follow seed
     004's Lagrange equations (solved with solve_ivp at 1e-11) within 1 mm over 0.5 s
@@ -121,6 +129,7 @@ def _energy_residual(alpha):
     return en["hht_dissipation"], en["kinetic"].max(), run
 
 
+@pytest.mark.slow
 def test_impact_without_damping_conserves_energy_up_to_hht_dissipation():
     """c = 0: E = kinetic + strain + gravity + contact is conserved through the impact up to
     the numerical dissipation of HHT: below 5e-4 of the peak kinetic energy with alpha = 0
@@ -133,6 +142,7 @@ def test_impact_without_damping_conserves_energy_up_to_hht_dissipation():
     assert max(run0.drift.max(), run5.drift.max()) < 1e-9
 
 
+@pytest.mark.slow
 def test_out_of_plane_maximum_orders_rigid_steel_soft():
     """The maximum of |z| of node 12 grows with the flexibility (seed 002: rigid < steel <
     soft), short runs with 4 elements per bar."""
@@ -141,3 +151,85 @@ def test_out_of_plane_maximum_orders_rigid_steel_soft():
         run = simulate(build(PendulumSpec(E=E, n_elements=4)), 0.15, 1e-3)
         peaks.append(np.abs(run.positions[12][:, 2]).max())
     assert peaks[0] < 1e-2 * peaks[1] and peaks[1] < peaks[2]
+
+
+# ------------------------------------------------------------- data file and readings
+
+
+def test_data_file_is_the_default_reading():
+    """The package's data file and PendulumSpec's defaults are the same pendulum."""
+    assert load_spec() == PendulumSpec()
+    assert load_spec(DATA_FILE).mass == pytest.approx(7800 * 9e-4 * 1.0)
+
+
+@pytest.mark.parametrize("text, field", [
+    ("[bars]\nmass = 'heavy'", "bars.mass"),
+    ("[bars]\nmass = -1.0", "bars.mass"),
+    ("[pulse]\nshape = 'square'", "pulse.shape"),
+    ("[pulse]\nduration = 0.0", "pulse.duration"),
+    ("[pulse]\npeak = 'big'", "pulse.peak"),
+    ("[ground]\nstiffnes = 1e6", "ground.stiffnes"),
+    ("[bars]\nelements = 2.5", "bars.elements"),
+])
+def test_data_file_errors_name_the_field(tmp_path, text, field):
+    """A bad value in the data file is refused on load, naming the file and the field."""
+    base = DATA_FILE.read_text()
+    section, line = text.split("\n")
+    key = line.split("=")[0].strip()
+    lines, inside = [], False
+    for raw in base.splitlines():
+        if raw.startswith("["):
+            inside = raw.split("#")[0].strip() == section
+        if inside and raw.split("=")[0].strip() == key:
+            continue
+        lines.append(raw)
+        if raw.split("#")[0].strip() == section:
+            lines.append(line)
+    f = tmp_path / "pendulum.toml"
+    f.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParameterError) as exc:
+        load_spec(f)
+    assert exc.value.field == field and exc.value.source == "pendulum.toml"
+
+
+def test_bar_mass_sets_the_density_of_the_beams():
+    """bars.mass = 1 kg: the system's mass is 2 kg (7.02 kg per bar from the density); the
+    section's rotary inertia scales with it."""
+    def total_mass(spec):
+        s = build(spec).system
+        u = np.zeros(s.n_q)
+        u.reshape(-1, 12)[:, 0] = 1.0
+        return float(u @ (s.M @ u))
+
+    assert total_mass(PendulumSpec(n_elements=2, bar_mass=1.0)) == pytest.approx(2.0, rel=1e-12)
+    assert total_mass(PendulumSpec(n_elements=2, bar_mass=None)) == pytest.approx(14.04, rel=1e-12)
+    assert PendulumSpec(bar_mass=1.0).mass_density == pytest.approx(1.0 / 9e-4)
+
+
+@pytest.mark.parametrize("shape, impulse", [("triangular", 0.5), ("rectangular", 1.0)])
+def test_pulse_shapes_impulse_and_support(shape, impulse):
+    """Both pulses act about the given axis on [0, duration) only; their impulses are
+    peak * duration / 2 (triangle) and peak * duration (rectangle)."""
+    m = PULSE_SHAPES[shape](2000.0, 0.02, [0.0, 0.0, -1.0])
+    t = np.linspace(-0.01, 0.04, 500001)
+    mz = np.array([m(x)[2] for x in t])
+    assert np.trapezoid(mz, t) == pytest.approx(-impulse * 2000.0 * 0.02, rel=1e-3)
+    assert m(0.0201)[2] == 0.0 and m(-1e-9)[2] == 0.0
+    assert np.all(np.array([m(x)[:2] for x in t[::1000]]) == 0.0)
+    assert m(0.01)[2] == pytest.approx(-2000.0)
+
+
+def test_command_line_reading_over_the_data_file():
+    """--pulse-shape, --pulse-peak and --bar-mass replace the data file's reading; a bad
+    bar mass is refused, naming the option."""
+    args = argparse.Namespace(params=None, pulse_shape="rectangular", pulse_peak=2000.0,
+                              bar_mass="1")
+    spec = spec_from_args(args)
+    assert (spec.pulse_shape, spec.pulse_peak, spec.bar_mass) == ("rectangular", 2000.0, 1.0)
+    assert spec_from_args(argparse.Namespace(params=None, pulse_shape=None, pulse_peak=None,
+                                             bar_mass="density")).bar_mass is None
+    for bad in ("heavy", "0", "-1", "nan"):
+        with pytest.raises(ParameterError) as exc:
+            spec_from_args(argparse.Namespace(params=None, pulse_shape=None, pulse_peak=None,
+                                              bar_mass=bad))
+        assert exc.value.field == "--bar-mass"

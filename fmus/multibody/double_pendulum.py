@@ -6,22 +6,29 @@ about Z at node 2 (the paper's "rotula", which keeps its first element in the XY
 universal joint joins node 12 (bar 1) to node 13 (bar 2); node 23 strikes the ground plane
 y = -1.8 m through the penalty-damper contact of seed 002, eq. 17. Gravity is -Y.
 
-Choices where the paper is silent or inconsistent (issue 18):
+The data are in ``data/double_pendulum.toml`` (:func:`load_spec`). Where the paper is silent,
+inconsistent or illegible:
 
-- mass: density 7800 kg/m3 and section 9e-4 m2 (7.02 kg per bar), the data a beam element
-  takes; the paper's "m1 = m2 = 1 kg" contradicts them and is not used;
+- mass: the paper gives "m1 = m2 = 1 kg" beside a density of 7800 kg/m3 and a section of
+  9e-4 m2, which make 7.02 kg per bar. ``bars.mass = "density"`` takes the density;
+  a number sets the bar mass and the density becomes mass / (A L);
 - Ix = Iy = 8.3e-8 m4 are the bending inertias, Iz = 4.15e-8 m4 the torsion constant J;
 - initial configuration (the paper's figure is not legible): bar 1 horizontal along +X,
   bar 2 from (1, 0, 0) leaning 30 degrees out of the XY plane, direction (cos 30, 0, sin 30),
   at rest; the universal joint's cross axes are Z in bar 1 and Y in bar 2;
-- the torque pulse (paper Fig. 2a, "delta-like", not legible): a triangular pulse about -Z on
-  node 2, 0 -> peak at 10 ms -> 0 at 20 ms, peak 200 N m (impulse 2 N m s);
+- the torque pulse (Fig. 2a, "tipo funcion delta"; its axis shows 0.02 s and a peak read as
+  200 or 2000 N m): about -Z on node 2, ``pulse.shape`` "triangular" (0 -> peak at
+  duration/2 -> 0) or "rectangular" (peak from 0 to duration), ``pulse.peak``,
+  ``pulse.duration``;
 - contact: k = 1e6 N/m, c = 100 N s/m, the same in every case as in the paper.
+
+docs/pendulum.md compares the readings with the paper's out-of-plane maxima of node 12.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -29,7 +36,9 @@ from scipy.spatial.transform import Rotation
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
 from .beam3d import Section, straight_beam
+from ..core.errors import ParameterError
 from ..core.hht import DEFAULT_ALPHA
+from ..core.params import Table, check_number, load_toml
 from .ground_contact import GroundContact
 from .joints import Revolute, Universal
 from .loads import Gravity, NodalMoment, triangular_pulse
@@ -38,6 +47,23 @@ from .system import System
 #: the three cases of seed 002: Young's modulus (Pa) and the paper's maximum out-of-plane
 #: displacement of node 12 (m)
 CASES = {"rigid": (2.1e15, 9e-7), "steel": (2.1e11, 0.025), "soft": (2.1e10, 0.08)}
+
+#: the pendulum's data (the default reading of the paper)
+DATA_FILE = Path(__file__).resolve().parent / "data" / "double_pendulum.toml"
+
+
+def rectangular_pulse(peak: float, duration: float, axis=(0.0, 0.0, 1.0)):
+    """m(t) = peak * axis for 0 <= t < duration, 0 otherwise (impulse peak * duration)."""
+    axis = np.asarray(axis, dtype=float)
+
+    def m(t):
+        return peak * axis if 0.0 <= t < duration else 0.0 * axis
+
+    return m
+
+
+#: pulse shape name -> m(peak, duration, axis) (a function of t)
+PULSE_SHAPES = {"triangular": triangular_pulse, "rectangular": rectangular_pulse}
 
 
 @dataclass
@@ -54,9 +80,86 @@ class PendulumSpec:
     ground: float = -1.8
     contact_stiffness: float = 1.0e6
     contact_damping: float = 100.0
+    pulse_shape: str = "triangular"
     pulse_peak: float = 200.0
     pulse_duration: float = 0.02
+    #: mass of each bar (kg); None: rho * area * length
+    bar_mass: float | None = None
     gravity: float = 9.81
+
+    def __post_init__(self):
+        if self.pulse_shape not in PULSE_SHAPES:
+            raise ParameterError("pulse.shape", self.pulse_shape,
+                                 f"must be one of {sorted(PULSE_SHAPES)}")
+        if self.bar_mass is not None:
+            check_number("bars.mass", self.bar_mass, positive=True)
+
+    @property
+    def mass_density(self) -> float:
+        """The density the beam elements take (kg/m3): rho, or bar_mass / (A L)."""
+        if self.bar_mass is None:
+            return self.rho
+        return self.bar_mass / (self.area * self.length)
+
+    @property
+    def mass(self) -> float:
+        """Mass of one bar (kg)."""
+        return self.mass_density * self.area * self.length
+
+    def reading(self) -> str:
+        """The reading of the illegible data, e.g. 'triangular 200 N m, 7.02 kg'."""
+        return f"{self.pulse_shape} {self.pulse_peak:g} N m, {self.mass:.3g} kg"
+
+
+def load_spec(path: str | Path | None = None, **overrides) -> PendulumSpec:
+    """The :class:`PendulumSpec` of a data file (default :data:`DATA_FILE`), every field
+    checked (unknown fields, types, signs and the pulse shape are errors naming the file and
+    the field); ``overrides`` (PendulumSpec field names) replace the file's values."""
+    p = Path(path) if path is not None else DATA_FILE
+    t = Table(load_toml(p), source=p.name)
+    t.unknown_keys(["bars", "pulse", "start", "ground", "gravity"])
+    bars, pulse, start, ground, grav = (t.sub(k) for k in ("bars", "pulse", "start",
+                                                             "ground", "gravity"))
+    bars.unknown_keys(["length", "elements", "density", "area", "I_bending", "J_torsion",
+                       "nu", "mass"])
+    pulse.unknown_keys(["shape", "peak", "duration"])
+    start.unknown_keys(["lean_deg"])
+    ground.unknown_keys(["y", "stiffness", "damping"])
+    grav.unknown_keys(["g"])
+    if not bars.has("mass"):
+        raise ParameterError("bars.mass", None, "missing field", p.name)
+    mass = bars.data["mass"]
+    if isinstance(mass, str):
+        if mass != "density":
+            raise ParameterError("bars.mass", mass, 'must be "density" or a mass in kg > 0',
+                                 p.name)
+        bar_mass = None
+    else:
+        bar_mass = bars.number("mass", positive=True)
+    spec = dict(
+        length=bars.number("length", positive=True),
+        n_elements=bars.integer("elements", minimum=1),
+        rho=bars.number("density", positive=True),
+        area=bars.number("area", positive=True),
+        I_bending=bars.number("I_bending", positive=True),
+        J_torsion=bars.number("J_torsion", positive=True),
+        nu=bars.number("nu", minimum=0.0, maximum=0.5),
+        bar_mass=bar_mass,
+        pulse_shape=pulse.string("shape", choices=PULSE_SHAPES),
+        pulse_peak=pulse.number("peak"),
+        pulse_duration=pulse.number("duration", positive=True),
+        lean_deg=start.number("lean_deg", minimum=-90.0, maximum=90.0),
+        ground=ground.number("y", maximum=0.0),
+        contact_stiffness=ground.number("stiffness", positive=True),
+        contact_damping=ground.number("damping", nonnegative=True),
+        gravity=grav.number("g", nonnegative=True),
+    )
+    unknown = set(overrides) - set(PendulumSpec.__dataclass_fields__)
+    if unknown:
+        raise ParameterError(sorted(unknown)[0], overrides[sorted(unknown)[0]],
+                             "not a field of the pendulum")
+    spec.update(overrides)
+    return PendulumSpec(**spec)
 
 
 @dataclass
@@ -82,7 +185,7 @@ class DoublePendulum:
 def build(spec: PendulumSpec | None = None, constraint_scale: float | None = None):
     spec = spec or PendulumSpec()
     sec = Section(E=spec.E, A=spec.area, I1=spec.I_bending, I2=spec.I_bending,
-                  J=spec.J_torsion, rho=spec.rho, nu=spec.nu)
+                  J=spec.J_torsion, rho=spec.mass_density, nu=spec.nu)
     # balance the constraint rows with the bending stiffness of an element
     scale = constraint_scale or spec.E * spec.I_bending * spec.n_elements / spec.length
     s = System(constraint_scale=scale)
@@ -97,9 +200,9 @@ def build(spec: PendulumSpec | None = None, constraint_scale: float | None = Non
     s.add(Revolute(bar1.nodes[0], axis=[0.0, 0.0, 1.0]))
     s.add(Universal(bar1.nodes[-1], bar2.nodes[0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]))
     s.add(Gravity([0.0, -spec.gravity, 0.0]))
-    pulse = s.add(NodalMoment(bar1.nodes[0], triangular_pulse(spec.pulse_peak,
-                                                              spec.pulse_duration,
-                                                              [0.0, 0.0, -1.0]), "pulse"))
+    moment = PULSE_SHAPES[spec.pulse_shape](spec.pulse_peak, spec.pulse_duration,
+                                            [0.0, 0.0, -1.0])
+    pulse = s.add(NodalMoment(bar1.nodes[0], moment, "pulse"))
     contact = s.add(GroundContact(bar2.nodes[-1], normal=[0.0, 1.0, 0.0], offset=spec.ground,
                                   stiffness=spec.contact_stiffness,
                                   damping=spec.contact_damping))

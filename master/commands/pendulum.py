@@ -12,6 +12,9 @@ refreshes the figures of docs/pendulum.md):
 - ``pendulum_summary.json`` and the printed table of the maximum out-of-plane displacement of
   node 12 against the paper's values, the energy balance and the constraint drift.
 
+The pendulum's data are read from ``--params`` (default: the package's
+``multibody/data/double_pendulum.toml``); ``--pulse-shape``, ``--pulse-peak`` and
+``--bar-mass`` select another reading of the paper's illegible torque pulse and bar mass.
 The modelling choices the paper leaves open are listed in
 :mod:`pantocosim.multibody.double_pendulum`.
 """
@@ -41,7 +44,41 @@ def add_parser(sub):
                    "k = 1e6 N/m contact, energy errors of several per cent)")
     p.add_argument("--alpha", type=float, default=DEFAULT_ALPHA, help="HHT alpha")
     p.add_argument("--cases", default="rigid,steel,soft", help="comma-separated cases")
+    p.add_argument("--params", default=None,
+                   help="pendulum data file (default: the package's double_pendulum.toml)")
+    p.add_argument("--pulse-shape", default=None, choices=["triangular", "rectangular"],
+                   help="torque pulse shape (default: the data file's)")
+    p.add_argument("--pulse-peak", type=float, default=None,
+                   help="torque pulse peak [N m] (default: the data file's)")
+    p.add_argument("--bar-mass", default=None,
+                   help='mass of each bar [kg], or "density" for density x section x length '
+                   "(default: the data file's)")
     return p
+
+
+def spec_from_args(args):
+    """The pendulum's data: the data file with the command line's reading on top."""
+    from pantocosim.core.errors import ParameterError
+    from pantocosim.core.params import check_number
+    from pantocosim.multibody.double_pendulum import load_spec
+
+    over = {}
+    if getattr(args, "pulse_shape", None) is not None:
+        over["pulse_shape"] = args.pulse_shape
+    if getattr(args, "pulse_peak", None) is not None:
+        over["pulse_peak"] = check_number("--pulse-peak", args.pulse_peak)
+    mass = getattr(args, "bar_mass", None)
+    if mass is not None:
+        if mass.strip() == "density":
+            over["bar_mass"] = None
+        else:
+            try:
+                value = float(mass)
+            except ValueError:
+                raise ParameterError("--bar-mass", mass,
+                                     'must be "density" or a mass in kg > 0') from None
+            over["bar_mass"] = check_number("--bar-mass", value, positive=True)
+    return load_spec(getattr(args, "params", None), **over)
 
 
 def run(args) -> int:
@@ -58,14 +95,16 @@ def run(args) -> int:
         if c not in CASES:
             raise ParameterError("--cases", c, f"unknown case (known: {', '.join(CASES)})")
     check_times(args.duration, args.step, args.alpha, None, dt_name="--step")
+    spec = spec_from_args(args)
     folder = OutputFolder(args.out, known=OUTPUT_FILES)
     try:
-        runs, summary = _simulate(cases, args, folder.path)
+        runs, summary = _simulate(cases, args, folder.path, spec)
         folder.commit()
     except BaseException:
         folder.discard()
         raise
     out = Path(args.out)
+    print(f"\nreading: {spec.reading()}")
     print("\n| case | E (Pa) | max out-of-plane node 12 (m) | paper (m) |")
     print("|---|---|---|---|")
     for c, s in summary.items():
@@ -87,19 +126,21 @@ def run(args) -> int:
     return 0
 
 
-def _simulate(cases, args, out: Path):
+def _simulate(cases, args, out: Path, spec):
     """Run the cases and write the figures and pendulum_summary.json into ``out``."""
     import numpy as np
 
     from pantocosim.core.errors import ConvergenceError
     from pantocosim.master.output_folder import writing
-    from pantocosim.multibody.double_pendulum import CASES, PendulumSpec, build, simulate
+    from dataclasses import replace
+
+    from pantocosim.multibody.double_pendulum import CASES, build, simulate
 
     runs, summary = {}, {}
     for c in cases:
         E, paper = CASES[c]
         start = time.perf_counter()
-        model = build(PendulumSpec(E=E))
+        model = build(replace(spec, E=E))
         try:
             r = simulate(model, args.duration, args.step, alpha=args.alpha)
         except (FloatingPointError, ConvergenceError) as exc:
@@ -114,6 +155,10 @@ def _simulate(cases, args, out: Path):
             "E": E,
             "max_out_of_plane_node12_m": float(np.abs(r.positions[12][:, 2]).max()),
             "paper_m": paper,
+            "reading": spec.reading(),
+            "pulse_shape": spec.pulse_shape,
+            "pulse_peak_N_m": spec.pulse_peak,
+            "bar_mass_kg": spec.mass,
             "first_impact_s": float(r.t[contact[0]]) if contact.size else None,
             "pulse_work_J": float(en["pulse_work"][-1]),
             "contact_dissipation_J": float(en["contact_dissipation"][-1]),
