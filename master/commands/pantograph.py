@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.core.hht_defaults import DEFAULT_ALPHA
 
 
 def add_parser(sub):

@@ -25,7 +25,7 @@ import json
 import time
 from pathlib import Path
 
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.core.hht_defaults import DEFAULT_ALPHA
 
 #: the files the command writes into its output folder
 OUTPUT_FILES = ("pendulum_trajectories.png", "pendulum_node23.png", "pendulum_energy.png",
