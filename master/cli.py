@@ -59,6 +59,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     prefix = f"pantocosim {args.command}"
+    if getattr(args, "no_cache", False):
+        import os
+
+        os.environ["PANTOCOSIM_NO_CACHE"] = "1"   # inherited by workers and FMUs
     from pantocosim.master.interrupt import remember_interrupts
 
     try:

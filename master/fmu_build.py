@@ -3,7 +3,7 @@
 
 Every FMU bundles the same copy of the model package ``pantocosim`` (the installed package
 without its ``master`` subpackage), a build stamp that each slave checks at initialisation
-(:func:`pantocosim.fmi.slave_base.package_stamp`), and a small generated slave module with a
+(:func:`pantocosim.core.stamp.package_stamp`), and a small generated slave module with a
 unique name (pythonfmu 0.7.0 lets two FMUs whose slave modules share a name collide).
 
 Two sets are built into the output folder (default ``dist/fmus`` of the working folder):
@@ -56,7 +56,8 @@ def model_package_dir() -> Path:
 
 def stage_package(dest: Path) -> tuple[Path, Path]:
     """Copy the installed model package (without ``master``) and write the build stamp."""
-    from pantocosim.fmi.slave_base import STAMP_FILE, package_stamp
+    from pantocosim.core.stamp import package_stamp
+    from pantocosim.fmi.slave_base import STAMP_FILE
 
     src = model_package_dir()
     pkg = dest / "pantocosim"
@@ -158,7 +159,8 @@ def build_fmus(out: Path | None = None, only=None, quiet: bool = False,
 def is_stale(fmu: Path) -> bool:
     """True when the FMU bundles another version of the model package than the one installed
     (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
-    from pantocosim.fmi.slave_base import bundled_stamp, package_stamp
+    from pantocosim.core.stamp import package_stamp
+    from pantocosim.fmi.slave_base import bundled_stamp
 
     return bundled_stamp(fmu) != package_stamp()
 

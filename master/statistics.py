@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy import signal
 
 from pantocosim.core.errors import ParameterError
 
@@ -23,6 +22,8 @@ def lowpass(values: np.ndarray, dt: float, cutoff_hz: float = 20.0, order: int =
     nyquist = 0.5 / dt
     if cutoff_hz >= nyquist:
         return values.copy()
+    from scipy import signal  # imported on use: 1-4 s that a run needs only at its end
+
     sos = signal.butter(order, cutoff_hz / nyquist, btype="low", output="sos")
     padlen = min(len(values) - 1, 3 * (2 * len(sos) + 1) * 4)
     return signal.sosfiltfilt(sos, values, padlen=padlen)

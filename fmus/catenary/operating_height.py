@@ -48,9 +48,23 @@ class LinearisedCatenary(SecondOrderModel):
 
 def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: float,
                              duration: float, alpha: float = DEFAULT_ALPHA) -> np.ndarray:
-    """Mean contact-wire height under each moving constant force over the window [m]."""
+    """Mean contact-wire height under each moving constant force over the window [m]; kept
+    in the set-up cache (:mod:`pantocosim.core.disk_cache`) under the linearised model's
+    matrices, its static configuration, the moving points and every argument."""
+    from pantocosim.core.disk_cache import cached
+
     model = LinearisedCatenary(catenary)
     forces = np.asarray(forces, dtype=float)
+    parts = (type(catenary).__name__, model.M, model.K0, model.C, model.q_static,
+             catenary.positions(0.0), catenary.positions(1.0), forces,
+             tuple(map(float, window)), float(dt), float(duration), float(alpha))
+    return cached("mean-wire-height", parts, lambda: {"z": _moving_load_run(
+        catenary, model, forces, window, dt, duration, alpha)})["z"]
+
+
+def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
+    """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
+    under the moving forces."""
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
     integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=True))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)

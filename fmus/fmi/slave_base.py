@@ -24,7 +24,6 @@ with status fmi2Error, not applied, and the next doStep returns fmi2Discard nami
 
 from __future__ import annotations
 
-import hashlib
 import math
 import operator
 import pickle
@@ -38,6 +37,8 @@ import numpy as np
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real, String
+
+from pantocosim.core.stamp import package_stamp
 
 STAMP_FILE = "pantocosim_build_stamp.txt"
 
@@ -92,28 +93,6 @@ def lossless(value, kind: str):
     if kind == "Boolean":
         return bool(x) if x in (0.0, 1.0) else None
     return None
-
-
-def package_stamp(package_dir: str | Path | None = None) -> str:
-    """SHA-256 over the model package's source and data files (relative path + content); the
-    ``master`` subpackage of an installed package is not part of the model (FMUs do not
-    bundle it)."""
-    if package_dir is None:
-        import pantocosim
-
-        package_dir = Path(pantocosim.__file__).resolve().parent
-    root = Path(package_dir)
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*")):
-        rel = f.relative_to(root)
-        if rel.parts[0] == "master":
-            continue
-        if f.suffix in (".py", ".toml", ".c") and "__pycache__" not in f.parts and f.is_file():
-            h.update(rel.as_posix().encode())
-            h.update(b"\0")
-            h.update(f.read_bytes())
-            h.update(b"\0")
-    return h.hexdigest()[:16]
 
 
 def bundled_stamp(fmu: str | Path) -> str | None:

@@ -6,6 +6,13 @@ import json
 from pathlib import Path
 
 
+def add_cache_option(p) -> None:
+    """``--no-cache``: compute the set-up (the moving-load run behind the operating heights)
+    instead of taking it from the set-up cache (pantocosim.core.disk_cache)."""
+    p.add_argument("--no-cache", action="store_true", help="compute the set-up again instead "
+                   "of taking it from the cache on disk (~/.cache/pantocosim/setup)")
+
+
 def add_parser(sub):
     from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
 
@@ -33,6 +40,7 @@ def add_parser(sub):
                    help="run even above 0.7 of the wave speed")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_cache_option(p)
     add_size_options(p)
     p.add_argument("--realtime", action="store_true",
                    help="pace each step to the wall clock as a hardware-in-the-loop loop "

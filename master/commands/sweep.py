@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from pantocosim.master.commands.run import add_cache_option
+
 
 def add_parser(sub):
     p = sub.add_parser("sweep", help="run a campaign of cases (sweep file) on Dask",
@@ -26,6 +28,7 @@ def add_parser(sub):
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--wait", action="store_true",
                    help="if another sweep writes --out, wait for it to end (default: stop)")
+    add_cache_option(p)
     return p
 
 

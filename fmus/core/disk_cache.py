@@ -1,0 +1,130 @@
+"""A content-addressed cache on disk of set-up results (named arrays), shared by every process
+of a machine: the command line, the campaign workers and the FMUs.
+
+An entry's key is the SHA-256 of every input that changes it, given as values (arrays by
+dtype, shape and bytes; numbers and strings by repr) together with the model package's build
+stamp (:mod:`.stamp`), so a changed input or a changed package misses. An entry is an ``.npz``
+file written whole under a temporary name and moved in place: processes that fill one entry
+at once leave one valid entry. An entry that does not load, or whose stored key is not its
+own, is computed again with a warning, never trusted.
+
+Settings (environment, so that worker processes and FMUs inherit them):
+``PANTOCOSIM_NO_CACHE=1`` (the command line's ``--no-cache``) computes everything;
+``PANTOCOSIM_CACHE_DIR`` is the folder (default ``$XDG_CACHE_HOME/pantocosim/setup``);
+``PANTOCOSIM_CACHE_MB`` bounds its size (default :data:`DEFAULT_LIMIT_MB`): the entries used
+least recently go first.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import warnings
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .stamp import process_stamp
+
+DEFAULT_LIMIT_MB = 512
+_KEY_FIELD = "__key__"
+
+
+def enabled() -> bool:
+    return os.environ.get("PANTOCOSIM_NO_CACHE", "") in ("", "0")
+
+
+def folder() -> Path:
+    given = os.environ.get("PANTOCOSIM_CACHE_DIR")
+    if given:
+        return Path(given)
+    home = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(home) / "pantocosim" / "setup"
+
+
+def _feed(h, part) -> None:
+    if isinstance(part, np.ndarray):
+        h.update(f"array {part.dtype.str} {part.shape}".encode())
+        h.update(np.ascontiguousarray(part).tobytes())
+    elif hasattr(part, "indptr") and hasattr(part, "data"):          # a scipy sparse matrix
+        h.update(f"sparse {part.shape}".encode())
+        for a in (part.indptr, part.indices, part.data):
+            _feed(h, np.asarray(a))
+    elif isinstance(part, (tuple, list)):
+        h.update(f"seq {len(part)}".encode())
+        for p in part:
+            _feed(h, p)
+    elif isinstance(part, (bool, int, float, str, np.number)) or part is None:
+        h.update(f"{type(part).__name__} {part!r}".encode())
+    else:
+        raise TypeError(f"cannot key a {type(part).__name__}")
+    h.update(b"\0")
+
+
+def key(kind: str, parts) -> str:
+    """The entry key of ``kind`` computed from ``parts`` (with the package stamp)."""
+    h = hashlib.sha256()
+    _feed(h, (kind, process_stamp(), tuple(parts)))
+    return h.hexdigest()
+
+
+def _load(path: Path, expected: str) -> dict[str, np.ndarray] | None:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if str(data[_KEY_FIELD]) != expected:
+                raise ValueError("the entry's stored key is another one")
+            out = {k: data[k] for k in data.files if k != _KEY_FIELD}
+    except FileNotFoundError:
+        return None
+    except Exception as exc:  # noqa: BLE001 - a corrupt or foreign entry is computed again
+        warnings.warn(f"cache entry {path} is unusable ({type(exc).__name__}: {exc}): "
+                      "computing it again", stacklevel=3)
+        return None
+    os.utime(path)                                   # recently used: evicted last
+    return out
+
+
+def _store(path: Path, expected: str, arrays: dict[str, np.ndarray]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    part = path.with_name(f".{path.stem}.{os.getpid()}.{id(arrays)}.tmp.npz")
+    try:
+        np.savez(part, **{_KEY_FIELD: np.array(expected)}, **arrays)
+        os.replace(part, path)
+    except OSError as exc:                           # a full or read-only disk: no cache
+        warnings.warn(f"cache entry {path} not written ({exc})", stacklevel=3)
+        part.unlink(missing_ok=True)
+        return
+    _evict(path.parent)
+
+
+def _evict(root: Path) -> None:
+    limit = float(os.environ.get("PANTOCOSIM_CACHE_MB", DEFAULT_LIMIT_MB)) * 2**20
+    entries = []
+    for f in root.glob("*.npz"):
+        try:
+            st = f.stat()
+        except OSError:
+            continue
+        entries.append((st.st_mtime, st.st_size, f))
+    total = sum(size for _, size, _ in entries)
+    for _, size, f in sorted(entries):
+        if total <= limit:
+            break
+        f.unlink(missing_ok=True)
+        total -= size
+
+
+def cached(kind: str, parts, compute: Callable[[], dict[str, np.ndarray]]
+           ) -> dict[str, np.ndarray]:
+    """``compute()`` (named arrays), or its entry kept for ``kind`` and ``parts``."""
+    if not enabled():
+        return compute()
+    k = key(kind, parts)
+    path = folder() / f"{kind}-{k[:32]}.npz"
+    found = _load(path, k)
+    if found is not None:
+        return found
+    arrays = {name: np.asarray(a) for name, a in compute().items()}
+    _store(path, k, arrays)
+    return arrays

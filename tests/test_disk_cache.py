@@ -1,0 +1,131 @@
+"""The set-up cache (pantocosim.core.disk_cache): a kept result is the computed one bit for
+bit; any changed input misses; a corrupt entry is computed again with a warning; processes
+that fill one entry at once leave one valid entry."""
+
+import multiprocessing
+import time
+
+import numpy as np
+import pytest
+
+from pantocosim.core import disk_cache
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("PANTOCOSIM_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.delenv("PANTOCOSIM_NO_CACHE", raising=False)
+    return tmp_path / "cache"
+
+
+def two_span_line(speed_kmh=250.0):
+    from pantocosim.catenary.definition import load_catenary, with_spans
+    from pantocosim.catenary.model import CatenaryModel
+
+    return CatenaryModel(with_spans(load_catenary("en50318"), 2), x0=[5.0],
+                         speed=speed_kmh / 3.6)
+
+
+def counting(fn):
+    calls = []
+
+    def compute():
+        calls.append(1)
+        return fn()
+    return compute, calls
+
+
+def test_the_moving_load_run_is_kept_bit_for_bit(cache):
+    from pantocosim.catenary.operating_height import mean_dynamic_wire_height
+
+    line = two_span_line()
+    args = ([120.0], (40.0, 80.0), 2e-3, 1.3)
+    cold = mean_dynamic_wire_height(line, *args)
+    assert len(list(cache.glob("mean-wire-height-*.npz"))) == 1
+    warm = mean_dynamic_wire_height(line, *args)
+    assert warm.tobytes() == cold.tobytes()
+    assert 5.0 < cold[0] < 5.8                      # a wire height, not a placeholder
+    # another speed, step, force or window is another entry
+    mean_dynamic_wire_height(two_span_line(200.0), *args)
+    mean_dynamic_wire_height(line, [150.0], *args[1:])
+    mean_dynamic_wire_height(line, args[0], args[1], 1e-3, args[3])
+    assert len(list(cache.glob("mean-wire-height-*.npz"))) == 4
+
+
+def test_every_input_and_the_package_stamp_change_the_key(monkeypatch):
+    base = ("line", np.arange(4.0), 0.001, (1.0, 2.0))
+    k = disk_cache.key("kind", base)
+    changed = [("line2", np.arange(4.0), 0.001, (1.0, 2.0)),
+               ("line", np.arange(4.0) + 1e-15, 0.001, (1.0, 2.0)),
+               ("line", np.arange(4, dtype=np.float32), 0.001, (1.0, 2.0)),
+               ("line", np.arange(4.0), 0.002, (1.0, 2.0)),
+               ("line", np.arange(4.0), 0.001, (1.0, 2.5))]
+    assert len({k} | {disk_cache.key("kind", p) for p in changed}) == 1 + len(changed)
+    assert disk_cache.key("other", base) != k
+    monkeypatch.setattr(disk_cache, "process_stamp", lambda: "another-build")
+    assert disk_cache.key("kind", base) != k
+
+
+def test_a_corrupt_entry_is_computed_again_with_a_warning(cache):
+    compute, calls = counting(lambda: {"x": np.linspace(0.0, 1.0, 7)})
+    first = disk_cache.cached("demo", (1,), compute)
+    [entry] = cache.glob("demo-*.npz")
+    entry.write_bytes(b"not an npz file")
+    with pytest.warns(UserWarning, match="unusable"):
+        again = disk_cache.cached("demo", (1,), compute)
+    assert len(calls) == 2 and again["x"].tobytes() == first["x"].tobytes()
+    assert disk_cache.cached("demo", (1,), compute)["x"].tobytes() == first["x"].tobytes()
+    assert len(calls) == 2                           # the rewritten entry is used
+
+
+def test_an_entry_of_another_key_is_not_trusted(cache):
+    compute, calls = counting(lambda: {"x": np.ones(3)})
+    disk_cache.cached("demo", (1,), compute)
+    [entry] = cache.glob("demo-*.npz")
+    other = cache / "elsewhere.npz"
+    np.savez(other, __key__=np.array("0" * 64), x=np.zeros(3))
+    other.replace(entry)                             # a foreign file under this entry's name
+    with pytest.warns(UserWarning, match="stored key"):
+        assert disk_cache.cached("demo", (1,), compute)["x"].tolist() == [1.0, 1.0, 1.0]
+
+
+def test_no_cache_and_the_size_limit(cache, monkeypatch):
+    compute, calls = counting(lambda: {"x": np.zeros(200_000)})   # 1.6 MB an entry
+    monkeypatch.setenv("PANTOCOSIM_NO_CACHE", "1")
+    disk_cache.cached("big", (0,), compute)
+    assert not cache.exists() and len(calls) == 1
+    monkeypatch.delenv("PANTOCOSIM_NO_CACHE")
+    monkeypatch.setenv("PANTOCOSIM_CACHE_MB", "4")
+    for i in range(5):
+        disk_cache.cached("big", (i,), compute)
+        time.sleep(0.01)
+    kept = sorted(cache.glob("big-*.npz"))
+    assert len(kept) == 2                            # 3.2 MB of at most 4 MB: the newest two
+
+
+def _fill(folder: str, barrier) -> None:
+    import os
+
+    os.environ["PANTOCOSIM_CACHE_DIR"] = folder
+    barrier.wait()
+
+    def slow():
+        time.sleep(0.3)
+        return {"x": np.arange(100_000, dtype=float)}
+    disk_cache.cached("shared", ("same",), slow)
+
+
+def test_processes_filling_one_entry_leave_one_valid_entry(cache):
+    ctx = multiprocessing.get_context("spawn")
+    barrier = ctx.Barrier(2)
+    procs = [ctx.Process(target=_fill, args=(str(cache), barrier)) for _ in range(2)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(120)
+    assert [p.exitcode for p in procs] == [0, 0]
+    entries = list(cache.iterdir())
+    assert len(entries) == 1 and entries[0].suffix == ".npz"    # no temporary file left
+    compute, calls = counting(lambda: {"x": np.zeros(1)})
+    kept = disk_cache.cached("shared", ("same",), compute)
+    assert not calls and kept["x"].tobytes() == np.arange(100_000, dtype=float).tobytes()
