@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from full_disk import FullDisk
+
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.cli import main
 
@@ -430,22 +432,6 @@ def good_run(tmp_path_factory):
     return {p.name: p.read_bytes() for p in (base / "out").iterdir()}
 
 
-class _FullDisk:
-    """A file whose writes fail with ENOSPC once ``budget`` bytes are written."""
-
-    def __init__(self, fh, budget):
-        self.fh, self.budget = fh, budget
-
-    def write(self, data):
-        self.budget -= len(data)
-        if self.budget < 0:
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        return self.fh.write(data)
-
-    def __getattr__(self, name):
-        return getattr(self.fh, name)
-
-
 @pytest.mark.parametrize("case, names", [
     ("broken FMU", ["pantographs[0].fmu", "not a zip archive"]),
     ("five pantographs", ["pantographs = 5"]),
@@ -480,7 +466,7 @@ def test_failing_run_leaves_earlier_results_intact(tmp_path, capsys, monkeypatch
     elif case == "full disk (time series)":
         import pantocosim.master.recorder as recorder
 
-        monkeypatch.setattr(recorder, "open", lambda p, mode: _FullDisk(open(p, mode), 30_000),
+        monkeypatch.setattr(recorder, "open", lambda p, mode: FullDisk(open(p, mode), 30_000),
                             raising=False)
         extra = []
     else:

@@ -18,19 +18,7 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.master import stability
 from pantocosim.master.cli import main
 
-SCENARIO = """\
-name = "three-spans"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_supports = [1, 2]
+SCENARIO = (Path(__file__).with_name("data") / "three-spans.toml").read_text() + """\
 
 [simulation]
 dt = {dt}

@@ -2,31 +2,21 @@
 case's files are staged and moved in (no half-written or 0-byte file in a case folder), the
 sweep stops with one line naming what failed and the file (exit 2), and resumes afterwards."""
 
-import errno
 import json
 import os
 
+from pathlib import Path
+
 import pytest
+
+from full_disk import FullDisk
 
 from pantocosim.master.campaign import execute
 from pantocosim.master.campaign.execute import SweepStopped, case_folder, task_of
 from pantocosim.master.campaign.spec import load_sweep
 from pantocosim.master.campaign.worker import CASE_FILE, run_case
 
-SCENARIO = """\
-name = "three-spans"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_supports = [1, 2]
-"""
+SCENARIO = (Path(__file__).with_name("data") / "three-spans.toml").read_text()
 SWEEP = """\
 name = "small"
 scenario = "three.toml"
@@ -46,22 +36,6 @@ def sweep(tmp_path):
     return load_sweep(str(tmp_path / "small-sweep.toml"))
 
 
-class _FullDisk:
-    """A file whose writes fail with ENOSPC once ``budget`` bytes are written."""
-
-    def __init__(self, fh, budget):
-        self.fh, self.budget = fh, budget
-
-    def write(self, data):
-        self.budget -= len(data)
-        if self.budget < 0:
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        return self.fh.write(data)
-
-    def __getattr__(self, name):
-        return getattr(self.fh, name)
-
-
 def files_under(folder):
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())
 
@@ -70,7 +44,7 @@ def test_a_case_that_cannot_write_leaves_nothing_and_says_which_file(tmp_path, s
                                                                     monkeypatch):
     import pantocosim.master.recorder as recorder
 
-    monkeypatch.setattr(recorder, "open", lambda p, mode: _FullDisk(open(p, mode), 30_000),
+    monkeypatch.setattr(recorder, "open", lambda p, mode: FullDisk(open(p, mode), 30_000),
                         raising=False)
     out = tmp_path / "out"
     case = sweep.cases[0]

@@ -3,6 +3,7 @@
 kept but marked and not assessed in the report, and the sweep's exit status 1."""
 
 import json
+from pathlib import Path
 
 from test_sweep import fake_sweep, stats
 
@@ -23,20 +24,7 @@ contact.stiffness = 1.0e7
 speed_kmh = [250.0]
 """
 
-SCENARIO = """\
-name = "three-spans"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_supports = [1, 2]
-"""
+SCENARIO = (Path(__file__).with_name("data") / "three-spans.toml").read_text()
 
 
 def test_worker_records_a_warned_case(tmp_path):
