@@ -70,6 +70,16 @@ def cofmupy_swap(folder: Path, model: str, work: Path) -> Path:
     return dest
 
 
+def failure(error) -> str:
+    """A failed run's cell: the FMU's refusal where it gave one."""
+    from pantocosim.master.thirdparty.common import REFUSED
+
+    text = " ".join(error) if isinstance(error, list) else str(error)
+    if REFUSED in text:
+        return "refused: " + text.split(REFUSED, 1)[1].strip().split("] ", 1)[-1]
+    return f"failed: {text}"
+
+
 def table(rows: list[dict]) -> str:
     out = ["| master | pantograph FMU | mean [N] | ref. mean | Δ mean | σ [N] | ref. σ | Δ σ "
            "| max uplift [mm] | wall [s] |",
@@ -77,7 +87,7 @@ def table(rows: list[dict]) -> str:
     for r in rows:
         s, ref = r["stats"], r["ref"]
         if "error" in s:
-            out.append(f"| {r['master']} | {r['model']} | failed: {s['error']} |||||||| |")
+            out.append(f"| {r['master']} | {r['model']} | {failure(s['error'])} |||||||| |")
             continue
         dm = 100 * (s["mean_n"] / ref["mean_n"] - 1)
         ds = 100 * (s["std_n"] / ref["std_n"] - 1)
@@ -98,7 +108,8 @@ def merged(old: str, new: str, models: list[str]) -> str:
     head = new.splitlines()[:2]
     rows = {_key(l): l for l in old.strip().splitlines()[2:] if l.startswith("|")}
     rows.update({_key(l): l for l in new.splitlines()[2:]})
-    order = list(dict.fromkeys(models + [k[1] for k in rows]))
+    order = list(dict.fromkeys([_key(l)[1] for l in old.strip().splitlines()[2:]
+                                if l.startswith("|")] + models))
     keys = sorted(rows, key=lambda k: (order.index(k[1]), list(MASTERS).index(k[0])
                                        if k[0] in MASTERS else len(MASTERS)))
     return "\n".join(head + [rows[k] for k in keys])

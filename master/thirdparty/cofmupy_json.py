@@ -81,8 +81,7 @@ def main(argv=None) -> int:
     proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
     wall = [l for l in proc.stdout.splitlines() if l.startswith("WALL ")]
     if proc.returncode != 0 or not wall:
-        sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
-        raise SystemExit(f"{MODULE}: the co-simulation failed (exit code {proc.returncode})")
+        run_common.failed(MODULE, proc)
     cpu = [float(l.split()[1]) for l in proc.stdout.splitlines() if l.startswith("CPU ")]
     run_common.report("cofmupy", r.out, r.window, r.support_x,
                       (float(wall[-1].split()[1]), None, cpu[-1] if cpu else None),

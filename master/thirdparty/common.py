@@ -109,6 +109,21 @@ def read_csv(path: str | Path) -> dict:
 
 
 # ------------------------------------------------------------------------- parent side
+def failed(module: str, proc: subprocess.CompletedProcess):
+    """Stop a recipe whose co-simulation child failed: its output on stderr, then one line
+    with the first refusal an FMU logged (its first sentence), if any."""
+    sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
+    said = [line for line in (proc.stdout + proc.stderr).splitlines()
+            if line.startswith(("[DISCARD]", "[ERROR]", "[FATAL]"))]
+    reason = f": {REFUSED} {said[0].split('. ')[0]}" if said else ""
+    raise SystemExit(f"{module}: the co-simulation failed (exit code {proc.returncode})"
+                     f"{reason}")
+
+
+#: what precedes an FMU's refusal in the line of :func:`failed`
+REFUSED = "the FMU said"
+
+
 def run_child(module: str, args: list) -> tuple:
     """Run ``python -m MODULE --child ARGS``; returns its wall time (printed as ``WALL <s>``),
     the part of it spent in initialisation (``INIT <s>``: model set-up and numba JIT) and the
@@ -117,9 +132,7 @@ def run_child(module: str, args: list) -> tuple:
     proc = subprocess.run(cmd, capture_output=True, text=True)
     wall = [l for l in proc.stdout.splitlines() if l.startswith("WALL ")]
     if proc.returncode != 0 or not wall:
-        sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
-        raise SystemExit(f"{module}: the co-simulation failed "
-                         f"(exit code {proc.returncode})")
+        failed(module, proc)
     init = None
     cpu = None
     for line in proc.stdout.splitlines():
