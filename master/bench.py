@@ -77,14 +77,39 @@ def scenario_text(name, catenary, spans, pantograph, speed, x0, duration,
 def select_cases(names=None) -> list[str]:
     """The case names asked for (all by default); an unknown one is an error."""
     if not names:
-        return list(CASES)
+        return list(CASES) + list(FIGURES)
     for name in names:
-        if name not in CASES:
+        if name not in CASES and name not in FIGURES:
             from pantocosim.core.errors import ParameterError
 
             raise ParameterError("--case", name, f"unknown bench case; one of "
-                                 f"{', '.join(CASES)}")
+                                 f"{', '.join([*CASES, *FIGURES])}")
     return list(dict.fromkeys(names))
+
+
+#: the short run of the time-to-result figures (the scenario, its options)
+TIME_TO_RESULT = ("en50318-250", ["--catenary-model", "linear"])
+
+
+def time_to_result(tmp: Path, printer=print) -> dict:
+    """``pantocosim run en50318-250`` (linear catenary, monolithic) end to end (the process'
+    wall time) against its time stepping, with an empty set-up cache (cold) and again with
+    the entries the first run kept (warm)."""
+    scenario, options = TIME_TO_RESULT
+    env = {"PANTOCOSIM_CACHE_DIR": str(tmp / "setup-cache")}
+    out = {}
+    for label in ("cold", "warm"):
+        s = run_case(Path(scenario), "monolithic", tmp / f"ttr-{label}", env, options)
+        out[label] = {"process_wall_s": s["process_wall_s"], "stepping_s": s["wall_time_s"],
+                      "end_to_end_over_stepping": s["process_wall_s"] / s["wall_time_s"]}
+        printer(f"time to result, {scenario} linear monolithic, set-up cache {label}: "
+                f"{s['process_wall_s']:.1f} s end to end, {s['wall_time_s']:.1f} s stepping: "
+                f"ratio {out[label]['end_to_end_over_stepping']:.2f}")
+    return out
+
+
+#: figures other than the step-time cases, by name (``--case NAME``)
+FIGURES = {"time-to-result": time_to_result}
 
 
 def step_time_entry(summary: dict) -> dict:
@@ -94,9 +119,10 @@ def step_time_entry(summary: dict) -> dict:
             "max_step_ms": st.get("max_ms")}
 
 
-def run_case(path: Path, coupling: str, out: Path, env: dict | None = None) -> dict:
+def run_case(path: Path, coupling: str, out: Path, env: dict | None = None,
+             options=()) -> dict:
     cmd = [sys.executable, "-m", "pantocosim.master.cli", "run", str(path), "--coupling",
-           coupling, "--out", str(out), "--json", "--no-plots", "--quiet"]
+           coupling, "--out", str(out), "--json", "--no-plots", "--quiet", *options]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True,
                           env=None if env is None else {**os.environ, **env})
@@ -143,11 +169,17 @@ def floor_per_step(catenary: str, spans: int, repeats: int = 200, rounds: int = 
 def bench(quick: bool = False, printer=print, cases=None) -> dict:
     """Run the bench; ``cases`` (names of :data:`CASES`) restricts it to those cases and then
     skips the cold first run and the span scaling (they belong to the full bench)."""
-    selected = select_cases(cases)
+    chosen = select_cases(cases)
+    selected = [name for name in chosen if name in CASES]
     full = not cases
     results: dict = {"cases": {}, "machine": _machine()}
     with tempfile.TemporaryDirectory(prefix="pantocosim_bench_") as tmp:
         tmp = Path(tmp)
+        for name in chosen:
+            if name in FIGURES:
+                results[name] = FIGURES[name](tmp, printer)
+        if not selected:
+            return results
         cat, spans, pan, v, x0 = CASES[selected[0]]
         if full:
             # cold first run: empty numba cache and FMUs extracted afresh (every kernel

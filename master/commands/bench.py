@@ -15,8 +15,10 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.add_argument("--out", help="also write the results as JSON to this file")
     p.add_argument("--case", action="append", metavar="NAME",
-                   help="run only this case (repeatable; en50318-300, dsa380-ave-300-40span); "
-                   "skips the cold first run and the span scaling")
+                   help="run only this case (repeatable; en50318-300, dsa380-ave-300-40span, "
+                   "the fast-model cases, time-to-result: end to end against time stepping "
+                   "with a cold and a warm set-up cache); skips the cold first run and the "
+                   "span scaling")
     return p
 
 
