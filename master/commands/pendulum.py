@@ -129,12 +129,12 @@ def run(args) -> int:
 
 def _simulate(cases, args, out: Path, spec):
     """Run the cases and write the figures and pendulum_summary.json into ``out``."""
+    from dataclasses import replace
+
     import numpy as np
 
     from pantocosim.core.errors import ConvergenceError
     from pantocosim.master.output_folder import writing
-    from dataclasses import replace
-
     from pantocosim.multibody.double_pendulum import CASES, simulate_case
 
     runs, summary = {}, {}
