@@ -1,11 +1,11 @@
 """Shared fixtures and the run's own folders.
 
-Every cache the project keeps in the user's home (extracted FMUs, generated kernels) goes to a
-folder of this run instead, shared by its pytest-xdist workers: suites started side by side do
-not meet, and a fresh home behaves like any other. The FMUs are built once per run, as
-``pantocosim build-fmus`` builds them (generic FMUs, the default scenario's FMUs, SSP file and
-CoFmuPy configuration): the first worker builds them under a file lock, the others reuse them.
-Tests that use them are part of the full suite (marked slow here)."""
+Every cache the project keeps in the user's home (extracted FMUs, generated kernels, set-up
+results) goes to a folder of this run instead, shared by its pytest-xdist workers: suites
+started side by side do not meet, and a fresh home behaves like any other. The FMUs are built
+once per run, as ``pantocosim build-fmus`` builds them (generic FMUs, the default scenario's
+FMUs, SSP file and CoFmuPy configuration): the first worker builds them under a file lock, the
+others reuse them. Tests that use them are part of the full suite (marked slow here)."""
 
 import os
 from pathlib import Path
@@ -15,7 +15,8 @@ from filelock import FileLock
 
 #: the project's cache variables and the base folder each one names under the run's folder
 CACHE_VARIABLES = {"XDG_CACHE_HOME": "cache", "PANTOCOSIM_FMU_CACHE": "cache/pantocosim/fmus",
-                   "PANTOCOSIM_KERNEL_DIR": "cache/pantocosim/kernels"}
+                   "PANTOCOSIM_KERNEL_DIR": "cache/pantocosim/kernels",
+                   "PANTOCOSIM_CACHE_DIR": "cache/pantocosim/setup"}
 
 
 def pytest_collection_modifyitems(items):
