@@ -13,10 +13,12 @@ from pathlib import Path
 import pytest
 from filelock import FileLock
 
-#: the project's cache variables and the base folder each one names under the run's folder
+#: the cache (and matplotlib's configuration) variables and the folder each one names under
+#: the run's folder
 CACHE_VARIABLES = {"XDG_CACHE_HOME": "cache", "PANTOCOSIM_FMU_CACHE": "cache/pantocosim/fmus",
                    "PANTOCOSIM_KERNEL_DIR": "cache/pantocosim/kernels",
-                   "PANTOCOSIM_CACHE_DIR": "cache/pantocosim/setup"}
+                   "PANTOCOSIM_CACHE_DIR": "cache/pantocosim/setup",
+                   "MPLCONFIGDIR": "config/matplotlib"}
 
 
 def pytest_collection_modifyitems(items):
