@@ -160,7 +160,6 @@ class CatenarySlave(IntegratorSlave):
         self.integer("max_dofs", 0, "largest catenary model the FMU builds (degrees of "
                      "freedom); 0 = the default limit (the size guard refuses larger models "
                      "before building them)")
-
         self.integer("factorization", 2, "Newton matrix policy of the HHT solver: 0 = full "
                      "Newton (refactorize every iteration), 1 = factorize once per step "
                      "(chord), 2 = reuse across steps (refreshed when droppers change state "
