@@ -31,7 +31,7 @@ damping = {c}
 
 #: (dt [s], largest stiffness measured stable, smallest measured unstable [N/m])
 MEASURED = [(0.001, 3e5, 4e5), (0.005, 8e4, 1.2e5), (0.01, 8e4, 1e5)]
-#: the issue's explicit / Gauss-Seidel rows: (coupling, k [N/m], c [N s/m], dt [s], field)
+#: unstable explicit / Gauss-Seidel settings seen in runs: (coupling, k [N/m], c [N s/m], dt [s], field)
 ISSUE_ROWS = [("explicit", 1e7, 0.0, 0.001, "contact.stiffness"),
               ("explicit", 1e6, 0.0, 0.01, "contact.stiffness"),
               ("explicit", 1e7, 0.0, 0.01, "contact.stiffness"),
