@@ -138,7 +138,7 @@ def build_fmus(out: Path | None = None, only=None, quiet: bool = False,
     with tempfile.TemporaryDirectory(prefix="pantocosim_fmus_") as tmp:
         work = Path(tmp)
         pkg, stamp = stage_package(work / "stage")
-        library = compile_export_library(work, quiet)
+        library = compile_export_library(work)
         for name in names:
             attrs = {} if name == CATENARY_FMU else {"preset": name}
             attrs.update({"start_values": start_values[name]} if start_values else {})

@@ -29,7 +29,7 @@ def compiler() -> str | None:
     return cc if cc else shutil.which("cc") or shutil.which("gcc")
 
 
-def compile_export_library(work: Path, quiet: bool = False) -> Path | None:
+def compile_export_library(work: Path) -> Path | None:
     """``fmi2_export.c`` compiled into ``work``; None (with a warning) without a compiler."""
     cc = compiler()
     out = Path(work) / "fmi2_export.so"

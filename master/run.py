@@ -190,7 +190,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
         from pantocosim.catenary.definition import with_spans
 
         definition = with_spans(base, sc.spans)
-    wave = math.sqrt(definition.contact.tension / definition.contact.mass_per_length)
+    wave = definition.contact.wave_speed
     if sc.speed > MAX_WAVE_SPEED_RATIO * wave and not force:
         raise ParameterError("speed_kmh", sc.speed_kmh,
                              f"exceeds {MAX_WAVE_SPEED_RATIO} of the contact-wire wave speed "

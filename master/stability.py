@@ -71,12 +71,23 @@ def wire_impedance(definition) -> float:
     return 2.0 * math.sqrt(definition.contact.tension * definition.contact.mass_per_length)
 
 
+def critical_frequency(dt: float) -> float:
+    """``w* = pi / (3 dt)`` [rad/s], where the exchange's lag turns the loop (module
+    docstring)."""
+    return math.pi / (3.0 * dt)
+
+
+def receptance(dt: float, mass: float, impedance: float) -> float:
+    """``|1 / (i w* Z_w) - 1 / (m_p w*^2)|`` of wire and pantograph at ``w*``."""
+    w = critical_frequency(dt)
+    return math.hypot(1.0 / (w * impedance), 1.0 / (mass * w * w))
+
+
 def exchange_gain(stiffness: float, damping: float, dt: float, mass: float,
                   impedance: float) -> float:
     """Loop gain of a once-per-step exchange of the penalty force (module docstring)."""
-    w = math.pi / (3.0 * dt)
-    law = math.hypot(stiffness, w * damping)
-    return law * math.hypot(1.0 / (w * impedance), 1.0 / (mass * w * w))
+    law = math.hypot(stiffness, critical_frequency(dt) * damping)
+    return law * receptance(dt, mass, impedance)
 
 
 def contact_frequency(stiffness: float, mass: float) -> float:
@@ -126,9 +137,8 @@ def _largest_stable_step(sc, est: Estimate) -> float | None:
 
 def _culprit(sc, est: Estimate) -> tuple[str, float, str]:
     """The contact field that sets the gain, its value and the largest one that runs."""
-    w = math.pi / (3.0 * sc.dt)
-    receptance = math.hypot(1.0 / (w * est.impedance), 1.0 / (est.mass * w * w))
-    budget = GAIN_LIMIT / receptance      # |k + i w c| that runs
+    w = critical_frequency(sc.dt)
+    budget = GAIN_LIMIT / receptance(sc.dt, est.mass, est.impedance)   # |k + i w c| that runs
     if sc.contact_stiffness >= w * sc.contact_damping:
         rest = max(budget ** 2 - (w * sc.contact_damping) ** 2, 0.0)
         return "contact.stiffness", sc.contact_stiffness, f"contact.stiffness < {math.sqrt(rest):.3g} N/m"
