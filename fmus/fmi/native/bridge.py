@@ -76,8 +76,8 @@ def slave_class(module):
     return max(found, key=lambda c: len(c.__mro__))
 
 
-def instantiate(resources: str, instance_name: str, guid: str, _reserved: str,
-                visible: int, component_id: int) -> "Adapter":
+def instantiate(resources: str, instance_name: str, guid: str, visible: int,
+                component_id: int) -> "Adapter":
     """The adapter of a new instance (fmi2Instantiate); raises with the reason."""
     res = Path(resources)
     while sys.path.count(resources) > 1:           # the library inserts it at every call

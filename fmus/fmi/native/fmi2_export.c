@@ -110,7 +110,6 @@ static struct {
 
 typedef struct State {
     uint64_t magic;
-    struct Component *owner;
     PyObject *object;
     PyObject *bytes; /* serialised form, made by fmi2SerializedFMUstateSize */
     struct State *next;
@@ -564,8 +563,8 @@ static int make_adapter(Component *c, const char *resources, const char *guid, i
     py.DecRef(added);
     bridge = py.ImportModule("pantocosim_fmi2_bridge");
     if (bridge == NULL) goto fail;
-    c->adapter = py.CallMethod(bridge, "instantiate", "ssssin", resources, c->instanceName,
-                               guid ? guid : "", "", visible, (Py_ssize_t)(intptr_t)c);
+    c->adapter = py.CallMethod(bridge, "instantiate", "sssin", resources, c->instanceName,
+                               guid ? guid : "", visible, (Py_ssize_t)(intptr_t)c);
     py.DecRef(bridge);
     if (c->adapter == NULL) goto fail;
     return 1;
@@ -801,7 +800,6 @@ static State *new_state(Component *c, PyObject *object)
     State *s = calloc(1, sizeof *s);
     if (s == NULL) return NULL;
     s->magic = STATE_MAGIC;
-    s->owner = c;
     s->object = object;
     s->next = c->states;
     c->states = s;
