@@ -7,3 +7,9 @@ in ``pantocosim.master`` (source folder ``master/``).
 """
 
 __version__ = "0.1.0"
+
+# numba keeps the package's kernels by module and source content, not by folder: every copy
+# of the package (each FMU extraction) loads the kernels compiled once
+from .core.kernel_cache import install as _install_kernel_cache  # noqa: E402
+
+_install_kernel_cache()

@@ -6,8 +6,9 @@ at its operating height. With a stiff mechanism (the rigid DSA-380 has about 2 k
 head) that height must be the mean height of the contact wire under the moving pantograph,
 which a moving load lifts more than a static one. It is computed here from the catenary
 linearised about its static configuration (M, C = alpha M + beta K0, K0) under the constant
-mean forces moving at the train speed, integrated with the project's HHT-alpha integrator (one
-banded factorization for the whole run), and averaged over the analysis window.
+mean forces moving at the train speed, integrated with HHT-alpha steps in closed form
+(:mod:`pantocosim.core.affine_hht`: one banded factorization for the whole run, one solve a
+step), and averaged over the analysis window.
 """
 
 from __future__ import annotations
@@ -16,12 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pantocosim.core.hht import DEFAULT_ALPHA, HHTIntegrator, HHTSettings
-from pantocosim.core.model import Evaluation, SecondOrderModel
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 
 
-class LinearisedCatenary(SecondOrderModel):
-    """M a + C v + K0 (q - q_static) = sum_k N_k(t)^T F_k on the catenary's own pattern."""
+class LinearisedCatenary:
+    """M a + C v + K0 (q - q_static) = sum_k N_k(t)^T F_k: the catenary linearised about its
+    static configuration with every dropper taut (C = alpha M + beta K0, (3.1); K0 the tangent
+    (3.5)), as an :class:`~pantocosim.core.affine_hht.AffineForm` whose HHT steps are taken in
+    closed form (one kept banded factorization, one solve a step)."""
 
     def __init__(self, catenary):
         self.cat = catenary
@@ -31,19 +34,39 @@ class LinearisedCatenary(SecondOrderModel):
         self.K0 = st.csr(catenary.K0_data)
         self.C = st.csr(catenary._C_base)
         self.q_static = catenary.q_static
+        self._factors: dict = {}
 
-    def evaluate(self, t, q, v, a, inputs, tangent=True):
-        f_rest = self.C @ v + self.K0 @ (q - self.q_static) - self.cat.input_vector(t, inputs)
-        ev = Evaluation(f_inertia=self.M @ a, f_rest=f_rest, structure_key=0)
-        if tangent:
-            ev.mass, ev.damping, ev.stiffness = self.M, self.C, self.K0
-        return ev
+    def _factor(self, c_a: float, c_v: float, c_f: float):
+        """The kept banded Cholesky factor of c_a M + c_f (c_v C + K0)."""
+        from pantocosim.core.banded import BandedCholesky
+        from pantocosim.core.errors import ConvergenceError
+        from pantocosim.core.lowrank import ColumnCache
 
-    def effective_matrix(self, ev, c_a, c_v, c_f):
-        return self.cat.effective_matrix(ev, c_a, c_v, c_f)
+        key = (c_a, c_v, c_f)
+        if key not in self._factors:
+            data = c_a * self.M.data + c_f * (c_v * self.C.data + self.K0.data)
+            chol = BandedCholesky.factor(self.cat.structure.lower_band(data))
+            if chol is None:
+                raise ConvergenceError(f"linearised catenary: HHT matrix {key} is not "
+                                       "positive definite")
+            self._factors[key] = ColumnCache(chol, self._taut.vectors)
+        return self._factors[key]
 
-    def factorize(self, S):
-        return self.cat.factorize(S)
+    def _forces(self, t, q, v, F) -> np.ndarray:
+        """f_rest = C v + K0 (q - q_static) - sum_k N_k^T F_k."""
+        return self.C @ v + self.K0 @ (q - self.q_static) - self.cat.input_vector(t, F)
+
+    def affine_form(self):
+        """The model as an AffineForm: no unilateral elements (every dropper stays in K0)."""
+        from pantocosim.catenary.linear_droppers import LinearDroppers
+        from pantocosim.core.affine_hht import AffineForm
+
+        cat, st = self.cat, self.cat.structure
+        self._taut = LinearDroppers(st, np.zeros(0, np.int64), cat.x_static, cat.beta_r)
+        return AffineForm(n=self.n_dofs, M_band=st.lower_band(st.M_data),
+                          K_band=st.lower_band(cat.K0_data), alpha_r=cat.alpha_r,
+                          beta_r=cat.beta_r, q_ref=self.q_static, r0=np.zeros(self.n_dofs),
+                          unilateral=self._taut, factor=self._factor, forces=self._forces)
 
 
 def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: float,
@@ -65,8 +88,11 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
     under the moving forces."""
+    from pantocosim.core.affine_hht import ForcedAffineIntegrator
+
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
-    integ = HHTIntegrator(model, HHTSettings(alpha=alpha, reuse_factorization=True))
+    integ = ForcedAffineIntegrator(model.affine_form(), catenary.contact_points,
+                                   HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)
     n = len(forces)
     total = np.zeros(n)
