@@ -55,12 +55,81 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
+from pantocosim.core.schema import OPTIONAL, Field, Format, Section
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 DEFAULT_SCENARIO = "dsa380-ave-300"
 #: closest two pantographs may be along the track [m]: a pantograph head is about 2 m long
 #: (two collector strips), so two heads closer than that would overlap
 MIN_SPACING_M = 2.0
+
+
+#: the declared fields of a scenario file (the loader reads each through its declaration;
+#: the reference page of the format is generated from them)
+ROOT = Section("", [
+    Field("name", "string", default=OPTIONAL, doc="name of the scenario (default: the "
+          "file's name)"),
+    Field("description", "string", default="", doc="free text"),
+    Field("catenary", "file", doc="catenary preset (en50318, benchmark55, ave64) or definition "
+          "file, relative to this file's folder"),
+    Field("spans", "integer", default=OPTIONAL, minimum=2,
+          doc="repeat or cut the catenary to this many spans"),
+    Field("speed_kmh", unit="km/h", positive=True, doc="train speed"),
+], extra=("pantographs", "analysis", "simulation", "contact"))
+PANTOGRAPH = Section("pantographs", [
+    Field("model", "file", doc="pantograph preset (dsa380-rigid, dsa380-flexible, "
+          "dsa380-lumped3, en50318-2mass) or parameter file, relative to this file's folder"),
+    Field("fmu", "string", default=OPTIONAL, doc="the co-simulation couplings' FMU of this "
+          "model (default dist/fmus/MODEL.fmu; a parameter file runs in "
+          "dist/fmus/dsa380-rigid.fmu)", rule="not empty"),
+    Field("position_m", unit="m", doc="x of the contact point at t = 0",
+          rule=f"pantographs at least {MIN_SPACING_M:g} m apart"),
+    Field("start", "string", default="static", choices=("static", "ramp"),
+          doc='"static": in contact and in equilibrium; "ramp": raised from a lowered height'),
+    Field("options", "table", default=OPTIONAL, doc="pantograph options overriding the "
+          "parameter file's [options] (see the pantograph format)"),
+], doc="One `[[pantographs]]` table per pantograph (at least one).", extra=("ramp",),
+    array=True)
+RAMP = Section("pantographs.ramp", [
+    Field("start_m", unit="m", doc="x where the raising starts",
+          rule="not behind position_m"),
+    Field("length_m", unit="m", positive=True, doc="distance over which the pantograph rises"),
+    Field("lowered_height", unit="m", positive=True,
+          doc="height of the lowered collector, below the contact wire"),
+], doc='Only with `start = "ramp"`; the raising ends before the analysis window.')
+ANALYSIS = Section("analysis", [
+    Field("window_supports", "integers", default=OPTIONAL, length=2, doc="analyse between "
+          "these supports (0 = first), applied to each pantograph's track",
+          rule="two increasing integer support indices >= 0"),
+    Field("window_m", "numbers", default=OPTIONAL, length=2, increasing=True, unit="m",
+          doc="or an explicit x range", rule="not with window_supports"),
+], doc="Give exactly one of `window_supports` and `window_m`.")
+SIMULATION = Section("simulation", [
+    Field("dt", unit="s", default=1e-3, positive=True, maximum=0.01, doc="time step"),
+    Field("alpha", default=DEFAULT_ALPHA, minimum=ALPHA_MIN, maximum=ALPHA_MAX,
+          doc="HHT-alpha parameter (numerical damping)"),
+    Field("newton_rtol", default=RUN_RTOL, positive=True, maximum=RUN_RTOL_MAX,
+          doc="Newton residual tolerance (relative)"),
+    Field("coupling_rtol", default=RUN_RTOL, positive=True, maximum=RUN_RTOL_MAX,
+          doc="implicit co-simulation: interface residual tolerance, relative to the "
+          "pantographs' mean contact force"),
+    Field("duration_s", unit="s", default=OPTIONAL, positive=True,
+          doc="run length (default: until the last pantograph leaves the analysis window)"),
+    Field("catenary_model", "string", default="nonlinear", choices=MODEL_NAMES,
+          doc="nonlinear (reference), linear or modal catenary model"),
+    Field("modal_cutoff_hz", unit="Hz", default=DEFAULT_MODAL_CUTOFF_HZ, positive=True,
+          doc="modal model: the modes below this frequency are kept"),
+], doc="Optional table: every field has a default.")
+CONTACT = Section("contact", [
+    Field("stiffness", unit="N/m", default=DEFAULT_CONTACT_STIFFNESS, positive=True,
+          doc="penalty stiffness k_H"),
+    Field("damping", unit="N s/m", default=0.0, nonnegative=True, doc="contact damping c_H"),
+], doc="Optional table: the penalty contact law F = k_H max(0, z_pantograph - z_wire).")
+FORMAT = Format("scenario", "Scenario files", """A scenario says which pantographs run on which catenary, how fast, and what is analysed. It is
+read by `pantocosim run SCENARIO` and is the base of a sweep. Presets live in
+`master/scenarios/` (`pantocosim run` lists them in its help); any of them is a good start for a
+file of your own. Files named in a scenario are taken from the scenario's folder when relative.
+""", (ROOT, PANTOGRAPH, RAMP, ANALYSIS, SIMULATION, CONTACT))
 
 
 @dataclass
@@ -169,23 +238,21 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario",
     """Validate the parsed TOML table of a scenario (``source`` names it in errors); files it
     names are taken from the folder ``base`` (:func:`scenario_file`)."""
     root = Table(data, source)
-    root.unknown_keys({"name", "description", "catenary", "spans", "speed_kmh", "pantographs",
-                       "analysis", "simulation", "contact"})
+    ROOT.check_keys(root)
     pans = root._get("pantographs", None, required=True)
     if not isinstance(pans, list) or not pans:
         raise ParameterError("pantographs", pans, "must be a non-empty array of tables", source)
     specs = []
     for i, raw in enumerate(pans):
         t = Table(raw, source, f"pantographs[{i}]")
-        t.unknown_keys({"model", "fmu", "position_m", "start", "ramp", "options"})
-        start = t.string("start", "static", choices=("static", "ramp"))
+        PANTOGRAPH.check_keys(t)
+        start = PANTOGRAPH.read(t, "start")
         ramp = None
-        position = t.number("position_m")
+        position = PANTOGRAPH.read(t, "position_m")
         if start == "ramp":
             r = t.sub("ramp")
-            r.unknown_keys({"start_m", "length_m", "lowered_height"})
-            ramp = RampSpec(r.number("start_m"), r.number("length_m", positive=True),
-                            r.number("lowered_height", positive=True))
+            RAMP.check_keys(r)
+            ramp = RampSpec(*(RAMP.read(r, f.name) for f in RAMP.fields))
             if ramp.start_m < position:
                 raise ParameterError(f"pantographs[{i}].ramp.start_m", ramp.start_m,
                                      f"behind the pantograph's start (position_m = "
@@ -197,16 +264,16 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario",
         opts = raw.get("options", {})
         if not isinstance(opts, dict):
             raise ParameterError(f"pantographs[{i}].options", opts, "must be a table", source)
-        fmu = t.string("fmu") if t.has("fmu") else None
+        fmu = PANTOGRAPH.read(t, "fmu")
         if fmu is not None and not fmu.strip():
             raise ParameterError(f"pantographs[{i}].fmu", fmu, "empty; give an .fmu file or "
                                  "leave the field out (default: the model's FMU)", source)
-        model = scenario_file(t.string("model"), base, f"pantographs[{i}].model", source)
+        model = scenario_file(PANTOGRAPH.read(t, "model"), base, f"pantographs[{i}].model", source)
         specs.append(PantographSpec(model=model, position_m=position,
                                     start=start, ramp=ramp, fmu=fmu, options=dict(opts)))
     check_spacing(specs, source)
     analysis = root.sub("analysis")
-    analysis.unknown_keys({"window_supports", "window_m"})
+    ANALYSIS.check_keys(analysis)
     if analysis.has("window_supports") and analysis.has("window_m"):
         raise ParameterError("analysis.window_m", analysis.data["window_m"], "give either "
                              "analysis.window_supports or analysis.window_m, not both", source)
@@ -220,34 +287,25 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario",
                                  "must be two increasing support indices", source)
         window_supports = (ws[0], ws[1])
     elif analysis.has("window_m"):
-        wm = analysis.numbers("window_m", length=2, increasing=True)
+        wm = ANALYSIS.read(analysis, "window_m")
         window_m = (wm[0], wm[1])
     else:
         raise ParameterError("analysis.window_supports", None,
                              "missing field (or give analysis.window_m)", source)
     sim = root.sub("simulation", required=False)
-    sim.unknown_keys({"dt", "alpha", "duration_s", "newton_rtol", "coupling_rtol",
-                      "catenary_model", "modal_cutoff_hz"})
+    SIMULATION.check_keys(sim)
     contact = root.sub("contact", required=False)
-    contact.unknown_keys({"stiffness", "damping"})
+    CONTACT.check_keys(contact)
+    name = ROOT.read(root, "name")
     sc = Scenario(
-        name=root.string("name", default_name), source=source,
-        description=root.string("description", ""),
-        catenary=scenario_file(root.string("catenary"), base, "catenary", source),
-        spans=root.integer("spans", minimum=2) if root.has("spans") else None,
-        speed_kmh=root.number("speed_kmh", positive=True),
+        name=default_name if name is None else name, source=source,
+        description=ROOT.read(root, "description"),
+        catenary=scenario_file(ROOT.read(root, "catenary"), base, "catenary", source),
+        spans=ROOT.read(root, "spans"), speed_kmh=ROOT.read(root, "speed_kmh"),
         pantographs=specs, window_supports=window_supports, window_m=window_m,
-        dt=sim.number("dt", 1e-3, positive=True, maximum=0.01),
-        alpha=sim.number("alpha", DEFAULT_ALPHA, minimum=ALPHA_MIN, maximum=ALPHA_MAX),
-        newton_rtol=sim.number("newton_rtol", RUN_RTOL, positive=True,
-                               maximum=RUN_RTOL_MAX),
-        coupling_rtol=sim.number("coupling_rtol", RUN_RTOL, positive=True,
-                                 maximum=RUN_RTOL_MAX),
-        duration_s=sim.number("duration_s", positive=True) if sim.has("duration_s") else None,
-        catenary_model=sim.string("catenary_model", "nonlinear", choices=MODEL_NAMES),
-        modal_cutoff_hz=sim.number("modal_cutoff_hz", DEFAULT_MODAL_CUTOFF_HZ, positive=True),
-        contact_stiffness=contact.number("stiffness", DEFAULT_CONTACT_STIFFNESS, positive=True),
-        contact_damping=contact.number("damping", 0.0, nonnegative=True))
+        **{f.name: f.read(sim) for f in SIMULATION.fields},
+        contact_stiffness=CONTACT.read(contact, "stiffness"),
+        contact_damping=CONTACT.read(contact, "damping"))
     return sc
 
 

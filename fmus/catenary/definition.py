@@ -34,9 +34,94 @@ import numpy as np
 
 from ..core.errors import ParameterError
 from ..core.params import Table, load_toml
-from .supports import Support, parse_support
+from ..core.schema import OPTIONAL, Field, Format, Section
+from .supports import SUPPORTS, Support, parse_support
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
+
+#: the declared fields of a catenary definition (the loader reads each through its
+#: declaration; the reference page of the format is generated from them)
+ROOT = Section("", [
+    Field("name", "string", default=OPTIONAL, doc="name (default: the file's name)"),
+    Field("description", "string", default="", doc="free text"),
+    Field("gravity", unit="m/s^2", default=9.81, nonnegative=True, doc="gravity"),
+], extra=("spans", "geometry", "contact_wire", "messenger_wire", "stitch_wire", "droppers",
+          "contact_support", "messenger_support", "damping"))
+SPANS = Section("spans", [
+    Field("count", "integer", default=OPTIONAL, minimum=1, doc="number of equal spans"),
+    Field("length", unit="m", default=OPTIONAL, positive=True, doc="their length"),
+    Field("lengths", "numbers", unit="m", default=OPTIONAL, positive=True,
+          doc="or the length of each span", rule="at least one span"),
+], doc="`count` and `length`, or `lengths`.")
+GEOMETRY = Section("geometry", [
+    Field("system_height", unit="m", positive=True, rule="> 0.1 m",
+          doc="messenger above contact wire at the supports"),
+    Field("contact_wire_height", unit="m", positive=True, doc="contact wire above the rail "
+          "at the supports"),
+    Field("stagger", "numbers", unit="m", default=[0.0], rule="at least one value, each "
+          "within +/- 1 m", doc="lateral offset of the contact wire at the supports; the "
+          "pattern repeats over the supports"),
+    Field("presag", unit="m", default=0.0, nonnegative=True, doc="contact-wire pre-sag at "
+          "mid-span (parabola between the first and last dropper of each span)"),
+    Field("element_size", unit="m", positive=True, rule="below half the shortest span",
+          doc="target length of the wire elements"),
+])
+WIRE = Section("contact_wire", [
+    Field("mass_per_length", unit="kg/m", positive=True, doc="mass per length"),
+    Field("EA", unit="N", positive=True, doc="axial stiffness"),
+    Field("EI", unit="N m^2", nonnegative=True, doc="bending stiffness"),
+    Field("tension", unit="N", positive=True, doc="horizontal tension at design"),
+], title="`[contact_wire]`, `[messenger_wire]`")
+STITCH = Section("stitch_wire", WIRE.fields + (
+    Field("length", unit="m", positive=True, rule="shorter than the shortest span",
+          doc="length, centred on every intermediate support"),), doc="Optional table.")
+DROPPERS = Section("droppers", [
+    Field("positions", "numbers", unit="m", rule="one list for every span or one list per "
+          "span; at least 2 per span, increasing, inside the span",
+          doc="dropper positions from the start of each span"),
+    Field("mass_per_length", unit="kg/m", nonnegative=True, doc="mass per length"),
+    Field("EA", unit="N", default=OPTIONAL, positive=True, rule="exactly one of EA and "
+          "axial_stiffness", doc="axial stiffness of the dropper wire"),
+    Field("axial_stiffness", unit="N/m", default=OPTIONAL, positive=True,
+          doc="or the stiffness of each dropper"),
+    Field("clamp_mass_contact", unit="kg", default=0.0, nonnegative=True,
+          doc="clamp mass on the contact wire"),
+    Field("clamp_mass_messenger", unit="kg", default=0.0, nonnegative=True,
+          doc="clamp mass on the messenger wire"),
+], doc="Droppers are tension-only: they go slack when compressed.")
+SUPPORT_TYPE = Section("contact_support", [
+    Field("type", "string", choices=tuple(SUPPORTS), rule='"steady_arm" holds the contact '
+          'wire only', doc="support of the wire at the intermediate masts"),
+], title="`[contact_support]`, `[messenger_support]`",
+    doc="The two line ends anchor both wires. The other fields depend on `type` "
+        "(sections below).")
+DAMPING = Section("damping", [
+    Field("ratios", "numbers", length=2, nonnegative=True, rule="each < 1",
+          doc="damping ratios z1, z2"),
+    Field("frequencies_hz", "numbers", unit="Hz", length=2, positive=True,
+          rule="different unless the ratios are equal", doc="at frequencies f1, f2"),
+], doc="Rayleigh damping C = a M + b K matching the two ratios, (3.1).")
+
+
+
+
+def _support_sections() -> tuple:
+    """One section per support type: its fields and its module's description."""
+    import sys
+
+    return tuple(Section(SUPPORT_TYPE.path, cls.FIELDS.fields,
+                         title=f'Support `type = "{name}"`',
+                         doc=" ".join((sys.modules[cls.__module__].__doc__ or "").split()))
+                 for name, cls in SUPPORTS.items())
+
+
+FORMAT = Format("catenary", "Catenary definition files", """\
+A catenary definition gives a line's data in SI units: heights from the rail, x along the
+track, y lateral, z up. It is read by `pantocosim static`, `pantocosim modes` and by a
+scenario's `catenary` field. The presets `en50318`, `benchmark55` and `ave64` live in
+`fmus/catenary/data/`; `en50318.toml` is a commented example.
+""", (ROOT, SPANS, GEOMETRY, WIRE, STITCH, DROPPERS, SUPPORT_TYPE, *_support_sections(),
+      DAMPING))
 
 
 @dataclass
@@ -118,44 +203,39 @@ class CatenaryDefinition:
 
 def _wire(t: Table, key: str, stitch: bool = False) -> Wire:
     w = t.sub(key)
-    allowed = ["mass_per_length", "EA", "EI", "tension"] + (["length"] if stitch else [])
-    w.unknown_keys(allowed)
-    return Wire(mass_per_length=w.number("mass_per_length", positive=True),
-                EA=w.number("EA", positive=True), EI=w.number("EI", nonnegative=True),
-                tension=w.number("tension", positive=True),
-                length=w.number("length", positive=True) if stitch else 0.0)
+    section = STITCH if stitch else WIRE
+    section.check_keys(w)
+    return Wire(**{f.name: f.read(w) for f in section.fields})
 
 
 def parse_definition(data: dict, source: str) -> CatenaryDefinition:
     """Validate a parsed TOML table; raise ParameterError naming the field and value."""
     t = Table(data, source)
-    t.unknown_keys(["name", "description", "gravity", "spans", "geometry", "contact_wire",
-                    "messenger_wire", "stitch_wire", "droppers", "contact_support",
-                    "messenger_support", "damping"])
-    name = t.string("name", Path(source).stem)
+    ROOT.check_keys(t)
+    name = ROOT.read(t, "name")
+    name = Path(source).stem if name is None else name
     sp = t.sub("spans")
-    sp.unknown_keys(["count", "length", "lengths"])
+    SPANS.check_keys(sp)
     if sp.has("lengths"):
-        lengths = sp.numbers("lengths", positive=True)
+        lengths = SPANS.read(sp, "lengths")
         if len(lengths) < 1:
             raise ParameterError("spans.lengths", lengths, "needs at least one span", source)
     else:
-        count = sp.integer("count", minimum=1)
-        lengths = [sp.number("length", positive=True)] * count
+        count = SPANS.read(sp, "count", required=True)
+        lengths = [SPANS.read(sp, "length", required=True)] * count
 
     geo = t.sub("geometry")
-    geo.unknown_keys(["system_height", "contact_wire_height", "stagger", "presag",
-                      "element_size"])
-    system_height = geo.number("system_height", positive=True)
-    cw_height = geo.number("contact_wire_height", positive=True)
-    stagger = geo.numbers("stagger", [0.0])
+    GEOMETRY.check_keys(geo)
+    system_height = GEOMETRY.read(geo, "system_height")
+    cw_height = GEOMETRY.read(geo, "contact_wire_height")
+    stagger = GEOMETRY.read(geo, "stagger")
     if not stagger:
         raise ParameterError("geometry.stagger", stagger, "needs at least one value", source)
     for i, s in enumerate(stagger):
         if abs(s) > 1.0:
             raise ParameterError(f"geometry.stagger[{i}]", s, "must be within +/- 1 m", source)
-    presag = geo.number("presag", 0.0, nonnegative=True)
-    element_size = geo.number("element_size", positive=True)
+    presag = GEOMETRY.read(geo, "presag")
+    element_size = GEOMETRY.read(geo, "element_size")
     if element_size > min(lengths) / 2:
         raise ParameterError("geometry.element_size", element_size,
                              "must be below half the shortest span", source)
@@ -168,8 +248,7 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
                              "must be shorter than the shortest span", source)
 
     dr = t.sub("droppers")
-    dr.unknown_keys(["positions", "mass_per_length", "EA", "axial_stiffness",
-                     "clamp_mass_contact", "clamp_mass_messenger"])
+    DROPPERS.check_keys(dr)
     raw_pos = dr._get("positions", None, True)
     if isinstance(raw_pos, list) and raw_pos and all(isinstance(p, list) for p in raw_pos):
         if len(raw_pos) != len(lengths):
@@ -188,23 +267,23 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
         if len(pos) < 2:
             raise ParameterError("droppers.positions", pos, "needs >= 2 droppers per span",
                                  source)
-    d_mass = dr.number("mass_per_length", nonnegative=True)
-    d_EA = dr.number("EA", positive=True) if dr.has("EA") else None
-    d_k = dr.number("axial_stiffness", positive=True) if dr.has("axial_stiffness") else None
+    d_mass = DROPPERS.read(dr, "mass_per_length")
+    d_EA = DROPPERS.read(dr, "EA")
+    d_k = DROPPERS.read(dr, "axial_stiffness")
     if (d_EA is None) == (d_k is None):
         raise ParameterError("droppers.EA", None,
                              "give exactly one of EA or axial_stiffness", source)
-    clamp_c = dr.number("clamp_mass_contact", 0.0, nonnegative=True)
-    clamp_m = dr.number("clamp_mass_messenger", 0.0, nonnegative=True)
+    clamp_c = DROPPERS.read(dr, "clamp_mass_contact")
+    clamp_m = DROPPERS.read(dr, "clamp_mass_messenger")
 
     contact_support = parse_support(t.sub("contact_support"), "contact")
     contact_support.check_line(stagger, len(lengths), source)
     messenger_support = parse_support(t.sub("messenger_support"), "messenger")
 
     dm = t.sub("damping")
-    dm.unknown_keys(["ratios", "frequencies_hz"])
-    ratios = dm.numbers("ratios", length=2, nonnegative=True)
-    freqs = dm.numbers("frequencies_hz", length=2, positive=True)
+    DAMPING.check_keys(dm)
+    ratios = DAMPING.read(dm, "ratios")
+    freqs = DAMPING.read(dm, "frequencies_hz")
     if freqs[0] == freqs[1] and ratios[0] != ratios[1]:
         raise ParameterError("damping.frequencies_hz", freqs, "must differ", source)
     for i, z in enumerate(ratios):
@@ -225,8 +304,7 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
         clamp_mass_messenger=clamp_m, contact_support=contact_support,
         messenger_support=messenger_support, damping_ratios=(ratios[0], ratios[1]),
         damping_frequencies_hz=(freqs[0], freqs[1]),
-        gravity=t.number("gravity", 9.81, nonnegative=True),
-        description=t.string("description", ""), raw=data)
+        gravity=ROOT.read(t, "gravity"), description=ROOT.read(t, "description"), raw=data)
 
 
 def _positions(dr: Table, value, name: str, source: str) -> list[float]:

@@ -20,6 +20,7 @@ import numpy as np
 from ..core.errors import ParameterError
 from ..core.model import SecondOrderModel
 from ..core.params import Table, check_number
+from ..core.schema import Field, Section
 
 
 @dataclass
@@ -57,20 +58,17 @@ class PantographOptions:
     ramp: Ramp | None = None
 
     def validate(self, source: str | None = None) -> None:
-        check_number("static_force", self.static_force, source=source, nonnegative=True)
-        check_number("aero_c1", self.aero_c1, source=source)
-        check_number("aero_c2", self.aero_c2, source=source)
-        check_number("speed_kmh", self.speed_kmh, source=source, nonnegative=True)
-        check_number("friction_force", self.friction_force, source=source, nonnegative=True)
-        check_number("friction_smoothing", self.friction_smoothing, source=source, positive=True)
+        for f in OPTIONS.fields:
+            if f.kind == "number":
+                check_number(f.name, getattr(self, f.name), source=source, positive=f.positive,
+                             nonnegative=f.nonnegative)
         if self.aero_force < 0.0 and self.mean_uplift <= 0.0:
             field = "aero_c2" if self.aero_c2 < 0.0 else "aero_c1"
             raise ParameterError(field, getattr(self, field), self.uplift_lost(), source)
         if self.ramp is not None:
-            check_number("ramp.start", self.ramp.start, source=source, nonnegative=True)
-            check_number("ramp.duration", self.ramp.duration, source=source, nonnegative=True)
-            check_number("ramp.lowered_height", self.ramp.lowered_height, source=source,
-                         positive=True)
+            for f in RAMP.fields:
+                check_number(f"ramp.{f.name}", getattr(self.ramp, f.name), source=source,
+                             positive=f.positive, nonnegative=f.nonnegative)
 
     def replaced(self, source: str | None = None, **changes) -> "PantographOptions":
         """A validated copy with some fields changed; unknown names raise ParameterError."""
@@ -114,24 +112,51 @@ class PantographOptions:
     @classmethod
     def from_table(cls, table: Table) -> "PantographOptions":
         """Read the ``[options]`` table of a parameter file (missing keys keep defaults)."""
-        known = {f.name for f in fields(cls)}
-        table.unknown_keys(known)
+        OPTIONS.check_keys(table)
         kwargs = {}
-        for f in fields(cls):
-            if f.name == "ramp" or not table.has(f.name):
-                continue
-            if f.type in ("bool",) or isinstance(f.default, bool):
-                kwargs[f.name] = table.boolean(f.name)
-            else:
-                kwargs[f.name] = table.number(f.name)
+        for f in OPTIONS.fields:   # read by kind; validate() checks the ranges
+            if table.has(f.name):
+                kwargs[f.name] = (table.boolean(f.name) if f.kind == "boolean"
+                                  else table.number(f.name))
         if table.has("ramp"):
             r = table.sub("ramp")
-            r.unknown_keys({"start", "duration", "lowered_height"})
-            kwargs["ramp"] = Ramp(start=r.number("start", 0.0), duration=r.number("duration"),
-                                  lowered_height=r.number("lowered_height", positive=True))
+            RAMP.check_keys(r)
+            kwargs["ramp"] = Ramp(start=r.number("start", RAMP["start"].default),
+                                  duration=r.number("duration"),
+                                  lowered_height=RAMP.read(r, "lowered_height", required=True))
         opts = cls(**kwargs)
         opts.validate(table.source)
         return opts
+
+
+#: the declared fields of a parameter file's ``[options]`` (defaults: the dataclass's)
+OPTIONS = Section("options", [
+    Field("static_force", unit="N", default=PantographOptions.static_force, nonnegative=True,
+          doc="static uplift: contact force at standstill"),
+    Field("aero_c1", unit="N h/km", default=PantographOptions.aero_c1,
+          doc="aerodynamic uplift F_aero = aero_c1 v + aero_c2 v^2, v in km/h",
+          rule="static_force + F_aero > 0 at the run's speed"),
+    Field("aero_c2", unit="N h^2/km^2", default=PantographOptions.aero_c2,
+          doc="(EN 50367 AC curve by default)"),
+    Field("speed_kmh", unit="km/h", default=PantographOptions.speed_kmh, nonnegative=True,
+          doc="train speed for the aerodynamic law (a scenario sets it)"),
+    Field("friction_force", unit="N", default=PantographOptions.friction_force,
+          nonnegative=True, doc="collector friction amplitude f_r, (2.15)-(2.17)"),
+    Field("friction_smoothing", unit="m/s", default=PantographOptions.friction_smoothing,
+          positive=True, doc="friction smoothing velocity k_t, (2.16)"),
+    Field("one_way_damper", "boolean", default=PantographOptions.one_way_damper,
+          doc="the damper acts only while the mechanism moves down"),
+], doc="Options common to every pantograph model; a scenario's `options` table overrides "
+       "them.", extra=("ramp",))
+#: ``[options.ramp]``: ramp raising instead of a static start
+RAMP = Section("options.ramp", [
+    Field("start", unit="s", default=Ramp.start, nonnegative=True, doc="start of the raising"),
+    Field("duration", unit="s", default=Ramp.duration, nonnegative=True,
+          doc="time to reach the full uplift"),
+    Field("lowered_height", unit="m", default=Ramp.lowered_height, positive=True,
+          doc="height of the lowered collector"),
+], doc="Optional: ramp raising (thesis 3.3.1); the actuation grows linearly from its value at "
+       "the lowered height. In a file, `duration` and `lowered_height` are required.")
 
 
 def smooth_friction(v_rel: float, f_r: float, k_t: float) -> tuple[float, float]:

@@ -25,6 +25,7 @@ import numpy as np
 from ..core.errors import ParameterError
 from ..core.model import Evaluation
 from ..core.params import Table, check_number, load_toml
+from ..core.schema import Field, Section
 from . import dsa380_kinematics as kin
 from .base import PantographOptions, TorqueActuatedPantograph, reject_nonfinite_force
 
@@ -35,7 +36,6 @@ PRESET_FILE = DATA_DIR / "dsa380-rigid.toml"
 MODE_LABELS = {"theta": "mechanism", "x10": "collector horizontal",
                "y10": "collector vertical", "theta7": "collector pitch"}
 
-_BAR_KEYS = ("L", "m", "I", "LG", "thetaG")
 
 
 @dataclass
@@ -160,12 +160,65 @@ class Dsa380Parameters:
             raise ParameterError("frame.x1", self.p1, "points 1 and 2 must differ", src)
 
 
+#: the declared fields of a rigid DSA-380 parameter file (figures 2.3-2.5 of the thesis
+#: name the points and bars)
+ROOT = Section("", [
+    Field("name", "string", default="dsa380-rigid", doc="model name"),
+    Field("description", "string", default="", doc="free text"),
+], extra=("frame", "bars", "links", "springs", "damper", "options", "variant", "calibration"),
+    doc="`calibration` is a free table the calibration script writes (not read).")
+FRAME = Section("frame", [
+    Field("base_height", unit="m", nonnegative=True, doc="height of the roof frame's origin "
+          "(point 2) above the rail"),
+    Field("x1", unit="m", doc="point 1 (lower-arm pivot) relative to point 2, x"),
+    Field("y1", unit="m", doc="and y", rule="points 1 and 2 differ"),
+    Field("theta_min", unit="rad", doc="lower-arm stop, low",
+          rule="the loops (A.1) close and point 5 moves monotonically over the range"),
+    Field("theta_max", unit="rad", doc="lower-arm stop, high"),
+    Field("working_height", unit="m", positive=True, doc="contact height of the static start"),
+    Field("g", unit="m/s^2", default=9.81, nonnegative=True, doc="gravity"),
+])
+BAR = Section("bars.barN", [
+    Field("L", unit="m", positive=True, doc="length"),
+    Field("m", unit="kg", positive=True, doc="mass"),
+    Field("I", unit="kg m^2", nonnegative=True, doc="inertia about the centre of gravity"),
+    Field("LG", unit="m", default=0.0, nonnegative=True, doc="centre of gravity: distance "
+          "from the bar's reference end"),
+    Field("thetaG", unit="rad", default=0.0, doc="and angle (Fig. 2.5)"),
+], title="`[bars.bar1]` ... `[bars.bar7]`", extra=("tube",),
+    doc="Seven rigid bars; `tube` (outer and inner diameter) is read by the flexible model.")
+LINKS = Section("links", [
+    Field("theta34", unit="rad", doc="angle between bars 3 and 4 (rigid joint at point 4)"),
+    Field("r", unit="m", positive=True, doc="|1-6|: point 6 on bar 1 (head-levelling rod "
+          "pivot)"),
+    Field("theta_r", unit="rad", doc="angle between bar 1 and segment 1-6"),
+    Field("lower_branch", default=1.0, doc="assembly mode (+1 or -1) of loop fixed-1-2-3"),
+    Field("upper_branch", default=1.0, doc="assembly mode (+1 or -1) of loop 1-4-5-6"),
+])
+SPRINGS = Section("springs", [
+    Field("k_r", unit="N m/rad", nonnegative=True, doc="torsional spring at joint 1"),
+    Field("theta_r0", unit="rad", doc="its unloaded angle"),
+    Field("k_l", unit="N/m", positive=True, doc="each collector spring, point 5 to the "
+          "collector ends 11/12"),
+    Field("l0", unit="m", nonnegative=True, doc="their unloaded length"),
+])
+DAMPER = Section("damper", [
+    Field("c", unit="N s/m", nonnegative=True, doc="damping coefficient"),
+    Field("L1p", unit="m", positive=True, doc="lever 1-1p on bar 1"),
+    Field("theta_1p", unit="rad", doc="angle between bar 1 and the lever"),
+    Field("x13", unit="m", doc="fixed damper end 13 relative to point 2, x"),
+    Field("y13", unit="m", doc="and y"),
+])
+VARIANT = Section("variant", [
+    Field("pitch_lock", "boolean", default=False, doc="lock the collector pitch (A.37): "
+          "three coordinates instead of four"),
+], doc="Optional table.")
+
+
 def _read_bar(t: Table, name: str) -> Bar:
     s = t.sub(name)
-    s.unknown_keys(set(_BAR_KEYS) | {"tube"})
-    return Bar(L=s.number("L", positive=True), m=s.number("m", positive=True),
-               I=s.number("I", nonnegative=True), LG=s.number("LG", 0.0, nonnegative=True),
-               thetaG=s.number("thetaG", 0.0))
+    BAR.check_keys(s)
+    return Bar(**{f.name: f.read(s) for f in BAR.fields})
 
 
 def read_parameters(path: str | Path) -> tuple[Dsa380Parameters, Table, dict]:
@@ -173,38 +226,37 @@ def read_parameters(path: str | Path) -> tuple[Dsa380Parameters, Table, dict]:
     source = str(path)
     data = load_toml(path)
     root = Table(data, source)
-    root.unknown_keys({"name", "description", "frame", "bars", "links", "springs", "damper",
-                       "options", "variant", "calibration"})
+    ROOT.check_keys(root)
     fr = root.sub("frame")
-    fr.unknown_keys({"base_height", "x1", "y1", "theta_min", "theta_max", "working_height", "g"})
+    FRAME.check_keys(fr)
     bars_t = root.sub("bars")
     bars_t.unknown_keys({f"bar{i}" for i in range(1, 8)})
     bars = [_read_bar(bars_t, f"bar{i}") for i in range(1, 8)]
     ln = root.sub("links")
-    ln.unknown_keys({"theta34", "r", "theta_r", "lower_branch", "upper_branch"})
+    LINKS.check_keys(ln)
     sp = root.sub("springs")
-    sp.unknown_keys({"k_r", "theta_r0", "k_l", "l0"})
+    SPRINGS.check_keys(sp)
     dp = root.sub("damper")
-    dp.unknown_keys({"c", "L1p", "theta_1p", "x13", "y13"})
+    DAMPER.check_keys(dp)
     params = Dsa380Parameters(
-        base_height=fr.number("base_height", nonnegative=True),
-        p1=(fr.number("x1"), fr.number("y1")),
-        p13=(dp.number("x13"), dp.number("y13")),
+        base_height=FRAME.read(fr, "base_height"),
+        p1=(FRAME.read(fr, "x1"), FRAME.read(fr, "y1")),
+        p13=(DAMPER.read(dp, "x13"), DAMPER.read(dp, "y13")),
         bars=bars,
-        theta34=ln.number("theta34"), r=ln.number("r", positive=True),
-        theta_r=ln.number("theta_r"),
-        L1p=dp.number("L1p", positive=True), theta_1p=dp.number("theta_1p"),
-        lower_branch=ln.number("lower_branch", 1.0), upper_branch=ln.number("upper_branch", 1.0),
-        k_r=sp.number("k_r", nonnegative=True), theta_r0=sp.number("theta_r0"),
-        k_l=sp.number("k_l", positive=True), l0=sp.number("l0", nonnegative=True),
-        c=dp.number("c", nonnegative=True), g=fr.number("g", 9.81, nonnegative=True),
-        theta_min=fr.number("theta_min"), theta_max=fr.number("theta_max"),
-        working_height=fr.number("working_height", positive=True),
+        theta34=LINKS.read(ln, "theta34"), r=LINKS.read(ln, "r"),
+        theta_r=LINKS.read(ln, "theta_r"),
+        L1p=DAMPER.read(dp, "L1p"), theta_1p=DAMPER.read(dp, "theta_1p"),
+        lower_branch=LINKS.read(ln, "lower_branch"), upper_branch=LINKS.read(ln, "upper_branch"),
+        k_r=SPRINGS.read(sp, "k_r"), theta_r0=SPRINGS.read(sp, "theta_r0"),
+        k_l=SPRINGS.read(sp, "k_l"), l0=SPRINGS.read(sp, "l0"),
+        c=DAMPER.read(dp, "c"), g=FRAME.read(fr, "g"),
+        theta_min=FRAME.read(fr, "theta_min"), theta_max=FRAME.read(fr, "theta_max"),
+        working_height=FRAME.read(fr, "working_height"),
         source=source)
     params.validate()
     variant = root.sub("variant", required=False)
-    variant.unknown_keys({"pitch_lock"})
-    flags = {"pitch_lock": variant.boolean("pitch_lock", False)}
+    VARIANT.check_keys(variant)
+    flags = {"pitch_lock": VARIANT.read(variant, "pitch_lock")}
     return params, root, flags
 
 
@@ -469,5 +521,5 @@ def load_dsa380(path: str | Path | None = None, options: PantographOptions | Non
     if options is None:
         options = PantographOptions.from_table(root.sub("options", required=False))
     lock = flags["pitch_lock"] if pitch_lock is None else bool(pitch_lock)
-    name = root.string("name", "dsa380-rigid")
+    name = ROOT.read(root, "name")
     return Dsa380Model(params, options, pitch_lock=lock, name=name)

@@ -33,7 +33,7 @@ f_rest = dU/dq + dV_springs/dq - Q_gravity + damper + friction - M_act dphi1/dq
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +43,7 @@ from numba import njit
 from ..core.errors import ParameterError
 from ..core.model import Evaluation
 from ..core.params import Table, check_number, load_toml
+from ..core.schema import OPTIONAL, Field, Section
 from . import beam_ancf as beam
 from .base import PantographOptions, TorqueActuatedPantograph, reject_nonfinite_force
 from .dsa380 import Dsa380Model, read_parameters
@@ -129,36 +130,62 @@ class FlexibleParameters:
                                      f"below the collector tube's own {tube:.6g} kg m2", src)
 
 
+#: the declared fields of a flexible DSA-380 parameter file
+ROOT = Section("", [
+    Field("name", "string", default="dsa380-flexible", doc="model name"),
+    Field("description", "string", default="", doc="free text"),
+    Field("rigid_model", "file", doc="rigid DSA-380 parameter file giving the geometry, "
+          "relative to this file"),
+], extra=("frame", "material", "sections", "mesh", "options"))
+FRAME = Section("frame", [
+    Field("working_height", unit="m", default=OPTIONAL, positive=True,
+          doc="contact height of the static start (default: the rigid model's)"),
+], doc="Optional table.")
+MATERIAL = Section("material", [
+    Field("E", unit="Pa", positive=True, doc="Young's modulus of the tubes"),
+    Field("rho", unit="kg/m^3", positive=True, doc="density of the tubes"),
+    Field("link_density_ratio", default=1e-3, positive=True,
+          doc="density of the joint links relative to rho"),
+    Field("mass_tolerance", default=0.02, positive=True,
+          doc="accepted relative difference between a tube's mass and the rigid bar's"),
+])
+SECTIONS = Section("sections", [
+    Field("barN", "numbers", unit="m", length=2, nonnegative=True,
+          doc="[r_int, r_ext] of bar N's tube, N = 1 ... 9 (thesis Table 2.1)"),
+])
+MESH = Section("mesh", [
+    Field("barN", "integer", minimum=1, doc="beam elements of bar N, N = 1 ... 9"),
+])
+
+
 def read_flexible(path: str | Path):
     """Read and validate a flexible DSA-380 file; returns (FlexibleParameters, root Table)."""
     path = Path(path)
     source = str(path)
     root = Table(load_toml(path), source)
-    root.unknown_keys({"name", "description", "rigid_model", "frame", "material", "sections",
-                       "mesh", "options"})
-    rel = root.string("rigid_model")
+    ROOT.check_keys(root)
+    rel = ROOT.read(root, "rigid_model")
     rigid_path = Path(rel) if Path(rel).is_absolute() else path.parent / rel
     if not rigid_path.exists():
         raise ParameterError("rigid_model", rel, "no such parameter file", source)
     rigid, _, flags = read_parameters(rigid_path)
     fr = root.sub("frame", required=False)
-    fr.unknown_keys({"working_height"})
+    FRAME.check_keys(fr)
     if fr.has("working_height"):
-        rigid.working_height = fr.number("working_height", positive=True)
+        rigid.working_height = FRAME.read(fr, "working_height")
     mat = root.sub("material")
-    mat.unknown_keys({"E", "rho", "link_density_ratio", "mass_tolerance"})
+    MATERIAL.check_keys(mat)
     sec = root.sub("sections")
     sec.unknown_keys({f"bar{i}" for i in range(1, N_BARS + 1)})
     mesh = root.sub("mesh")
     mesh.unknown_keys({f"bar{i}" for i in range(1, N_BARS + 1)})
     params = FlexibleParameters(
         rigid=rigid,
-        E=mat.number("E", positive=True), rho=mat.number("rho", positive=True),
-        link_density_ratio=mat.number("link_density_ratio", 1e-3, positive=True),
-        mass_tolerance=mat.number("mass_tolerance", 0.02, positive=True),
-        sections=tuple(tuple(sec.numbers(f"bar{i}", length=2, nonnegative=True))
+        **{f.name: f.read(mat) for f in MATERIAL.fields},
+        sections=tuple(tuple(replace(SECTIONS["barN"], name=f"bar{i}").read(sec))
                        for i in range(1, N_BARS + 1)),
-        mesh=tuple(mesh.integer(f"bar{i}", minimum=1) for i in range(1, N_BARS + 1)),
+        mesh=tuple(replace(MESH["barN"], name=f"bar{i}").read(mesh)
+                   for i in range(1, N_BARS + 1)),
         source=source)
     params.validate()
     return params, root
@@ -817,4 +844,4 @@ def load_dsa380_flexible(path: str | Path | None = None,
         setattr(params, k, v)
     if options is None:
         options = PantographOptions.from_table(root.sub("options", required=False))
-    return Dsa380FlexibleModel(params, options, name=root.string("name", "dsa380-flexible"))
+    return Dsa380FlexibleModel(params, options, name=ROOT.read(root, "name"))

@@ -11,7 +11,7 @@ damper, ramp raising that weights the uplift and the reference height (thesis 3.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +19,7 @@ import numpy as np
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, LinearForm
 from ..core.params import Table, load_toml
+from ..core.schema import OPTIONAL, Field, Section
 from .base import PantographModel, PantographOptions, smooth_friction
 
 
@@ -219,29 +220,51 @@ def _chain_matrix(k: np.ndarray) -> np.ndarray:
     return K
 
 
+#: the declared fields of a lumped-mass parameter file
+ROOT = Section("", [
+    Field("name", "string", default=OPTIONAL, doc="model name (default: the file's name)"),
+    Field("description", "string", default="", doc="free text"),
+], extra=("chain", "options"))
+CHAIN = Section("chain", [
+    Field("masses", "numbers", unit="kg", positive=True, doc="masses from the head (mass 1, "
+          "in contact) down to the frame"),
+    Field("stiffness", "numbers", unit="N/m", nonnegative=True, rule="one per mass",
+          doc="spring k_i between mass i and mass i+1 (the last one to the roof)"),
+    Field("damping", "numbers", unit="N s/m", nonnegative=True, rule="one per mass",
+          doc="damper c_i beside spring k_i"),
+    Field("names", "any", default=OPTIONAL, rule="one string per mass",
+          doc='labels of the masses (default "mass 1", ...)'),
+    Field("uplift_mass", "integer", default=OPTIONAL, minimum=1, rule="at most the number "
+          "of masses", doc="mass (1 = head) that carries the uplift force (default: the "
+          "last)"),
+    Field("working_height", unit="m", positive=True, doc="contact height of the static "
+          "start"),
+], doc="A chain of masses joined by springs and dampers; the first mass is the head.")
+
+
 def read_chain(path: str | Path) -> tuple[ChainParameters, Table]:
     """Read and validate a lumped-mass parameter file; returns (ChainParameters, root Table)."""
     source = str(path)
     data = load_toml(path)
     root = Table(data, source)
-    root.unknown_keys({"name", "description", "chain", "options"})
+    ROOT.check_keys(root)
     chain = root.sub("chain")
-    chain.unknown_keys({"names", "masses", "stiffness", "damping", "uplift_mass",
-                        "working_height"})
-    masses = chain.numbers("masses", positive=True)
+    CHAIN.check_keys(chain)
+    masses = CHAIN.read(chain, "masses")
     n = len(masses)
     names = chain._get("names", [f"mass {i + 1}" for i in range(n)], required=False)
     if not isinstance(names, list) or len(names) != n or not all(isinstance(s, str) for s in names):
         raise ParameterError("chain.names", names, f"must be {n} strings", source)
-    uplift = chain.integer("uplift_mass", n, minimum=1)
+    uplift = CHAIN.read(chain, "uplift_mass")
+    uplift = n if uplift is None else uplift
     if uplift > n:
         raise ParameterError("chain.uplift_mass", uplift, f"must be between 1 and {n}", source)
     params = ChainParameters(
         masses=np.array(masses),
-        stiffness=np.array(chain.numbers("stiffness", length=n, nonnegative=True)),
-        damping=np.array(chain.numbers("damping", length=n, nonnegative=True)),
+        stiffness=np.array(replace(CHAIN["stiffness"], length=n).read(chain)),
+        damping=np.array(replace(CHAIN["damping"], length=n).read(chain)),
         names=tuple(names), uplift_mass=uplift - 1,
-        working_height=chain.number("working_height", positive=True))
+        working_height=CHAIN.read(chain, "working_height"))
     params.validate(source)
     return params, root
 
@@ -252,5 +275,6 @@ def load_chain(path: str | Path, options: PantographOptions | None = None
     params, root = read_chain(path)
     if options is None:
         options = PantographOptions.from_table(root.sub("options", required=False))
-    name = root.string("name", Path(path).stem)
+    name = ROOT.read(root, "name")
+    name = Path(path).stem if name is None else name
     return LumpedPantograph(params, options, name=name)

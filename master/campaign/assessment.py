@@ -15,25 +15,54 @@ from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.params import Table, load_toml
+from pantocosim.core.schema import OPTIONAL, Field, Format, Section
 
 CRITERIA_DIR = Path(__file__).resolve().parent
 STATISTICS = ("mean_n", "std_n", "stat_max_n", "stat_min_n", "max_n", "min_n",
               "loss_of_contact_percent", "max_uplift_at_support_m")
 
 
+#: the fields every criterion has (``[[criteria]]``)
+CRITERION = Section("criteria", [
+    Field("name", "string", doc="column name in the results table",
+          rule="unique, not the name of a statistic"),
+    Field("kind", "string", choices=("band", "max", "min", "ratio_max", "report"),
+          doc="what is checked (the fields of each kind below)"),
+    Field("title", "string", default=OPTIONAL, doc="label in the report (default: name)"),
+    Field("quantity", "string", choices=STATISTICS, doc="the statistic checked"),
+    Field("source", "string", doc="where the criterion comes from (clause of the standard)"),
+    Field("verified", "boolean", doc="whether the value was checked against the standard's "
+          "text"),
+    Field("min_speed_kmh", unit="km/h", default=OPTIONAL, nonnegative=True,
+          doc="applies from this speed on"),
+], array=True, doc="One `[[criteria]]` table per check (at least one).")
+#: a ``band`` criterion's ``lower`` and ``upper`` tables
+POLYNOMIAL = Section("criteria.lower", [
+    Field("c0", unit="N", default=0.0, doc="constant term"),
+    Field("c1", unit="N h/km", default=0.0, doc="times v [km/h]"),
+    Field("c2", unit="N h^2/km^2", default=0.0, doc="times v^2"),
+], title="`lower`, `upper` of a band", doc="A polynomial of the speed: "
+         "c0 + c1 v + c2 v^2, v in km/h.")
+
+
 class Criterion:
     """A check of one statistic; subclasses read their own fields of the table."""
 
     def __init__(self, t: Table):
-        self.name = t.string("name")
-        self.title = t.string("title", self.name)
-        self.quantity = t.string("quantity", choices=STATISTICS)
-        self.source = t.string("source")
-        self.verified = t.boolean("verified")
-        self.min_speed_kmh = (t.number("min_speed_kmh", nonnegative=True)
-                              if t.has("min_speed_kmh") else None)
+        self.name = CRITERION.read(t, "name")
+        title = CRITERION.read(t, "title")
+        self.title = self.name if title is None else title
+        self.quantity = CRITERION.read(t, "quantity")
+        self.source = CRITERION.read(t, "source")
+        self.verified = CRITERION.read(t, "verified")
+        self.min_speed_kmh = CRITERION.read(t, "min_speed_kmh")
 
-    fields: tuple = ()
+    #: the kind's own fields (a Section)
+    FIELDS = Section("criteria", [])
+
+    @classmethod
+    def field_names(cls) -> set:
+        return set(cls.FIELDS.names)
     checks = True
 
     def evaluate(self, stats: dict, speed_kmh: float):
@@ -59,12 +88,16 @@ class Polynomial:
 
     @classmethod
     def from_table(cls, t: Table) -> "Polynomial":
-        t.unknown_keys({"c0", "c1", "c2"})
-        return cls(t.number("c0", 0.0), t.number("c1", 0.0), t.number("c2", 0.0))
+        POLYNOMIAL.check_keys(t)
+        return cls(*(f.read(t) for f in POLYNOMIAL.fields))
 
 
 class Band(Criterion):
-    fields = ("lower", "upper")
+    """`quantity` between two polynomials of the speed."""
+
+    FIELDS = Section("criteria", [
+        Field("lower", "table", doc="lower bound (polynomial)"),
+        Field("upper", "table", doc="upper bound (polynomial)")])
 
     def __init__(self, t):
         super().__init__(t)
@@ -76,29 +109,39 @@ class Band(Criterion):
 
 
 class Max(Criterion):
-    fields = ("limit", "strict")
+    """`quantity` at most `limit`."""
+
+    FIELDS = Section("criteria", [
+        Field("limit", doc="the limit, in the quantity's unit"),
+        Field("strict", "boolean", default=False, doc="the limit itself fails")])
 
     def __init__(self, t):
         super().__init__(t)
-        self.limit = t.number("limit")
-        self.strict = t.boolean("strict", False)
+        self.limit = self.FIELDS.read(t, "limit")
+        self.strict = self.FIELDS.read(t, "strict")
 
     def check(self, x, stats, v):
         return x < self.limit if self.strict else x <= self.limit
 
 
 class Min(Max):
+    """`quantity` at least `limit`."""
+
     def check(self, x, stats, v):
         return x > self.limit if self.strict else x >= self.limit
 
 
 class RatioMax(Criterion):
-    fields = ("reference", "factor")
+    """`quantity` at most `factor` times the statistic `reference`."""
+
+    FIELDS = Section("criteria", [
+        Field("reference", "string", choices=STATISTICS, doc="the reference statistic"),
+        Field("factor", positive=True, doc="the factor")])
 
     def __init__(self, t):
         super().__init__(t)
-        self.reference = t.string("reference", choices=STATISTICS)
-        self.factor = t.number("factor", positive=True)
+        self.reference = self.FIELDS.read(t, "reference")
+        self.factor = self.FIELDS.read(t, "factor")
 
     def check(self, x, stats, v):
         ref = stats.get(self.reference)
@@ -106,19 +149,35 @@ class RatioMax(Criterion):
 
 
 class Report(Criterion):
-    fields = ("factor",)
+    """No check: `factor` times `quantity` is reported as a column."""
+
+    FIELDS = Section("criteria", [
+        Field("factor", default=1.0, positive=True, doc="scale of the reported value")])
     checks = False
 
     def __init__(self, t):
         super().__init__(t)
-        self.factor = t.number("factor", 1.0, positive=True)
+        self.factor = self.FIELDS.read(t, "factor")
 
     def check(self, x, stats, v):
         return self.factor * x
 
 
 KINDS = {"band": Band, "max": Max, "min": Min, "ratio_max": RatioMax, "report": Report}
-COMMON = {"name", "title", "kind", "quantity", "source", "verified", "min_speed_kmh"}
+assert tuple(KINDS) == CRITERION["kind"].choices
+ROOT = Section("", [
+    Field("name", "string", default=OPTIONAL, doc="name (default: the file's name)"),
+    Field("description", "string", default="", doc="free text"),
+], extra=("criteria",))
+FORMAT = Format("criteria", "Criteria files", """\
+A criteria file lists the checks of the contact-force statistics that a campaign assesses
+(`criteria` of a sweep file; `pantocosim report --criteria FILE`). The preset `en50367`
+(`master/campaign/en50367.toml`, commented) holds the EN 50367 / TSI checks with their sources
+and whether each was verified against the standard's text. A case passes when every check
+that applies at its speed passes.
+""", (ROOT, CRITERION, *(Section("criteria", cls.FIELDS.fields, title=f'`kind = "{kind}"`',
+                                  doc=cls.__doc__ or "") for kind, cls in KINDS.items()),
+      POLYNOMIAL))
 
 
 @dataclass
@@ -147,23 +206,25 @@ def load_criteria(name_or_path: str = "en50367", base: Path | None = None) -> Cr
     path = criteria_path(name_or_path, base)
     source = str(path)
     t = Table(load_toml(path), source)
-    t.unknown_keys({"name", "description", "criteria"})
+    ROOT.check_keys(t)
     raw = t._get("criteria", None, True)
     if not isinstance(raw, list) or not raw:
         raise ParameterError("criteria", raw, "must be a non-empty array of tables", source)
     items, names = [], set()
     for i, entry in enumerate(raw):
         ct = Table(entry, source, f"criteria[{i}]")
-        kind = ct.string("kind", choices=KINDS)
+        kind = CRITERION.read(ct, "kind")
         cls = KINDS[kind]
-        ct.unknown_keys(COMMON | set(cls.fields))
+        ct.unknown_keys(set(CRITERION.names) | cls.field_names())
         c = cls(ct)
         if c.name in names or c.name in STATISTICS:
             raise ParameterError(f"criteria[{i}].name", c.name, "must be unique and not the "
                                  "name of a statistic", source)
         names.add(c.name)
         items.append(c)
-    return Criteria(t.string("name", path.stem), t.string("description", ""), source, items)
+    name = ROOT.read(t, "name")
+    return Criteria(path.stem if name is None else name, ROOT.read(t, "description"), source,
+                    items)
 
 
 def assess(criteria: Criteria, stats: dict | None, speed_kmh: float) -> dict:

@@ -39,13 +39,48 @@ from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.params import Table, load_toml
+from pantocosim.core.schema import OPTIONAL, Field, Format, Section
+from pantocosim.master.campaign import axes as _axes_module
 from pantocosim.master.campaign.axes import COUPLINGS, CaseInputs, make_axis
+from pantocosim.master.coupling import ACCELERATORS
 
 SWEEP_DIR = Path(__file__).resolve().parent.parent / "sweeps"
 COMBINE = ("product", "zip")
 DEFAULT_CRITERIA = "en50367"
-RUN_DEFAULTS = {"coupling": "monolithic", "accelerator": "iqn-imvj", "force": False,
-                "plots": False}
+
+#: the declared fields of a sweep file (the loader reads each through its declaration; the
+#: reference page of the format is generated from them)
+ROOT = Section("", [
+    Field("name", "string", default=OPTIONAL, doc="name of the sweep (default: the file's name without "
+          "-sweep)"),
+    Field("description", "string", default="", doc="free text"),
+    Field("scenario", "file", doc="base scenario: preset or TOML file (relative to this "
+          "file)"),
+    Field("combine", "string", default="product", choices=COMBINE,
+          doc='"product": every combination of the axes; "zip": the i-th value of each axis',
+          rule='"zip" needs axes of one length'),
+    Field("criteria", "file", default=DEFAULT_CRITERIA, doc="assessment criteria: preset or "
+          "TOML file (see the criteria format)"),
+], extra=("run", "set", "axes"))
+RUN = Section("run", [
+    Field("coupling", "string", default="monolithic", choices=tuple(COUPLINGS),
+          doc="how each case runs (may also be an axis)"),
+    Field("accelerator", "string", default="iqn-imvj", choices=tuple(ACCELERATORS),
+          doc="the implicit coupling's interface acceleration"),
+    Field("force", "boolean", default=False, doc="run above 0.7 of the wave speed"),
+    Field("plots", "boolean", default=False, doc="write each case's PNG plots"),
+], doc="Optional table: how each case runs.")
+RUN_DEFAULTS = {f.name: f.default for f in RUN.fields}
+SET = Section("set", [], doc="Optional table: fixed changes to the base scenario, named as "
+              "axes are (`catenary_model = \"linear\"`).")
+AXES = Section("axes", [], doc="One array of values per axis (`speed_kmh = [200.0, 250.0]`); "
+               "every case is validated as its own scenario and catenary would be. "
+               + "\n\n".join(_axes_module.__doc__.split("\n\n")[1:3]))
+FORMAT = Format("sweep", "Sweep files", """\
+A sweep file describes a campaign: a base scenario, the axes to vary and the criteria to
+assess; `pantocosim sweep FILE` runs it and `pantocosim report FOLDER` summarises it. Presets
+live in `master/sweeps/`.
+""", (ROOT, RUN, SET, AXES))
 
 
 @dataclass
@@ -98,12 +133,11 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
     path = sweep_path(name_or_path)
     source = str(path)
     t = Table(load_toml(path), source)
-    t.unknown_keys({"name", "description", "scenario", "combine", "criteria", "run", "set",
-                    "axes"})
-    base_path = _base_scenario(t.string("scenario"), path, source)
+    ROOT.check_keys(t)
+    base_path = _base_scenario(ROOT.read(t, "scenario"), path, source)
     run = _run_options(t.sub("run", required=False))
-    combine = t.string("combine", "product", choices=COMBINE)
-    criteria = t.string("criteria", DEFAULT_CRITERIA)
+    combine = ROOT.read(t, "combine")
+    criteria = ROOT.read(t, "criteria")
     from pantocosim.master.campaign.assessment import load_criteria
 
     try:
@@ -131,8 +165,9 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
         seen.add(case.key)
         case.index = len(cases)
         cases.append(case)
-    return Sweep(name=t.string("name", path.stem.replace("-sweep", "")),
-                 description=t.string("description", ""), source=source,
+    name = ROOT.read(t, "name")
+    return Sweep(name=path.stem.replace("-sweep", "") if name is None else name,
+                 description=ROOT.read(t, "description"), source=source,
                  scenario_path=base_path, combine=combine, axes=axes, settings=settings,
                  run=run, criteria=criteria, cases=cases, duplicates=dups)
 
@@ -149,14 +184,8 @@ def _base_scenario(name: str, sweep_file: Path, source: str) -> Path:
 
 
 def _run_options(t: Table) -> dict:
-    from pantocosim.master.coupling import ACCELERATORS
-
-    t.unknown_keys(RUN_DEFAULTS)
-    return {"coupling": t.string("coupling", RUN_DEFAULTS["coupling"], choices=COUPLINGS),
-            "accelerator": t.string("accelerator", RUN_DEFAULTS["accelerator"],
-                                    choices=ACCELERATORS),
-            "force": t.boolean("force", RUN_DEFAULTS["force"]),
-            "plots": t.boolean("plots", RUN_DEFAULTS["plots"])}
+    RUN.check_keys(t)
+    return {f.name: f.read(t) for f in RUN.fields}
 
 
 def _flatten(table: dict, prefix: str = "") -> list:

@@ -61,6 +61,9 @@ class Support:
     wires: ClassVar[tuple[str, ...]] = ("contact", "messenger")
     #: nodes of its own per mast (3 position DOFs each, numbered after the wire nodes)
     n_own_nodes: ClassVar[int] = 0
+    #: the fields of its table besides ``type`` (a :class:`~pantocosim.core.schema.Section`,
+    #: read by ``from_table`` and listed in the catenary format's reference)
+    FIELDS: ClassVar[Any] = None
 
     @classmethod
     def from_table(cls, table: Table, wire: str) -> "Support":

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ...core.schema import Section
 from . import Site, Support, register
 
 
@@ -12,9 +13,11 @@ from . import Site, Support, register
 @dataclass(frozen=True)
 class FixedSupport(Support):
 
+    FIELDS = Section("", [], extra=("type",))
+
     @classmethod
     def from_table(cls, table, wire):
-        table.unknown_keys(["type"])
+        cls.FIELDS.check_keys(table)
         return cls()
 
     def attach(self, site: Site, parts) -> None:

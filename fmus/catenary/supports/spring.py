@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ...core.schema import Field, Section
 from ..parts import Anchor
 from . import Site, Support, register
 
@@ -17,11 +18,16 @@ class SpringSupport(Support):
     stiffness: float
     mass: float = 0.0
 
+    FIELDS = Section("", [
+        Field("stiffness", unit="N/m", positive=True, doc="vertical spring under the wire"),
+        Field("mass", unit="kg", default=0.0, nonnegative=True,
+              doc="point mass on the wire (steady arm, cantilever)"),
+    ], extra=("type",))
+
     @classmethod
     def from_table(cls, table, wire):
-        table.unknown_keys(["type", "stiffness", "mass"])
-        return cls(stiffness=table.number("stiffness", positive=True),
-                   mass=table.number("mass", 0.0, nonnegative=True))
+        cls.FIELDS.check_keys(table)
+        return cls(**{f.name: f.read(table) for f in cls.FIELDS.fields})
 
     def attach(self, site: Site, parts) -> None:
         site.structure.fixed[site.held(vertical=False)] = True

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.errors import ParameterError
+from ...core.schema import Field, Section
 from ..parts import Anchor
 from . import Site, Support, register
 
@@ -26,12 +27,17 @@ class SteadyArm(Support):
     wires = ("contact",)
     n_own_nodes = 1          # the pin at the mast
 
+    FIELDS = Section("", [
+        Field("length", unit="m", positive=True, doc="arm from the pin at the mast to the "
+              "contact wire"),
+        Field("mass", unit="kg", nonnegative=True, doc="mass of the arm"),
+        Field("EA", unit="N", default=DEFAULT_EA, positive=True, doc="axial stiffness"),
+    ], extra=("type",))
+
     @classmethod
     def from_table(cls, table, wire):
-        table.unknown_keys(["type", "length", "mass", "EA"])
-        return cls(length=table.number("length", positive=True),
-                   mass=table.number("mass", nonnegative=True),
-                   EA=table.number("EA", DEFAULT_EA, positive=True))
+        cls.FIELDS.check_keys(table)
+        return cls(**{f.name: f.read(table) for f in cls.FIELDS.fields})
 
     def check_line(self, stagger, n_spans, source):
         for i in range(1, n_spans):
