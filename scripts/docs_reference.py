@@ -1,0 +1,207 @@
+"""The reference pages of the documentation, generated from the code.
+
+- ``reference/cli.md``: every ``pantocosim`` command from its argument parser;
+- ``reference/scenario.md``, ``catenary.md``, ``pantograph.md``, ``sweep.md``,
+  ``criteria.md``: every data-file field from the declarations the loaders read
+  (:mod:`pantocosim.core.schema`);
+- ``reference/fmu-ports.md``: the variables of every FMU from its model description, made by the
+  same slave classes the FMUs are built from.
+
+The documentation build runs it through mkdocs-gen-files (``mkdocs.yml``); run alone it writes
+the pages into a folder (``python scripts/docs_reference.py OUT``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+
+def _cell(text) -> str:
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+# ---------------------------------------------------------------------------- CLI
+def cli_page() -> str:
+    from pantocosim.master.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    helps = {c.dest: c.help for c in sub._choices_actions}
+    out = ["# Command line\n\n",
+           "Generated from the argument parsers of `pantocosim` (`pantocosim COMMAND --help` "
+           "prints the same). A mistake in a flag or a file ends with one line naming it, "
+           "the value and what is accepted, and exit status 2; Ctrl-C stops a run after the "
+           "step in flight with exit status 130, its results so far kept.\n\n",
+           "| command | what it does |\n|---|---|\n"]
+    for name in sub.choices:
+        out.append(f"| [`{name}`](#{name}) | {_cell(helps.get(name) or '')} |\n")
+    for name, p in sub.choices.items():
+        out.append(f"\n## {name}\n\n")
+        if p.description:
+            out.append(" ".join(p.description.split()) + "\n\n")
+        usage = " ".join(p.format_usage().split())
+        out.append(f"```text\n{usage.removeprefix('usage: ')}\n```\n\n")
+        rows = []
+        for a in p._actions:
+            if isinstance(a, argparse._HelpAction):
+                continue
+            flag = ", ".join(f"`{s}`" for s in a.option_strings) or f"`{a.dest}`"
+            if a.option_strings and a.nargs != 0:
+                flag += f" {a.metavar or a.dest.upper()}"
+            choices = ", ".join(f"`{c}`" for c in a.choices) if a.choices else ""
+            default = a.default
+            if a.nargs == 0 or default in (None, argparse.SUPPRESS):
+                default = ""
+            elif isinstance(default, (list, tuple)):
+                default = " ".join(map(str, default))
+            rows.append(f"| {flag} | {_cell(a.help or '')} | {choices} | "
+                        f"{_cell(default) and f'`{_cell(default)}`'} |\n")
+        if rows:
+            out.append("| argument | meaning | choices | default |\n|---|---|---|---|\n")
+            out += rows
+    return "".join(out)
+
+
+# ---------------------------------------------------------------------------- formats
+def _presets(names: list[str], where: str) -> str:
+    return (f"\n**Presets** (`{where}`): " + ", ".join(f"`{n}`" for n in names) + ".\n")
+
+
+def format_pages() -> dict[str, str]:
+    from pantocosim.catenary import definition
+    from pantocosim.core.schema import Format, markdown
+    from pantocosim.master import scenario
+    from pantocosim.master.campaign import assessment, spec
+    from pantocosim.pantograph import base, dsa380, dsa380_flexible, lumped
+    from pantocosim.pantograph.presets import PRESETS
+
+    def sections(module, names, tag):
+        out = []
+        for n in names:
+            sec = getattr(module, n)
+            head = sec.title or ((f"`[{sec.path}]`" if sec.path else "Top level"))
+            out.append(type(sec)(sec.path, sec.fields, sec.doc, sec.extra, sec.array,
+                                 f"{tag}: {head}"))
+        return out
+
+    pantograph = Format("pantograph", "Pantograph parameter files", """\
+A pantograph parameter file describes one model; its tables tell which: `[chain]` a
+lumped-mass model, `rigid_model` a flexible-bar DSA-380, `[frame]` with `[bars]` the rigid
+DSA-380. Every kind has the `[options]` table (defaults below), which a scenario's
+`options` overrides. `pantocosim modal FILE` gives the modes of a file, `pantocosim pantograph
+FILE` its time response, and a scenario's `model = "FILE"` runs it.
+""", (*sections(base, ["OPTIONS", "RAMP"], "All kinds"),
+      *sections(lumped, ["ROOT", "CHAIN"], "Lumped"),
+      *sections(dsa380, ["ROOT", "FRAME", "BAR", "LINKS", "SPRINGS", "DAMPER", "VARIANT"],
+                "Rigid DSA-380"),
+      *sections(dsa380_flexible, ["ROOT", "FRAME", "MATERIAL", "SECTIONS", "MESH"],
+                "Flexible DSA-380")))
+    return {
+        "scenario.md": markdown(scenario.FORMAT)
+        + _presets(scenario.scenario_names(), "master/scenarios/"),
+        "catenary.md": markdown(definition.FORMAT)
+        + _presets(definition.preset_names(), "fmus/catenary/data/"),
+        "pantograph.md": markdown(pantograph)
+        + _presets(sorted(PRESETS), "fmus/pantograph/data/"),
+        "sweep.md": markdown(spec.FORMAT) + _presets(spec.sweep_names(), "master/sweeps/"),
+        "criteria.md": markdown(assessment.FORMAT) + _presets(
+            sorted(p.stem for p in assessment.CRITERIA_DIR.glob("*.toml")),
+            "master/campaign/"),
+    }
+
+
+# ---------------------------------------------------------------------------- FMU ports
+def _fmi2(core: type) -> type:
+    """The FMI 2.0 slave class of a slave core (the core itself where the package has no
+    separate FMI fronts)."""
+    try:
+        from pantocosim.fmi.front import slave_class
+    except ImportError:
+        return core
+    return slave_class(core, 2)
+
+
+def _model_description(slave_cls) -> ET.Element:
+    """The model description the FMU built from ``slave_cls`` carries (pythonfmu builds it the
+    same way: an instance's ``to_xml``)."""
+    return _fmi2(slave_cls)(instance_name="reference", resources=".").to_xml()
+
+
+def _variables_table(root: ET.Element, causalities: tuple) -> str:
+    rows = []
+    for v in root.iter("ScalarVariable"):
+        if v.get("causality") not in causalities:
+            continue
+        typ = next(iter(v))
+        start = typ.get("start", "")
+        try:
+            start = f"{float(start):.6g}" if typ.tag == "Real" else start
+        except ValueError:
+            pass
+        rows.append(f"| `{v.get('name')}` | {v.get('causality')} | {v.get('variability')} | "
+                    f"{typ.tag} | {typ.get('unit', '') or ''} | {_cell(start)} | "
+                    f"{_cell(v.get('description', ''))} |\n")
+    if not rows:
+        return ""
+    return ("| variable | causality | variability | type | unit | start | description |\n"
+            "|---|---|---|---|---|---|---|\n" + "".join(rows))
+
+
+def fmu_page() -> str:
+    from pantocosim.fmi.catenary_slave import CatenarySlave
+    from pantocosim.fmi.pantograph_slave import PantographSlave
+    from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
+
+    out = ["# FMU ports and parameters\n\n",
+           "Generated from the model descriptions of the FMUs, made by the slave classes they "
+           "are built from (`pantocosim build-fmus` writes them into `dist/fmus/`). Every "
+           "pantograph FMU has the same ports, so a model swap is a file swap; the catenary "
+           "FMU has one set of ports per pantograph (`_1`, `_2`, ...). The recipes for "
+           "third-party masters are in [Third-party masters](../third-party.md).\n"]
+    pantographs = {}
+    for preset, cls_name in PANTOGRAPH_FMUS.items():
+        cls = type(cls_name, (PantographSlave,), {"preset": preset})
+        pantographs[preset] = _model_description(cls)
+    first = next(iter(pantographs.values()))
+    out.append("\n## Pantograph FMUs: ports\n\n"
+               + _variables_table(first, ("input", "output")))
+    for preset, root in pantographs.items():
+        out.append(f"\n## Pantograph FMU `{preset}.fmu`: parameters\n\n"
+                   + _variables_table(root, ("parameter", "calculatedParameter")))
+    cat = _model_description(type(CATENARY_CLASS, (CatenarySlave,), {}))
+    out.append("\n## Catenary FMU `catenary.fmu`\n\n### Ports\n\n"
+               + _variables_table(cat, ("input", "output"))
+               + "\n### Parameters\n\n"
+               + _variables_table(cat, ("parameter", "calculatedParameter")))
+    return "".join(out)
+
+
+def pages() -> dict[str, str]:
+    out = {"reference/cli.md": cli_page(), "reference/fmu-ports.md": fmu_page()}
+    out.update({f"reference/{k}": v for k, v in format_pages().items()})
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", type=Path, help="folder to write the pages into")
+    args = ap.parse_args(argv)
+    for name, text in pages().items():
+        path = args.out / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+        print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+elif __name__ == "<run_path>":   # run by mkdocs-gen-files during the documentation build
+    import mkdocs_gen_files
+
+    for _name, _text in pages().items():
+        with mkdocs_gen_files.open(_name, "w") as _fh:
+            _fh.write(_text)
