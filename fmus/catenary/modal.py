@@ -42,6 +42,20 @@ from .model import CatenaryModel
 KEPT_BASES = 4
 
 
+def kept_modes_below(lin: LinearCatenary, cutoff_hz: float, bands):
+    """:func:`~.modal_basis.modes_below` of the linear model's (K0, M) ``bands``, kept in the
+    set-up cache (:mod:`pantocosim.core.disk_cache`) under the bands and the cutoff: the band
+    eigensolution is most of the modal model's set-up."""
+    from ..core.disk_cache import cached
+
+    def compute():
+        f, phi = modes_below(lin.K0, lin.M, cutoff_hz, bands=bands)
+        return {"frequencies": f, "Phi": phi}
+
+    basis = cached("modal-basis", (bands[0], bands[1], float(cutoff_hz)), compute)
+    return basis["frequencies"], basis["Phi"]
+
+
 class ModalCatenary(SecondOrderModel):
     """``ModalCatenary(catenary, x0, speed, cutoff_hz=...)``, or around a ``linear`` model."""
 
@@ -55,7 +69,7 @@ class ModalCatenary(SecondOrderModel):
         self.cutoff_hz = float(cutoff_hz)
         S = lin.structure
         bands = (S.lower_band(lin.K0_data), S.lower_band(S.M_data))
-        self.frequencies, self.Phi = modes_below(lin.K0, lin.M, self.cutoff_hz, bands=bands)
+        self.frequencies, self.Phi = kept_modes_below(lin, self.cutoff_hz, bands)
         self.omega2 = (2.0 * np.pi * self.frequencies) ** 2
         self.m = m = self.Phi.shape[1]
         self.n_p = len(lin.x0)

@@ -12,7 +12,7 @@ Settings (environment, so that worker processes and FMUs inherit them):
 ``PANTOCOSIM_NO_CACHE=1`` (the command line's ``--no-cache``) computes everything;
 ``PANTOCOSIM_CACHE_DIR`` is the folder (default ``$XDG_CACHE_HOME/pantocosim/setup``);
 ``PANTOCOSIM_CACHE_MB`` bounds its size (default :data:`DEFAULT_LIMIT_MB`): the entries used
-least recently go first.
+least recently go first, and an entry over half of it is not kept.
 """
 
 from __future__ import annotations
@@ -98,8 +98,13 @@ def _store(path: Path, expected: str, arrays: dict[str, np.ndarray]) -> None:
     _evict(path.parent)
 
 
+def limit_bytes() -> float:
+    """The size the cache folder is kept under (``PANTOCOSIM_CACHE_MB``)."""
+    return float(os.environ.get("PANTOCOSIM_CACHE_MB", DEFAULT_LIMIT_MB)) * 2**20
+
+
 def _evict(root: Path) -> None:
-    limit = float(os.environ.get("PANTOCOSIM_CACHE_MB", DEFAULT_LIMIT_MB)) * 2**20
+    limit = limit_bytes()
     entries = []
     for f in root.glob("*.npz"):
         try:
@@ -126,5 +131,6 @@ def cached(kind: str, parts, compute: Callable[[], dict[str, np.ndarray]]
     if found is not None:
         return found
     arrays = {name: np.asarray(a) for name, a in compute().items()}
-    _store(path, k, arrays)
+    if sum(a.nbytes for a in arrays.values()) <= limit_bytes() / 2:
+        _store(path, k, arrays)          # a larger entry would push out every other one
     return arrays
