@@ -205,18 +205,28 @@ def fmu_variables(fmu: Path) -> dict:
         raise ParameterError("modelDescription.xml", str(exc), "not well-formed XML; "
                              "accepted: an FMI 2.0 model description", str(fmu)) from None
     version = root.get("fmiVersion")
-    if root.tag != "fmiModelDescription" or version != "2.0":
-        raise ParameterError("fmiVersion", version, "accepted: 2.0 (an FMI 2.0 co-simulation "
-                             "FMU)", str(fmu))
+    if root.tag != "fmiModelDescription" or version not in ("2.0", "3.0"):
+        raise ParameterError("fmiVersion", version, "accepted: 2.0 or 3.0 (an FMI 2.0 or 3.0 "
+                             "co-simulation FMU)", str(fmu))
     if root.find("CoSimulation") is None:
         raise ParameterError("CoSimulation", None, "the FMU has no co-simulation interface; "
-                             "accepted: an FMI 2.0 co-simulation FMU", str(fmu))
+                             "accepted: an FMI 2.0 or 3.0 co-simulation FMU", str(fmu))
     out = {}
     for v in root.iterfind("ModelVariables/ScalarVariable"):
         kind = next((c.tag for c in v if c.tag in ("Real", "Integer", "Boolean", "String",
                                                     "Enumeration")), None)
         out[v.get("name")] = (v.get("causality", "local"), kind)
+    for v in root.iterfind("ModelVariables/*"):     # FMI 3.0: one element per variable
+        if v.tag in FMI3_KINDS and v.find("Dimension") is None:
+            out[v.get("name")] = (v.get("causality", "local"), FMI3_KINDS[v.tag])
     return out
+
+
+#: FMI 3.0 variable types as the SSP 1.0 connector types they map to (scalars)
+FMI3_KINDS = {"Float64": "Real", "Float32": "Real", "Int32": "Integer", "Int64": "Integer",
+              "Int16": "Integer", "Int8": "Integer", "UInt32": "Integer", "UInt16": "Integer",
+              "UInt8": "Integer", "Boolean": "Boolean", "String": "String",
+              "Enumeration": "Enumeration"}
 
 
 def pantograph_connections(fmu: Path) -> list[tuple]:
@@ -330,9 +340,10 @@ def cofmupy_config(fmus: dict, connections: list[tuple]) -> dict:
 
 # ------------------------------------------------------------------ the package
 def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
-                           quiet: bool = False) -> list[Path]:
-    """For each scenario (preset name or file): its FMUs in ``out/<name>/``,
-    ``out/<name>.ssp`` and ``out/<name>/cofmupy.json`` (``name``: the scenario's)."""
+                           quiet: bool = False, fmi: int = 2) -> list[Path]:
+    """For each scenario (preset name or file): its FMI ``fmi`` FMUs in ``out/<name>/``,
+    ``out/<name>.ssp`` and (FMI 2.0: CoFmuPy takes FMI 2.0 only) ``out/<name>/cofmupy.json``
+    (``name``: the scenario's)."""
     from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
 
     written = []
@@ -342,18 +353,22 @@ def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
         name = sc.name
         folder = Path(out) / name
         baked = {m: fmu_start_values(values, m) for m in FMU_NAMES}
-        written += build_fmus(folder, quiet=True, start_values=baked, scenario=name)
+        written += build_fmus(folder, quiet=True, start_values=baked, scenario=name,
+                              fmi=fmi)
         model = sc.pantographs[0].model
         ssp = write_ssp(Path(out) / f"{name}.ssp", name, folder / f"{model}.fmu",
                         folder / f"{CATENARY_FMU}.fmu", values, sc.dt)
-        config = folder / "cofmupy.json"
-        config.write_text(json.dumps(cofmupy_config(
-            {"pantograph": f"{model}.fmu", "catenary": f"{CATENARY_FMU}.fmu"}, PORTS),
-            indent=2) + "\n")
-        written += [ssp, config]
+        written.append(ssp)
+        if fmi == 2:
+            config = folder / "cofmupy.json"
+            config.write_text(json.dumps(cofmupy_config(
+                {"pantograph": f"{model}.fmu", "catenary": f"{CATENARY_FMU}.fmu"}, PORTS),
+                indent=2) + "\n")
+            written.append(config)
         if not quiet:
             cat = values["catenary"]
-            print(f"wrote {ssp} and {folder}/ (scenario FMUs, cofmupy.json): stop "
+            print(f"wrote {ssp} and {folder}/ (FMI {fmi}.0 scenario FMUs"
+                  f"{', cofmupy.json' if fmi == 2 else ''}): stop "
                   f"{values['stop_time']:g} s, window {values['window'][0]:g}.."
                   f"{values['window'][1]:g} m, start height {cat['pantograph_height_1']:.6f} m")
     return written

@@ -6,7 +6,11 @@ import math
 
 import pytest
 
-from pantocosim.fmi.catenary_slave import CatenarySlave
+from pantocosim.fmi import catenary_slave
+from pantocosim.fmi.front import slave_class
+
+#: the catenary slave as its FMI 2.0 FMU has it (the core with the FMI 2.0 front)
+CatenarySlave = slave_class(catenary_slave.CatenarySlave, 2)
 
 LINEAR = {"catenary_definition": "en50318", "spans": 4, "speed_kmh": 300.0,
           "n_pantographs": 1, "position_1": 30.0, "static_force_1": 120.0,

@@ -101,9 +101,9 @@ class PortNames:
 
 
 def _discard():
-    from pythonfmu.enums import Fmi2Status
+    from .front import Status
 
-    return Fmi2Status.discard
+    return Status.discard
 
 
 class CatenarySlave(IntegratorSlave):

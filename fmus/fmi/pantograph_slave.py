@@ -1,4 +1,5 @@
-"""FMI 2.0 co-simulation adapter for every pantograph model (one port contract).
+"""Co-simulation adapter for every pantograph model (one port contract; FMI 2.0 and 3.0
+through the fronts of :mod:`pantocosim.fmi.front`).
 
 Ports (identical for all variants; README.md, "The FMUs and their ports"):
   input  ``contact_force`` [N] >= 0: pushes the collector down;
@@ -31,6 +32,7 @@ from pantocosim.core.hht import DEFAULT_ALPHA
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
 
+from .front import Status
 from .given import track_sets
 from .slave_base import IntegratorSlave
 
@@ -271,11 +273,11 @@ class PantographSlave(IntegratorSlave):
     def advance(self, current_time, step_size):
         integ = self._integ
         if self._error or integ is None:
-            self.log(self._error or "not initialised", Fmi2StatusDiscard())
+            self.log(self._error or "not initialised", Status.discard)
             return False
         F = float(self.contact_force)
         if not (math.isfinite(F) and F >= 0.0):
-            self.log(f"contact_force = {F!r}: must be finite and >= 0", Fmi2StatusDiscard())
+            self.log(f"contact_force = {F!r}: must be finite and >= 0", Status.discard)
             return False
         n = int(self.n_substeps)
         # a closed-form step (linear model) cannot fail half-way: no state to save
@@ -301,7 +303,7 @@ class PantographSlave(IntegratorSlave):
                     integ.set_state(saved)
                 else:  # a closed-form step kept no state: only a rollback recovers
                     self._error = f"{problem}; roll back with fmi2SetFMUstate"
-                self.log(problem, Fmi2StatusDiscard())
+                self.log(problem, Status.discard)
                 return False
             self._force_prev = F
             self._input_prev = u
@@ -312,7 +314,7 @@ class PantographSlave(IntegratorSlave):
             if saved is not None:
                 integ.set_state(saved)
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: {exc}",
-                     Fmi2StatusDiscard())
+                     Status.discard)
             return False
 
     def _outside_range(self, t: float, h: float) -> str | None:
@@ -330,9 +332,3 @@ class PantographSlave(IntegratorSlave):
         q, v = self._integ.q, self._integ.v
         self.contact_height = float(self._model.contact_height(q))
         self.contact_velocity = float(self._model.contact_velocity(q, v))
-
-
-def Fmi2StatusDiscard():
-    from pythonfmu.enums import Fmi2Status
-
-    return Fmi2Status.discard

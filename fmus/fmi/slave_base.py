@@ -1,4 +1,9 @@
-"""Shared machinery of the project's pythonfmu slaves (thin adapters over model objects).
+"""Shared machinery of the project's slaves (thin adapters over model objects).
+
+The slaves are version-neutral: an FMU's slave class mixes in the front of its FMI version
+(:mod:`pantocosim.fmi.front`: pythonfmu for FMI 2.0, pythonfmu3 for FMI 3.0), which makes the
+variables, logs with the version's statuses and names the version's calls. Everything below
+holds for both versions; the FMI 2.0 names stand for their FMI 3.0 counterparts.
 
 Works around the pythonfmu 0.7.0 behaviours of docs/pythonfmu-notes.md:
 - no exception may escape a callback (the wrapper turns it into fmi2Fatal and may crash): every
@@ -31,14 +36,11 @@ import traceback
 import uuid
 from pathlib import Path
 from typing import Any, Callable
-from xml.etree.ElementTree import Element, SubElement
 
 import numpy as np
-from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
-from pythonfmu.fmi2slave import Fmi2Slave
-from pythonfmu.variables import Boolean, Integer, Real, String
-
 from pantocosim.core.stamp import package_stamp
+
+from .front import Status
 
 STAMP_FILE = "pantocosim_build_stamp.txt"
 
@@ -56,20 +58,9 @@ _INT32 = 2 ** 31
 MAX_SUBSTEPS = 10_000
 
 
-_FMI_TYPES: dict = {}
-
-
 def fmi_type(var) -> str:
-    """FMI type name of a pythonfmu variable (cached per Python class: every get/set asks)."""
-    kind = _FMI_TYPES.get(type(var))
-    if kind is None:
-        kind = type(var).__name__
-        for cls in (Real, Integer, Boolean, String):
-            if isinstance(var, cls):
-                kind = cls.__name__
-                break
-        _FMI_TYPES[type(var)] = kind
-    return kind
+    """The neutral kind of a variable (Real, Integer, Boolean, String; given by the front)."""
+    return var.kind
 
 
 #: the Python value of each FMI type, as pythonfmu's own getters return it
@@ -107,27 +98,9 @@ def bundled_stamp(fmu: str | Path) -> str | None:
         return None
 
 
-def _do_step_call(t: float, h: float) -> str:
-    """The doStep call named in a refusal."""
-    return f"fmi2DoStep(t = {t!r}, h = {h!r})"
-
-
-class UnitReal(Real):
-    """A Real variable with a ``unit`` attribute."""
-
-    def __init__(self, name: str, unit: str | None = None, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self) -> Element:
-        node = super().to_xml()
-        if self.unit:
-            node.find("Real").set("unit", self.unit)
-        return node
-
-
-class GuardedSlave(Fmi2Slave):
-    """Base of the project's slaves: variable helpers, guarded callbacks, full state."""
+class GuardedSlave:
+    """Base of the project's slaves: variable helpers, guarded callbacks, full state. A
+    version-neutral core: an FMU's class mixes in a front (:func:`front.slave_class`)."""
 
     author = "pantocosim"
     license = "MIT"
@@ -137,6 +110,7 @@ class GuardedSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        self.author, self.license = GuardedSlave.author, GuardedSlave.license
         self._units: set[str] = set()
         #: first error found in parameters or inputs; do_step reports it as a discard
         self._error: str | None = None
@@ -201,50 +175,39 @@ class GuardedSlave(Fmi2Slave):
                 self.update_initial_outputs()
             except Exception as exc:  # noqa: BLE001 - an early read; initialise() decides
                 self.log(f"initialisation outputs not available yet: {exc}",
-                         Fmi2Status.warning)
+                         Status.warning)
         return getattr(self, name)
 
     # ------------------------------------------------------------------ variables
     def real(self, name: str, value: float, causality: str, unit: str | None = None,
              description: str | None = None, tunable: bool = False) -> None:
         setattr(self, name, float(value))
-        kwargs: dict[str, Any] = {"description": description}
+        kwargs: dict[str, Any] = {"description": description, "unit": unit}
         if causality == "parameter":
-            kwargs.update(causality=Fmi2Causality.parameter,
-                          variability=Fmi2Variability.tunable if tunable
-                          else Fmi2Variability.fixed)
-        elif causality == "input":
-            kwargs.update(causality=Fmi2Causality.input, variability=Fmi2Variability.continuous)
+            kwargs.update(causality="parameter", variability="tunable" if tunable else "fixed")
         elif causality == "output":
-            kwargs.update(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                          initial=Fmi2Initial.exact,
+            kwargs.update(causality="output", variability="continuous", initial="exact",
                           getter=lambda: self._output_value(name))
         else:
-            kwargs.update(causality=Fmi2Causality.local, variability=Fmi2Variability.continuous)
+            kwargs.update(causality="input" if causality == "input" else "local",
+                          variability="continuous")
         if unit:
             self._units.add(unit)
-        var = UnitReal(name, unit=unit, **kwargs)
-        self.register_variable(var)
+        var = self.make_variable("Real", name, **kwargs)
         if "." not in name:
             self._attribute_reals.add(var.value_reference)
 
     def integer(self, name: str, value: int, description: str | None = None) -> None:
         setattr(self, name, int(value))
-        self.register_variable(Integer(name, causality=Fmi2Causality.parameter,
-                                       variability=Fmi2Variability.fixed,
-                                       description=description))
+        self.make_variable("Integer", name, "parameter", "fixed", description=description)
 
     def boolean(self, name: str, value: bool, description: str | None = None) -> None:
         setattr(self, name, bool(value))
-        self.register_variable(Boolean(name, causality=Fmi2Causality.parameter,
-                                       variability=Fmi2Variability.fixed,
-                                       description=description))
+        self.make_variable("Boolean", name, "parameter", "fixed", description=description)
 
     def string(self, name: str, value: str, description: str | None = None) -> None:
         setattr(self, name, str(value))
-        self.register_variable(String(name, causality=Fmi2Causality.parameter,
-                                      variability=Fmi2Variability.fixed,
-                                      description=description))
+        self.make_variable("String", name, "parameter", "fixed", description=description)
 
     def given_or_start(self, name: str, given) -> float:
         """The value of input ``name``, or its baked start value where the master passed none
@@ -256,7 +219,7 @@ class GuardedSlave(Fmi2Slave):
         if name not in self._logged_fallbacks:
             self._logged_fallbacks.add(name)
             self.log(f"{name} = {value!r} was not given by the master: using its start value "
-                     f"{self.start_values[name]!r} (this FMU's scenario)", Fmi2Status.warning)
+                     f"{self.start_values[name]!r} (this FMU's scenario)", Status.warning)
         return self.start_values[name]
 
     def apply_start_values(self) -> None:
@@ -267,22 +230,8 @@ class GuardedSlave(Fmi2Slave):
                 raise KeyError(f"start value for an unknown variable {name!r}")
             setattr(self, name, type(getattr(self, name))(value))
 
-    def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
-        root = super().to_xml(model_options)
-        # every output is a state output (no direct feedthrough within a step): declaring it
-        # lets masters that check algebraic loops (OMSimulator) see there is none
-        for unknown in root.iterfind("ModelStructure/Outputs/Unknown"):
-            unknown.set("dependencies", "")
-        if self._units:
-            units = Element("UnitDefinitions")
-            for u in sorted(self._units):
-                SubElement(units, "Unit", {"name": u})
-            index = [child.tag for child in root].index("CoSimulation") + 1
-            root.insert(index, units)
-        return root
-
     # ------------------------------------------------------------------ errors
-    def fail(self, message: str, status: Fmi2Status = Fmi2Status.error) -> None:
+    def fail(self, message: str, status: Status = Status.error) -> None:
         """Record and log an error; every later do_step returns fmi2Discard."""
         if self._error is None:
             self._error = message
@@ -298,18 +247,19 @@ class GuardedSlave(Fmi2Slave):
         reported by the next do_step (fmi2Discard)."""
         if not self.statuses_per_call:
             self._refused.append(message)
-        self.log(message, Fmi2Status.error)
+        self.log(message, Status.error)
 
     # ------------------------------------------------------------------ FMI state machine
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         try:
             t0 = float(start_time)
             if not math.isfinite(t0):
-                self.fail(f"fmi2SetupExperiment: startTime = {start_time!r}: must be finite")
+                self.fail(f"{self.fmi_call('SetupExperiment')}: startTime = "
+                          f"{start_time!r}: must be finite")
                 return
             self._t0 = self._time = t0
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            self.fail(f"fmi2SetupExperiment: {type(exc).__name__}: {exc}")
+            self.fail(f"{self.fmi_call('SetupExperiment')}: {type(exc).__name__}: {exc}")
 
     def terminate(self):
         self._terminated = True
@@ -317,11 +267,16 @@ class GuardedSlave(Fmi2Slave):
     def time_tolerance(self, step_size: float) -> float:
         return TIME_RTOL * max(1.0, abs(self._time)) + STEP_RTOL * abs(step_size)
 
+    def _do_step_call(self, t: float, h: float) -> str:
+        """The doStep call named in a refusal."""
+        return f"{self.fmi_call('DoStep')}(t = {t!r}, h = {h!r})"
+
     def _step_refusal(self, t: float, h: float) -> str | None:
-        """Why doStep(t, h) is not taken (FMI 2.0 state machine), or None."""
+        """Why doStep(t, h) is not taken (FMI state machine), or None."""
+        _do_step_call = self._do_step_call
         if self._terminated:
-            return (f"{_do_step_call(t, h)} after fmi2Terminate: only fmi2Reset or "
-                    "fmi2FreeInstance may follow")
+            return (f"{_do_step_call(t, h)} after {self.fmi_call('Terminate')}: only "
+                    f"{self.fmi_call('Reset')} or {self.fmi_call('FreeInstance')} may follow")
         if self._refused:
             msgs, self._refused = self._refused, []
             more = f" (and {len(msgs) - 3} more)" if len(msgs) > 3 else ""
@@ -341,15 +296,15 @@ class GuardedSlave(Fmi2Slave):
             t, h = float(current_time), float(step_size)
             problem = self._step_refusal(t, h)
             if problem is not None:
-                self.log(problem, Fmi2Status.discard)
+                self.log(problem, Status.discard)
                 return False
             ok = bool(self.advance(t, h))
             if ok:
                 self._time = t + h
             return ok
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            self.log(f"fmi2DoStep(t = {current_time!r}, h = {step_size!r}): "
-                     f"{type(exc).__name__}: {exc}", Fmi2Status.discard)
+            self.log(f"{self._do_step_call(current_time, step_size)}: "
+                     f"{type(exc).__name__}: {exc}", Status.discard)
             return False
 
     def advance(self, current_time: float, step_size: float) -> bool:
@@ -362,13 +317,12 @@ class GuardedSlave(Fmi2Slave):
             return "it cannot be set"
         if not self.initialised:
             return None
-        if var.causality == Fmi2Causality.input:
+        if var.causality.name == "input":
             return None
-        if (var.causality == Fmi2Causality.parameter
-                and var.variability == Fmi2Variability.tunable):
+        if var.causality.name == "parameter" and var.variability.name == "tunable":
             return None
         return (f"a {var.variability.name} {var.causality.name} can only be set before "
-                f"fmi2ExitInitializationMode (FMI 2.0)")
+                f"{self.fmi_call('ExitInitializationMode')} (FMI {self.fmi_version}.0)")
 
     def _set(self, call: str, kind: str, vrs, values) -> None:
         for vr, value in zip(vrs, values):
@@ -377,7 +331,7 @@ class GuardedSlave(Fmi2Slave):
                 if var is None:
                     self.refuse(f"{call}: unknown value reference {vr}: not applied")
                     continue
-                what = f"{call}: {var.name!r} (vr {vr}, {fmi_type(var)})"
+                what = f"{call}: {var.name!r} (vr {vr}, {self.TYPE_NAMES[fmi_type(var)]})"
                 why = self._not_settable(var)
                 if why:
                     self.refuse(f"{what}: {why}: {value!r} not applied")
@@ -385,8 +339,9 @@ class GuardedSlave(Fmi2Slave):
                 target = fmi_type(var)
                 x = value if target == kind else lossless(value, target)
                 if x is None:
-                    self.refuse(f"{what}: the {kind} value {value!r} does not convert to "
-                                f"{target} without loss: not applied")
+                    names = self.TYPE_NAMES
+                    self.refuse(f"{what}: the {names[kind]} value {value!r} does not convert "
+                                f"to {names[target]} without loss: not applied")
                     continue
                 var.setter(x)
             except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
@@ -405,9 +360,10 @@ class GuardedSlave(Fmi2Slave):
                     value = _NORMALISE[source](var.getter())
                     x = value if source == kind else lossless(value, kind)
                     if x is None:
-                        self.refuse(f"{call}: {var.name!r} (vr {vr}) is a {source} variable; "
-                                    f"its value {value!r} does not convert to {kind} without "
-                                    "loss")
+                        names = self.TYPE_NAMES
+                        self.refuse(f"{call}: {var.name!r} (vr {vr}) is a {names[source]} "
+                                    f"variable; its value {value!r} does not convert to "
+                                    f"{names[kind]} without loss")
             except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
                 self.refuse(f"{call}: vr {vr}: {type(exc).__name__}: {exc}")
             out.append(_GET_DEFAULT[kind] if x is None else x)
@@ -423,7 +379,7 @@ class GuardedSlave(Fmi2Slave):
             fast = self._fast_real = (
                 {vr: v.getter for vr, v in reals},
                 {vr: v.setter for vr, v in reals
-                 if v.causality == Fmi2Causality.input and v.setter is not None},
+                 if v.causality.name == "input" and v.setter is not None},
                 len(self.vars))
         return fast
 
@@ -436,16 +392,16 @@ class GuardedSlave(Fmi2Slave):
                 return
             except Exception:  # noqa: BLE001 - the checked path says what went wrong
                 pass
-        self._set("fmi2SetReal", "Real", vrs, values)
+        self._set(self.fmi_call("SetReal"), "Real", vrs, values)
 
     def set_integer(self, vrs, values):
-        self._set("fmi2SetInteger", "Integer", vrs, values)
+        self._set(self.fmi_call("SetInteger"), "Integer", vrs, values)
 
     def set_boolean(self, vrs, values):
-        self._set("fmi2SetBoolean", "Boolean", vrs, values)
+        self._set(self.fmi_call("SetBoolean"), "Boolean", vrs, values)
 
     def set_string(self, vrs, values):
-        self._set("fmi2SetString", "String", vrs, values)
+        self._set(self.fmi_call("SetString"), "String", vrs, values)
 
     def get_real(self, vrs):
         try:
@@ -456,7 +412,7 @@ class GuardedSlave(Fmi2Slave):
             getters = self._fast_access()[0]
             return [float(getters[vr]()) for vr in vrs]
         except Exception:  # noqa: BLE001 - the checked path says what went wrong
-            return self._get("fmi2GetReal", "Real", vrs)
+            return self._get(self.fmi_call("GetReal"), "Real", vrs)
 
     #: lists of value references whose attribute reader is kept (a master reads a few
     #: fixed lists every step)
@@ -486,13 +442,13 @@ class GuardedSlave(Fmi2Slave):
         return lambda d: list(map(float, lookup(d)))
 
     def get_integer(self, vrs):
-        return self._get("fmi2GetInteger", "Integer", vrs)
+        return self._get(self.fmi_call("GetInteger"), "Integer", vrs)
 
     def get_boolean(self, vrs):
-        return self._get("fmi2GetBoolean", "Boolean", vrs)
+        return self._get(self.fmi_call("GetBoolean"), "Boolean", vrs)
 
     def get_string(self, vrs):
-        return self._get("fmi2GetString", "String", vrs)
+        return self._get(self.fmi_call("GetString"), "String", vrs)
 
     def guarded(self, what: str, fn: Callable[[], Any]) -> bool:
         """Run ``fn`` and turn any exception into a logged error (never escapes)."""
@@ -555,7 +511,7 @@ class GuardedSlave(Fmi2Slave):
                 state[name] = self._copy_attribute(name)
             return state
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            msg = f"fmi2GetFMUstate: {type(exc).__name__}: {exc}"
+            msg = f"{self.fmi_call('GetFMUstate')}: {type(exc).__name__}: {exc}"
             self.refuse(msg)
             return {"invalid": msg}
 
@@ -572,13 +528,15 @@ class GuardedSlave(Fmi2Slave):
         if state["model"] != self._model_id:
             return f"the state is one of model {state['model']}; this FMU is {self._model_id}"
         if state.get("initialised") is False and self.initialised:
-            return ("the state was taken before fmi2ExitInitializationMode and this instance "
+            return (f"the state was taken before {self.fmi_call('ExitInitializationMode')} "
+                    "and this instance "
                     "is initialised (its model is built): set it before initialisation, or "
                     "take the state after it")
         if not state.get("deserialized") and state.get("instance") != self._instance_id:
             return (f"in-memory state of another instance ({state.get('instance_name')!r}; "
                     f"this is {self.instance_name!r}); copy a state between instances with "
-                    "fmi2SerializeFMUstate and fmi2DeSerializeFMUstate")
+                    f"{self.fmi_call('SerializeFMUstate')} and "
+                    f"{self.fmi_call('DeSerializeFMUstate')}")
         return None
 
     def _set_fmu_state(self, state) -> None:
@@ -587,7 +545,7 @@ class GuardedSlave(Fmi2Slave):
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
             problem = f"{type(exc).__name__}: {exc}"
         if problem is not None:
-            self.refuse(f"fmi2SetFMUstate: {problem}: state not applied")
+            self.refuse(f"{self.fmi_call('SetFMUstate')}: {problem}: state not applied")
             return
         try:
             self._set_variable_values(*state["vars"])
@@ -596,17 +554,19 @@ class GuardedSlave(Fmi2Slave):
             for name in self._state_attributes:
                 self._restore_attribute(name, state[name])
         except Exception as exc:  # noqa: BLE001 - partly applied: the instance is unusable
-            self.fail(f"fmi2SetFMUstate: {type(exc).__name__}: {exc}")
+            self.fail(f"{self.fmi_call('SetFMUstate')}: {type(exc).__name__}: {exc}")
 
     def _state_variables(self) -> tuple:
         """(names, read): every variable's name in registration order and a function giving
         their values as a tuple, read from the attribute each is kept in (:meth:`real`,
         :meth:`integer`) in one C-level lookup; the getter only for a variable without one.
-        Variables are registered once, in ``__init__``: built on first use."""
+        Variables are registered once, in ``__init__``: built on first use. The independent
+        variable (FMI 3.0's time) is the state's ``time``, not one of them."""
         cached = self.__dict__.get("_state_var_reader")
-        if cached is not None and len(cached[0]) == len(self.vars):
-            return cached
-        names = tuple(v.name for v in self.vars.values())
+        if cached is not None and cached[2] == len(self.vars):
+            return cached[:2]
+        variables = [v for v in self.vars.values() if v.causality.name != "independent"]
+        names = tuple(v.name for v in variables)
         d = self.__dict__
         if len(names) > 1 and all(n in d for n in names):
             lookup = operator.itemgetter(*names)
@@ -614,11 +574,11 @@ class GuardedSlave(Fmi2Slave):
             def read():
                 return lookup(d)
         else:
-            pairs = [(v.name, v.getter) for v in self.vars.values()]
+            pairs = [(v.name, v.getter) for v in variables]
 
             def read():
                 return tuple(d[n] if n in d else getter() for n, getter in pairs)
-        self._state_var_reader = (names, read)
+        self._state_var_reader = (names, read, len(self.vars))
         return names, read
 
     def _variable_values(self) -> tuple:
@@ -662,7 +622,7 @@ class GuardedSlave(Fmi2Slave):
         try:
             return pickle.dumps(cls._picklable_state(state), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            return pickle.dumps({"invalid": f"fmi2SerializeFMUstate failed: "
+            return pickle.dumps({"invalid": f"{cls.fmi_call('SerializeFMUstate')} failed: "
                                             f"{type(exc).__name__}: {exc}"})
 
     @staticmethod

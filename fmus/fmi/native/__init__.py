@@ -1,12 +1,33 @@
-"""The FMUs' export library: its C source and the Python bridge it calls (both bundled)."""
+"""The FMUs' export libraries: their C sources and the Python bridge they call (both bundled).
 
+One library per FMI version (``fmi2_export.c``, ``fmi3_export.c``), each over the shared
+part ``export_common.c`` (finding a Python runtime, the instance and FMU-state registries,
+calling the bridge); one bridge module for both (its ``instantiate`` takes the version).
+"""
+
+from dataclasses import dataclass
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-#: C source of the FMI 2.0 export library (binaries/linux64/<modelIdentifier>.so)
-EXPORT_SOURCE = HERE / "fmi2_export.c"
-#: the bridge module, copied into every FMU's resources under :data:`BRIDGE_MODULE`
+#: the bridge module's source, copied into every FMU's resources under its version's name
 BRIDGE_SOURCE = HERE / "bridge.py"
-BRIDGE_MODULE = "pantocosim_fmi2_bridge"
 #: resources file naming the Python that built the FMU (``executable=...``)
 RUNTIME_FILE = "pantocosim_runtime.txt"
+#: C sources every export library is compiled with
+COMMON_SOURCES = (HERE / "export_common.c",)
+
+
+@dataclass(frozen=True)
+class ExportLibrary:
+    """The export library of one FMI version."""
+
+    source: Path            # its C source (compiled with COMMON_SOURCES)
+    bridge_module: str      # the bridge's module name in the FMU's resources
+    platform: str           # the FMU's binaries/<platform>/ folder of the library
+
+
+#: FMI major version -> its export library
+EXPORTS = {
+    2: ExportLibrary(HERE / "fmi2_export.c", "pantocosim_fmi2_bridge", "linux64"),
+    3: ExportLibrary(HERE / "fmi3_export.c", "pantocosim_fmi3_bridge", "x86_64-linux"),
+}

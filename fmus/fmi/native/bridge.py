@@ -1,8 +1,9 @@
-"""Python side of the FMUs' export library (``fmi2_export.c``).
+"""Python side of the FMUs' export libraries (``fmi2_export.c``, ``fmi3_export.c``).
 
-Each FMU carries a copy of this module as ``resources/pantocosim_fmi2_bridge.py``; the
-library imports it and calls :func:`instantiate`, then the methods of :class:`Adapter`, one
-per FMI call. Every method returns ``(status, value)``: the FMI status of the call (the
+Each FMU carries a copy of this module as ``resources/pantocosim_fmi2_bridge.py`` (FMI 2.0)
+or ``resources/pantocosim_fmi3_bridge.py`` (FMI 3.0); the library imports it and calls
+:func:`instantiate` with its FMI version, then the methods of :class:`Adapter` (FMI 2.0) or
+:class:`Adapter3` (FMI 3.0), one per FMI call. Every method returns ``(status, value)``: the FMI status of the call (the
 most severe message the slave logged during it, ``STATUS_LOG_FLAG`` added when messages are
 waiting in :meth:`Adapter.take_log`) and the call's result. Nothing raises: an exception of the
 slave is the call's fmi2Error, with its message.
@@ -39,14 +40,21 @@ def forget_vanished_modules() -> None:
             del sys.modules[name]
 
 
-def check_guid(resources: Path, guid: str) -> None:
-    """The GUID given to fmi2Instantiate must be the model description's."""
+#: the model description's attribute the instantiate call's token must equal, by FMI version
+TOKEN_ATTRIBUTE = {2: "guid", 3: "instantiationToken"}
+
+
+def check_guid(resources: Path, guid: str, fmi: int = 2) -> None:
+    """The GUID (FMI 2.0) or instantiation token (FMI 3.0) given to instantiate must be the
+    model description's."""
     md = resources.parent / "modelDescription.xml"
     if not guid or not md.is_file():
         return
-    expected = ET.parse(md).getroot().get("guid")
+    attribute = TOKEN_ATTRIBUTE[fmi]
+    expected = ET.parse(md).getroot().get(attribute)
     if expected and expected != guid:
-        raise ValueError(f"fmuGUID {guid!r} is not this FMU's ({expected!r} in "
+        name = "fmuGUID" if fmi == 2 else attribute
+        raise ValueError(f"{name} {guid!r} is not this FMU's ({expected!r} in "
                          f"{md}): the model description and the binary do not match")
 
 
@@ -64,32 +72,32 @@ def import_slave_module(name: str, resources: Path):
     return importlib.import_module(name)
 
 
-def slave_class(module):
-    """The deepest Fmi2Slave subclass defined in ``module``."""
-    from pythonfmu.fmi2slave import Fmi2Slave
-
+def slave_class(module, fmi: int = 2):
+    """The deepest slave class of FMI version ``fmi`` (a core with that version's front)
+    defined in ``module``."""
     found = [c for c in vars(module).values()
-             if isinstance(c, type) and issubclass(c, Fmi2Slave)
+             if isinstance(c, type) and getattr(c, "fmi_version", None) == fmi
              and c.__module__ == module.__name__]
     if not found:
-        raise ImportError(f"{module.__name__} defines no Fmi2Slave subclass")
+        raise ImportError(f"{module.__name__} defines no FMI {fmi}.0 slave class")
     return max(found, key=lambda c: len(c.__mro__))
 
 
 def instantiate(resources: str, instance_name: str, guid: str, visible: int,
-                component_id: int) -> "Adapter":
-    """The adapter of a new instance (fmi2Instantiate); raises with the reason."""
+                component_id: int, fmi: int = 2) -> "Adapter":
+    """The adapter of a new instance of FMI version ``fmi`` (fmi2Instantiate,
+    fmi3InstantiateCoSimulation); raises with the reason."""
     res = Path(resources)
     while sys.path.count(resources) > 1:           # the library inserts it at every call
         sys.path.reverse()
         sys.path.remove(resources)
         sys.path.reverse()
     forget_vanished_modules()
-    check_guid(res, guid)
+    check_guid(res, guid, fmi)
     module = import_slave_module((res / "slavemodule.txt").read_text().strip(), res)
     kwargs = dict(instance_name=instance_name, resources=resources, visible=bool(visible),
                   logger=component_id)
-    return Adapter(slave_class(module), kwargs)
+    return ADAPTERS[fmi](slave_class(module, fmi), kwargs)
 
 
 def _level(status) -> int:
@@ -101,6 +109,8 @@ class Adapter:
 
     def __init__(self, cls, kwargs: dict):
         self._cls, self._kwargs = cls, kwargs
+        #: the FMI call names of the slave's version (its front's)
+        self.call_name = cls.fmi_call
         self._log: list[tuple[int, str, str]] = []
         self._strings: list[str] = []
         self._last_step = OK
@@ -157,27 +167,29 @@ class Adapter:
         unknown = [c for c in categories if c not in known]
         if unknown:
             self._log.append((ERROR, "logStatusError",
-                              f"fmi2SetDebugLogging: unknown log categories {unknown}; "
-                              f"known: {sorted(known)}"))
+                              f"{self.call_name('SetDebugLogging')}: unknown log categories "
+                              f"{unknown}; known: {sorted(known)}"))
             return self._status(ERROR), None
         return self._status(), None
 
     def setup_experiment(self, tol_defined, tol, start, stop_defined, stop):
-        return self._call("fmi2SetupExperiment", self.slave.setup_experiment, start,
-                          stop if stop_defined else None, tol if tol_defined else None)
+        return self._call(self.call_name("SetupExperiment"), self.slave.setup_experiment,
+                          start, stop if stop_defined else None, tol if tol_defined else None)
 
     def enter_initialization_mode(self):
-        return self._call("fmi2EnterInitializationMode", self.slave.enter_initialization_mode)
+        return self._call(self.call_name("EnterInitializationMode"),
+                          self.slave.enter_initialization_mode)
 
     def exit_initialization_mode(self):
-        return self._call("fmi2ExitInitializationMode", self.slave.exit_initialization_mode)
+        return self._call(self.call_name("ExitInitializationMode"),
+                          self.slave.exit_initialization_mode)
 
     def terminate(self):
-        return self._call("fmi2Terminate", self.slave.terminate)
+        return self._call(self.call_name("Terminate"), self.slave.terminate)
 
     def reset(self):
         self._discarded = False
-        return self._call("fmi2Reset", self._new_slave)
+        return self._call(self.call_name("Reset"), self._new_slave)
 
     def free(self):
         self.slave = None
@@ -194,10 +206,11 @@ class Adapter:
             ok = bool(self.slave.do_step(t, h))
         except Exception as exc:  # noqa: BLE001 - the guarded slave never raises
             self._last_step, self._discarded = ERROR, True
-            return self._error("fmi2DoStep", exc), None
+            return self._error(self.call_name("DoStep"), exc), None
         if not ok and not self.slave.log_queue:
             self._log.append((DISCARD, "logStatusDiscard",
-                              f"fmi2DoStep(t = {t!r}, h = {h!r}): step not taken"))
+                              f"{self.call_name('DoStep')}(t = {t!r}, h = {h!r}): step not "
+                              "taken"))
         status = self._status(OK if ok else DISCARD, "do_step")
         self._last_step = status & ~STATUS_LOG_FLAG
         self._discarded = self._last_step == DISCARD
@@ -217,32 +230,35 @@ class Adapter:
 
     # ------------------------------------------------------------------ variables
     def get_real(self, vrs):
-        return self._call("fmi2GetReal", self.slave.get_real, vrs)
+        return self._call(self.call_name("GetReal"), self.slave.get_real, vrs)
 
     def get_integer(self, vrs):
-        return self._call("fmi2GetInteger", self.slave.get_integer, vrs)
+        return self._call(self.call_name("GetInteger"), self.slave.get_integer, vrs)
 
     def get_boolean(self, vrs):
-        status, values = self._call("fmi2GetBoolean", self.slave.get_boolean, vrs)
+        status, values = self._call(self.call_name("GetBoolean"), self.slave.get_boolean, vrs)
         return status, None if values is None else [int(bool(v)) for v in values]
 
     def get_string(self, vrs):
-        status, values = self._call("fmi2GetString", self.slave.get_string, vrs)
+        status, values = self._call(self.call_name("GetString"), self.slave.get_string, vrs)
         self._strings = [] if values is None else [str(v) for v in values]
         return status, self._strings                 # kept: the host reads the pointers
 
     def set_real(self, vrs, values):
-        return self._call("fmi2SetReal", self.slave.set_real, vrs, values)
+        return self._call(self.call_name("SetReal"), self.slave.set_real, vrs,
+                          values)
 
     def set_integer(self, vrs, values):
-        return self._call("fmi2SetInteger", self.slave.set_integer, vrs, values)
+        return self._call(self.call_name("SetInteger"), self.slave.set_integer, vrs,
+                          values)
 
     def set_boolean(self, vrs, values):
-        return self._call("fmi2SetBoolean", self.slave.set_boolean, vrs,
+        return self._call(self.call_name("SetBoolean"), self.slave.set_boolean, vrs,
                           [bool(v) for v in values])
 
     def set_string(self, vrs, values):
-        return self._call("fmi2SetString", self.slave.set_string, vrs, values)
+        return self._call(self.call_name("SetString"), self.slave.set_string, vrs,
+                          values)
 
     # ------------------------------------------------------------------ FMU states
     def _checked_state(self, call: str, state):
@@ -252,27 +268,68 @@ class Adapter:
         return self._status(), state
 
     def get_state(self):
-        status, state = self._call("fmi2GetFMUstate", self.slave._get_fmu_state)
+        call = self.call_name("GetFMUstate")
+        status, state = self._call(call, self.slave._get_fmu_state)
         if status & ~STATUS_LOG_FLAG >= DISCARD:
             return status, None
-        return self._checked_state("fmi2GetFMUstate", state)
+        return self._checked_state(call, state)
 
     def set_state(self, state):
-        status = self._call("fmi2SetFMUstate", self.slave._set_fmu_state, state)
+        status = self._call(self.call_name("SetFMUstate"), self.slave._set_fmu_state, state)
         if status[0] & ~STATUS_LOG_FLAG < DISCARD:
             self._discarded = False
         return status
 
     def serialize(self, state):
-        status, data = self._call("fmi2SerializeFMUstate", self._cls._fmu_state_to_bytes,
-                                  state)
+        status, data = self._call(self.call_name("SerializeFMUstate"),
+                                  self._cls._fmu_state_to_bytes, state)
         if data is not None and not isinstance(data, bytes):
             data = bytes(data)
         return status, data
 
     def deserialize(self, data: bytes):
-        status, state = self._call("fmi2DeSerializeFMUstate",
-                                   self._cls._fmu_state_from_bytes, data)
+        call = self.call_name("DeSerializeFMUstate")
+        status, state = self._call(call, self._cls._fmu_state_from_bytes, data)
         if status & ~STATUS_LOG_FLAG >= DISCARD:
             return status, None
-        return self._checked_state("fmi2DeSerializeFMUstate", state)
+        return self._checked_state(call, state)
+
+
+class Adapter3(Adapter):
+    """One FMI 3.0 co-simulation instance: the FMI 2.0 rules where FMI 3.0 keeps them, and
+    what FMI 3.0 changes: the start time comes with fmi3EnterInitializationMode, and
+    fmi3DoStep returns its flags and the last successful time with its status."""
+
+    def enter_initialization_mode(self, tol_defined=0, tol=0.0, start=0.0, stop_defined=0,
+                                  stop=0.0):
+        def enter():
+            self.slave.setup_experiment(start, stop if stop_defined else None,
+                                        tol if tol_defined else None)
+            self.slave.enter_initialization_mode()
+
+        return self._call("fmi3EnterInitializationMode", enter)
+
+    def do_step(self, t: float, h: float):
+        """(status, (eventHandlingNeeded, terminateSimulation, earlyReturn,
+        lastSuccessfulTime)). The FMU has no events and never returns early; a discarded
+        step asks to terminate only when the instance cannot take any further step (a
+        failed initialisation, a step after fmi3Terminate): other discards leave the choice
+        to the master (roll back and retry, or stop)."""
+        status, _ = super().do_step(t, h)
+        s = self.slave
+        failed = (status & ~STATUS_LOG_FLAG) >= DISCARD
+        final = bool(getattr(s, "_terminated", False) or getattr(s, "_error", None))
+        return status, (0, int(failed and final), 0, float(getattr(s, "_time", t)))
+
+    def enter_step_mode(self):
+        """fmi3EnterStepMode: the instance is in step mode after initialisation already (it
+        has no event mode); accepted once initialised."""
+        if not getattr(self.slave, "initialised", False):
+            self._log.append((ERROR, "logStatusError", "fmi3EnterStepMode: only after "
+                              "fmi3ExitInitializationMode"))
+            return self._status(ERROR), None
+        return self._status(), None
+
+
+#: FMI major version -> the adapter of its instances
+ADAPTERS = {2: Adapter, 3: Adapter3}
