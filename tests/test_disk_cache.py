@@ -129,3 +129,70 @@ def test_processes_filling_one_entry_leave_one_valid_entry(cache):
     compute, calls = counting(lambda: {"x": np.zeros(1)})
     kept = disk_cache.cached("shared", ("same",), compute)
     assert not calls and kept["x"].tobytes() == np.arange(100_000, dtype=float).tobytes()
+
+
+from pantocosim.core.model import SecondOrderModel  # noqa: E402
+
+
+class _NewtonLinearised(SecondOrderModel):
+    """The linearised catenary of the moving-load run as a generic second-order model
+    (M a + C v + K0 (q - q_static) = loads), for Newton-Raphson HHT steps."""
+
+    def __init__(self, line):
+        from pantocosim.catenary.operating_height import LinearisedCatenary
+
+        self.lin, self.line, self.n_dofs = LinearisedCatenary(line), line, line.n_dofs
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        from pantocosim.core.model import Evaluation
+
+        lin = self.lin
+        ev = Evaluation(f_inertia=lin.M @ a, f_rest=lin._forces(t, q, v, inputs),
+                        structure_key=0)
+        if tangent:
+            ev.mass, ev.damping, ev.stiffness = lin.M, lin.C, lin.K0
+        return ev
+
+    def effective_matrix(self, ev, c_a, c_v, c_f):
+        return self.line.effective_matrix(ev, c_a, c_v, c_f)
+
+    def factorize(self, S):
+        return self.line.factorize(S)
+
+
+def test_the_closed_form_moving_load_run_is_the_newton_one():
+    """The pre-run's closed-form HHT steps (pantocosim.core.affine_hht) solve the same
+    linear equations as Newton-Raphson HHT (pantocosim.core.hht) on the model written out."""
+    from pantocosim.catenary.operating_height import LinearisedCatenary, _moving_load_run
+    from pantocosim.core.hht import DEFAULT_ALPHA, HHTIntegrator, HHTSettings
+
+    line = two_span_line()
+    F, window, dt, duration = np.array([150.0]), (40.0, 80.0), 2e-3, 1.3
+    closed = _moving_load_run(line, LinearisedCatenary(line), F, window, dt, duration,
+                              DEFAULT_ALPHA)
+    model = _NewtonLinearised(line)
+    integ = HHTIntegrator(model, HHTSettings(alpha=DEFAULT_ALPHA, rtol=1e-12))
+    integ.initialize(0.0, line.static_state(F), np.zeros(line.n_dofs), F)
+    heights = []
+    for _ in range(int(np.ceil(duration / dt - 1e-9))):
+        integ.step(dt, F)
+        if window[0] <= line.positions(integ.t)[0] <= window[1]:
+            heights.append(line.wire_height(integ.t, integ.q)[0])
+    assert len(heights) > 100
+    assert closed[0] == pytest.approx(np.mean(heights), abs=1e-9)   # m; the lift is ~5 cm
+    assert abs(closed[0] - line.wire_height(0.0, line.q_static)[0]) > 1e-3
+
+
+def test_the_modal_basis_is_kept_bit_for_bit(cache):
+    from pantocosim.catenary.linear import LinearCatenary
+    from pantocosim.catenary.modal import ModalCatenary
+
+    lin = LinearCatenary(two_span_line().definition, x0=[5.0], speed=250 / 3.6)
+    cold = ModalCatenary(linear=lin, cutoff_hz=40.0, keep_basis=True)
+    assert len(list(cache.glob("modal-basis-*.npz"))) == 1
+    warm = ModalCatenary(linear=lin, cutoff_hz=40.0, keep_basis=True)
+    assert warm.Phi.tobytes() == cold.Phi.tobytes()
+    assert warm.frequencies.tobytes() == cold.frequencies.tobytes()
+    assert 0.5 < cold.frequencies[0] < 2.0 and cold.frequencies[-1] < 40.0    # Hz
+    ModalCatenary(linear=lin, cutoff_hz=30.0)                       # another cutoff: missed
+    assert len(list(cache.glob("modal-basis-*.npz"))) == 2
