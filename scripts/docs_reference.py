@@ -127,7 +127,14 @@ def _fmi2(core: type) -> type:
 def _model_description(slave_cls) -> ET.Element:
     """The model description the FMU built from ``slave_cls`` carries (pythonfmu builds it the
     same way: an instance's ``to_xml``)."""
-    return _fmi2(slave_cls)(instance_name="reference", resources=".").to_xml()
+    slave = _fmi2(slave_cls)(instance_name="reference", resources=".")
+    # an output's start value is what the FMU computes at initialisation (the catenary's start
+    # laws take a moving-load run): the reference lists outputs without one
+    outputs = {v.value_reference for v in slave.vars.values() if v.causality.name == "output"}
+    get_real = slave.get_real
+    slave.get_real = lambda vrs: [float("nan") if vr in outputs else get_real([vr])[0]
+                                  for vr in vrs]
+    return slave.to_xml()
 
 
 def _variables_table(root: ET.Element, causalities: tuple) -> str:
@@ -136,7 +143,7 @@ def _variables_table(root: ET.Element, causalities: tuple) -> str:
         if v.get("causality") not in causalities:
             continue
         typ = next(iter(v))
-        start = typ.get("start", "")
+        start = typ.get("start", "") if v.get("causality") != "output" else ""
         try:
             start = f"{float(start):.6g}" if typ.tag == "Real" else start
         except ValueError:
