@@ -1,4 +1,4 @@
-"""Worker memory over a campaign (issue 19): the same short case N times as N distinct cases
+"""Worker memory over a campaign: the same short case N times as N distinct cases
 (tiny changes of the Newton tolerance, so each has its own hash) on a LocalCluster of one
 worker process; prints the worker's resident memory after each case.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Flexible-bar vs rigid DSA-380 (thesis 2.3, issue 6): frequencies (Table 2.2), static drop of
+"""Flexible-bar vs rigid DSA-380 (thesis 2.3): frequencies (Table 2.2), static drop of
 point 10 under 120 N (2.3.2, Fig. 2.14), time responses (Figs. 2.13, 2.15), FRFs (Figs.
 2.19, 2.20, 2.22) and mode shapes; writes ``docs/figures/flex-*.png`` and prints the tables
 quoted in ``docs/flexible-vs-rigid.md``.

@@ -29,7 +29,7 @@ START, END = "<!-- study:start -->", "<!-- study:end -->"
 STATICS = "<!-- statics:start -->", "<!-- statics:end -->"
 SCENARIOS = ("en50318-250", "en50318-300", "dsa380-ave-300", "benchmark-320",
              "dsa380-ave-300-double")
-#: the issue's accuracy targets [%]: mean, sigma, actual max/min, max uplift at supports
+#: the accuracy targets [%]: mean, sigma, actual max/min, max uplift at supports
 TARGETS = {"linear": (0.2, 1.0, 2.0, 3.0), "modal": (0.5, 2.0, 3.0, 5.0)}
 QUANTITIES = ("mean_n", "std_n", "max_n", "min_n", "max_uplift_at_support_m")
 
@@ -62,7 +62,7 @@ def errors(s_ref: dict, s: dict) -> dict:
 
 
 def within_targets(err: dict, model: str) -> bool | None:
-    """Whether the errors meet the issue's targets of ``model`` (None: it has none)."""
+    """Whether the errors meet the accuracy targets of ``model`` (None: it has none)."""
     limits = TARGETS.get(model)
     if not limits:
         return None

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Time-step convergence of the monolithic pantograph-catenary solution (issue 4).
+"""Time-step convergence of the monolithic pantograph-catenary solution.
 
 1. sigma of the contact force at 1 ms and 0.5 ms on a full preset (default en50318-250);
 2. observed order of convergence of the contact force as the step halves (4, 2, 1, 0.5,

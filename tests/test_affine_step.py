@@ -1,4 +1,4 @@
-"""Closed-form HHT steps of the linear catenary (issue 14): the same solution as
+"""Closed-form HHT steps of the linear catenary: the same solution as
 Newton-Raphson on the linear model, with exact dropper slackening; the monolithic step
 condensed on the contact points equals the assembled monolithic Newton solution, for a
 linear (closed-form) and a nonlinear (Newton) pantograph; the condensed penalty law."""

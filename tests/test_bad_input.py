@@ -1,4 +1,4 @@
-"""Bad input, interrupts and full disks (issue 15): every user error ends with one line naming
+"""Bad input, interrupts and full disks: every user error ends with one line naming
 the file or flag, the field and the value, and exit status 2; Ctrl-C ends with status 130 and
 keeps what was computed; nothing already written is lost; no silent wrong result.
 

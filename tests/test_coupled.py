@@ -1,5 +1,5 @@
 """Monolithic pantograph-catenary model, static start, run outputs, scenario validation
-(issue 4) and the coupling algorithms on in-process subsystems (issue 5)."""
+and the coupling algorithms on in-process subsystems."""
 
 import json
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""The scripts behind docs/ run on short settings, so their tables cannot rot (issue 17).
+"""The scripts behind docs/ run on short settings, so their tables cannot rot.
 
 Each test takes under 20 s on one core except those marked ``slow`` (thesis study: six runs;
 flexible vs rigid: the flexible model's set-up and FRFs).

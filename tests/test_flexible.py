@@ -1,4 +1,4 @@
-"""Flexible-bar DSA-380 (issue 6, thesis 2.2-2.3): ANCF element tangents, convergence to the
+"""Flexible-bar DSA-380 (thesis 2.2-2.3): ANCF element tangents, convergence to the
 rigid model as E grows, steel frequencies and bar bending modes (Table 2.2), mesh refinement,
 static drop (2.3.2), time response, preset/CLI path, bad files, FMU swap."""
 

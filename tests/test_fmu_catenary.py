@@ -1,5 +1,5 @@
 """Catenary FMU: validation, port contract, exactness vs the in-process model, rollback,
-bad input, built-in penalty vs monolithic, SSP, third-party masters, bare venv (issue 5).
+bad input, built-in penalty vs monolithic, SSP, third-party masters, bare venv.
 
 Every FMU is loaded in a subprocess (tests/fmu_catenary_probe.py, the run_* scripts), never in
 the pytest process (pythonfmu B4/B5, docs/pythonfmu-notes.md)."""

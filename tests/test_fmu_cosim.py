@@ -1,4 +1,4 @@
-"""Co-simulation through the FMUs with our master (issue 5), run as the CLI in subprocesses
+"""Co-simulation through the FMUs with our master, run as the CLI in subprocesses
 (pythonfmu FMUs never load into the pytest process)."""
 
 import json

@@ -1,5 +1,5 @@
 """The catenary FMU with catenary_model = 1 (linear) equals the in-process linear model under
-the same closed-form steps (issue 14; tests/test_affine_step.py checks those against
+the same closed-form steps (tests/test_affine_step.py checks those against
 Newton-Raphson); the FMU runs in a subprocess (tests/fmu_catenary_probe.py)."""
 
 import numpy as np

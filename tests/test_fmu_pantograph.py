@@ -1,4 +1,4 @@
-"""Pantograph FMUs: build, validation, port contract, rollback, bad input (issue 5)."""
+"""Pantograph FMUs: build, validation, port contract, rollback, bad input."""
 
 import json
 import subprocess

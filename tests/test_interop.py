@@ -1,4 +1,4 @@
-"""The shipped files in third-party masters, unpatched (issue 13): the SSP is valid and
+"""The shipped files in third-party masters, unpatched: the SSP is valid and
 tool-friendly and holds nothing of one pantograph model; fmpy's SSP support and CoFmuPy run
 the default scenario from the FMUs' start values alone; a pantograph swap inside the SSP is a
 file swap in libcosim; a non-editable install builds and runs from any folder.

@@ -1,4 +1,4 @@
-"""Linear and modal catenary (issue 14): the physics, not the speed.
+"""Linear and modal catenary: the physics, not the speed.
 
 - linear equals nonlinear under a small moving load to the linearisation's round-off, and the
   difference scales like the load squared;
@@ -159,7 +159,7 @@ def test_monolithic_run_with_each_model(kind):
     if kind == "linear":
         assert np.max(np.abs(got - ref)) < 0.03 * np.mean(ref)
     else:
-        # the modal model at its default cutoff (docs/modal-cutoff.md): the issue's targets
+        # the modal model at its default cutoff (docs/modal-cutoff.md): the accuracy targets
         # on the mean and sigma; its own truncation adds a few newtons to max |dF|
         assert abs(np.mean(got) - np.mean(ref)) < 0.005 * np.mean(ref)
         assert abs(np.std(got) - np.std(ref)) < 0.02 * np.std(ref)

@@ -1,4 +1,4 @@
-"""The modal catenary (issue 14): the physics, not the speed.
+"""The modal catenary: the physics, not the speed.
 
 - with every mode it is the linear model (Newton and the closed-form step);
 - its static correction keeps the static response exact at any pantograph position, with
@@ -171,7 +171,7 @@ def test_banded_modes_are_the_dense_ones():
 def test_default_cutoff_meets_the_targets_against_linear():
     """A short en50318-300 run (the hardest preset for the modal model: 0.69 of the wave
     speed) with the default cutoff, against the linear model at the same time step: the
-    issue's modal targets (mean 0.5 %, sigma 2 %, actual max / min 3 %)."""
+    modal model's accuracy targets (mean 0.5 %, sigma 2 %, actual max / min 3 %)."""
     from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ
     from pantocosim.master.run import prepare, run_monolithic
     from pantocosim.master.scenario import load_scenario

@@ -1,4 +1,4 @@
-"""The 3D director beam (issue 18, step 1) against closed forms and finite differences."""
+"""The 3D director beam against closed forms and finite differences."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""`pantocosim regress`: the FMU regression cases match the stored references (issue 5)."""
+"""`pantocosim regress`: the FMU regression cases match the stored references."""
 
 import subprocess
 import sys

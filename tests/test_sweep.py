@@ -1,5 +1,5 @@
 """Sweep files, case hashing, the worker's record of a failing case, the EN 50367 assessment,
-the results table and the report (issue 19). Fast: no Dask cluster, no full run."""
+the results table and the report. Fast: no Dask cluster, no full run."""
 
 import csv
 import json

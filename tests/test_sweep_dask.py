@@ -1,4 +1,4 @@
-"""`pantocosim sweep` on Dask (issue 19): a LocalCluster of 2 worker processes, a scheduler
+"""`pantocosim sweep` on Dask: a LocalCluster of 2 worker processes, a scheduler
 and a worker started as separate processes on localhost, resume after an interrupted sweep.
 Each sweep has 3 short cases (5 spans, one analysed span, linear catenary), one of which
 fails (above 0.7 of the wave speed) and is recorded while the others go on."""

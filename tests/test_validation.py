@@ -13,7 +13,7 @@ from pantocosim.master.cli import main
 from pantocosim.master.validation import (DATA_DIR, QUANTITIES, compare, load_standard,
                                           markdown_table, parse_standard)
 
-#: the statistics of the en50318 preset before issue 16 (issue 16's table), SI units
+#: the statistics of the en50318 preset before its messenger support was calibrated, SI units
 BEFORE = {"mean_n": 114.7, "std_n": 30.3, "stat_max_n": 205.5, "stat_min_n": 23.9,
           "max_n": 179.8, "min_n": 55.4, "max_uplift_at_support_m": 0.0363,
           "loss_of_contact_percent": 0.0}

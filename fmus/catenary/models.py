@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from ..core.errors import ParameterError
 
-#: default cutoff of the modal model [Hz]: the issue-14 accuracy targets against the linear
+#: default cutoff of the modal model [Hz]: the accuracy targets against the linear
 #: model on en50318-250, en50318-300 and dsa380-ave-300 (docs/modal-cutoff.md; the wire modes
 #: a pantograph meets within the 20 Hz band reach 20 Hz / (1 - V/c), c the contact wire's
 #: wave speed, and the study needs about 1.3 times that)

@@ -1,4 +1,4 @@
-"""Spatial flexible multibody dynamics (issue 18): nodes carrying a position and three
+"""Spatial flexible multibody dynamics: nodes carrying a position and three
 directors, geometrically exact director beams, joints as quadratic constraints with Lagrange
 multipliers, ground contact, loads, and a system that collects them for the one HHT-alpha
 integrator (cardillo style: components contribute mass, forces and constraints).
