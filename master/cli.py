@@ -109,7 +109,7 @@ def console_main() -> None:
     except KeyboardInterrupt:   # before a command started (loading the modules)
         print("pantocosim: interrupted (Ctrl-C)", file=sys.stderr)
         code = EXIT_INTERRUPTED
-    if "fmpy.fmi2" in sys.modules:
+    if "fmpy.fmi2" in sys.modules or "fmpy.fmi3" in sys.modules:
         import os
 
         sys.stdout.flush()

@@ -172,16 +172,16 @@ def fmu_paths(prep, build: bool = True):
     of ``prep`` (a :class:`Prepared` or a scenario):
     a pantograph's ``fmu`` (relative to the working folder, else to the scenario file), by
     default ``dist/fmus/<model>.fmu`` of the working folder (a model given by a parameter
-    file: ``dist/fmus/<PARAMETER_FILE_FMU>.fmu``, which gets the file); the default ones are
-    built if missing or stale."""
-    from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus
+    file: ``dist/fmus/<PARAMETER_FILE_FMU>.fmu``, which gets the file; ``dist/fmus/fmi3/`` with
+    ``[simulation] fmi = 3``); the default ones are built if missing or stale."""
+    from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus, fmi_out
     from pantocosim.master.fmu_check import check_fmus
     from pantocosim.pantograph.presets import PRESETS
 
     sc = prep.scenario if isinstance(prep, Prepared) else prep
     n_supports = len(prep.support_x) if isinstance(prep, Prepared) else line_supports(sc)
     base = Path(sc.source).resolve().parent
-    dist = default_out()
+    dist = fmi_out(default_out(), sc.fmi)
     pans = []
     for spec in sc.pantographs:
         if spec.fmu:
@@ -195,8 +195,8 @@ def fmu_paths(prep, build: bool = True):
     if build:
         from pantocosim.master.folder_lock import FolderLock
 
-        with FolderLock(dist, "dist/fmus", wait=True, required=False):   # one build at a time in that folder
-            ensure_fmus(pans + [cat], dist)
+        with FolderLock(default_out(), "dist/fmus", wait=True, required=False):   # one build at a time in that folder
+            ensure_fmus(pans + [cat], dist, fmi=sc.fmi)
     return check_fmus(sc, n_supports, cat, pans)
 
 

@@ -225,15 +225,15 @@ def is_stale(fmu: Path) -> bool:
     return bundled_stamp(fmu) != package_stamp()
 
 
-def ensure_fmus(paths, out: Path | None = None) -> None:
-    """Build the FMUs among ``paths`` (files in ``out``) that are missing or stale (built from
-    another version of the model package than the installed one)."""
+def ensure_fmus(paths, out: Path | None = None, fmi: int = 2) -> None:
+    """Build the FMI ``fmi`` FMUs among ``paths`` (files in ``out``) that are missing or stale
+    (built from another version of the model package than the installed one)."""
     out = Path(out) if out is not None else default_out()
     todo = sorted({Path(p).stem for p in paths
                    if Path(p).parent == Path(out) and (not Path(p).exists() or is_stale(p))})
     if todo:
         print(f"building FMUs {', '.join(todo)} into {out}", file=sys.stderr, flush=True)
-        build_fmus(out, only=todo, quiet=True)
+        build_fmus(out, only=todo, quiet=True, fmi=fmi)
 
 
 def build_all(out: Path | None = None, only=None, ssp: bool = True,

@@ -1,7 +1,7 @@
 """Checks of the FMU files of a co-simulation, before any is loaded or anything is written.
 
-- each file is an FMI 2.0 co-simulation FMU: a readable zip archive with a model description
-  (not a folder, an empty or truncated file);
+- each file is an FMI 2.0 or 3.0 co-simulation FMU: a readable zip archive with a model
+  description (not a folder, an empty or truncated file);
 - each pantograph FMU is a pantocosim pantograph FMU holding the scenario's model: the model
   of an FMU is its ``modelName``, the slave class of its preset
   (:data:`pantocosim.master.fmu_build.PANTOGRAPH_FMUS`); a pantograph given by a parameter
@@ -67,8 +67,8 @@ def read_fmu(path: Path, field: str, source: str | None):
         first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         raise ParameterError(field, str(p), f"has an unreadable modelDescription.xml: "
                              f"{first}", source) from None
-    if md.fmiVersion != "2.0" or md.coSimulation is None:
-        raise ParameterError(field, str(p), f"is not an FMI 2.0 co-simulation FMU (FMI "
+    if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
+        raise ParameterError(field, str(p), f"is not an FMI 2.0 or 3.0 co-simulation FMU (FMI "
                              f"{md.fmiVersion}, co-simulation: "
                              f"{'yes' if md.coSimulation else 'no'})", source)
     return md

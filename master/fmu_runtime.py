@@ -1,10 +1,12 @@
-"""Loading and driving FMI 2.0 co-simulation FMUs through fmpy (``FMU2Slave``).
+"""Loading and driving FMI 2.0 and 3.0 co-simulation FMUs through fmpy (``FMU2Slave``,
+``FMU3Slave``; the version is the model description's, :data:`APIS`).
 
 - FMUs are extracted once per content hash into a fixed cache folder, so numba's on-disk cache
   inside the bundled package stays warm across runs (docs/pythonfmu-notes.md);
 - every log message of an instance is captured (for error reports) and FMI call failures
   become :class:`FmuError` with the status and the instance's last messages;
-- interface variables are exchanged with one vector ``getReal``/``setReal`` call per FMU.
+- interface variables are exchanged with one vector ``getReal``/``setReal`` call per FMU
+  (``getFloat64``/``setFloat64`` in FMI 3.0).
 """
 
 from __future__ import annotations
@@ -104,29 +106,135 @@ def _callbacks():
     return _CALLBACKS[0]
 
 
+class Fmi2Api:
+    """What differs between the FMI versions, for FMI 2.0 (fmpy's ``FMU2Slave``)."""
+
+    #: the setter of each variable type of the model description
+    SETTERS = {"Real": "setReal", "Integer": "setInteger", "Boolean": "setBoolean",
+               "String": "setString"}
+    REAL = "Real"
+
+    @staticmethod
+    def make(md, unzip: Path, instance_name: str):
+        from fmpy.fmi2 import FMU2Slave
+
+        return FMU2Slave(guid=md.guid, unzipDirectory=str(unzip),
+                         modelIdentifier=md.coSimulation.modelIdentifier,
+                         instanceName=instance_name)
+
+    @staticmethod
+    def instantiate(slave, instance_name: str) -> None:
+        slave.instantiate(callbacks=_callbacks(), loggingOn=True)
+
+    @staticmethod
+    def enter_initialization(fmu, start_time: float) -> None:
+        fmu._call("setupExperiment", lambda: fmu.slave.setupExperiment(startTime=start_time))
+        fmu._call("enterInitializationMode", fmu.slave.enterInitializationMode)
+
+    @staticmethod
+    def do_step(slave, t: float, h: float) -> None:
+        # noSetFMUStatePriorToCurrentPoint false: the master may roll back
+        slave.doStep(t, h, 0)
+
+    @staticmethod
+    def real_calls(slave):
+        """(get, set) of Real values through C arrays: fn(instance, vr, n, values)."""
+        return ((lambda vr, n, buf: slave.fmi2GetReal(slave.component, vr, n, buf)),
+                (lambda vr, n, buf: slave.fmi2SetReal(slave.component, vr, n, buf)))
+
+    @staticmethod
+    def c_types():
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+        return fmi2ValueReference, fmi2Real
+
+    STATE_CALLS = {"get": "getFMUstate", "set": "setFMUstate", "free": "freeFMUstate",
+                   "serialize": "serializeFMUstate", "deserialize": "deSerializeFMUstate"}
+
+
+class Fmi3Api(Fmi2Api):
+    """FMI 3.0 (fmpy's ``FMU3Slave``): Float64 and Int32 variables, the start time given to
+    fmi3EnterInitializationMode, fmi3DoStep's flags."""
+
+    SETTERS = {"Float64": "setFloat64", "Int32": "setInt32", "Boolean": "setBoolean",
+               "String": "setString"}
+    REAL = "Float64"
+
+    @staticmethod
+    def make(md, unzip: Path, instance_name: str):
+        from fmpy.fmi3 import FMU3Slave
+
+        return FMU3Slave(guid=md.instantiationToken, unzipDirectory=str(unzip),
+                         modelIdentifier=md.coSimulation.modelIdentifier,
+                         instanceName=instance_name)
+
+    @staticmethod
+    def instantiate(slave, instance_name: str) -> None:
+        def log_message(env, status, category, message):
+            text = message.decode("utf-8", "replace") if message else ""
+            _LOGS.setdefault(instance_name, []).append((int(status), text))
+
+        slave.instantiate(loggingOn=True, logMessage=log_message)
+
+    @staticmethod
+    def enter_initialization(fmu, start_time: float) -> None:
+        fmu._call("enterInitializationMode",
+                  lambda: fmu.slave.enterInitializationMode(startTime=start_time))
+
+    @staticmethod
+    def do_step(slave, t: float, h: float) -> None:
+        slave.doStep(t, h, False)
+
+    @staticmethod
+    def real_calls(slave):
+        return ((lambda vr, n, buf: slave.fmi3GetFloat64(slave.component, vr, n, buf, n)),
+                (lambda vr, n, buf: slave.fmi3SetFloat64(slave.component, vr, n, buf, n)))
+
+    @staticmethod
+    def c_types():
+        from fmpy.fmi3 import fmi3Float64, fmi3ValueReference
+
+        return fmi3ValueReference, fmi3Float64
+
+    STATE_CALLS = {"get": "getFMUState", "set": "setFMUState", "free": "freeFMUState",
+                   "serialize": "serializeFMUState", "deserialize": "deserializeFMUState"}
+
+
+#: the model description's fmiVersion -> its API
+APIS = {"2.0": Fmi2Api, "3.0": Fmi3Api}
+
+
+def fmi_version(fmu_path: str | Path) -> int:
+    """The FMI major version of an FMU file (its model description's ``fmiVersion``)."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    with zipfile.ZipFile(fmu_path) as z:
+        return int(float(ET.fromstring(z.read("modelDescription.xml")).get("fmiVersion")))
+
+
 class FmuInstance:
-    """One instantiated co-simulation FMU with name-based variable access."""
+    """One instantiated co-simulation FMU (FMI 2.0 or 3.0, as its model description says)
+    with name-based variable access."""
 
     def __init__(self, fmu_path: str | Path, instance_name: str):
         from fmpy import read_model_description
-        from fmpy.fmi2 import FMU2Slave, fmi2False
 
         self.path = Path(fmu_path)
         self.name = instance_name
         unzip = extract_cached(self.path)
         self.md = read_model_description(str(unzip))
+        if self.md.fmiVersion not in APIS:
+            raise FmuError(f"{self.name} ({self.path.name}): FMI {self.md.fmiVersion}: "
+                           f"accepted: {', '.join(APIS)}", instance=self.name)
+        self.api = APIS[self.md.fmiVersion]
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=str(unzip),
-                               modelIdentifier=self.md.coSimulation.modelIdentifier,
-                               instanceName=instance_name)
+        self.slave = self.api.make(self.md, unzip, instance_name)
         _LOGS[instance_name] = []
         self.fatal = False
-        self._call("instantiate", lambda: self.slave.instantiate(callbacks=_callbacks(),
-                                                                  loggingOn=True))
+        self._call("instantiate", lambda: self.api.instantiate(self.slave, instance_name))
         self.t = 0.0
-        #: doStep's noSetFMUStatePriorToCurrentPoint: the master may roll back
-        self._no_set_prior = fmi2False
 
     # ------------------------------------------------------------------ errors
     def messages(self, min_status: int = 1) -> list[str]:
@@ -161,23 +269,21 @@ class FmuInstance:
             raise FmuError(f"{self.name} ({self.path.name}) has no variable {exc.args[0]!r}",
                            instance=self.name) from None
 
+    #: the Python value of each variable type
+    CONVERT = {"Real": float, "Float64": float, "Integer": int, "Int32": int, "Boolean": bool,
+               "String": str}
+
     def set_start_values(self, values: dict) -> None:
         """Set parameters of any type by name (before exitInitializationMode)."""
         for name, value in values.items():
             ref = self.refs([name])
             kind = self.variables[name].type
-            if kind == "Real":
-                self._call(f"setReal({name})", lambda: self.slave.setReal(ref, [float(value)]))
-            elif kind == "Integer":
-                self._call(f"setInteger({name})", lambda: self.slave.setInteger(ref, [int(value)]))
-            elif kind == "Boolean":
-                self._call(f"setBoolean({name})", lambda: self.slave.setBoolean(ref, [bool(value)]))
-            else:
-                self._call(f"setString({name})", lambda: self.slave.setString(ref, [str(value)]))
+            setter = getattr(self.slave, self.api.SETTERS[kind])
+            x = self.CONVERT[kind](value)
+            self._call(f"{self.api.SETTERS[kind]}({name})", lambda: setter(ref, [x]))
 
     def initialize(self, start_values: dict, start_time: float = 0.0) -> None:
-        self._call("setupExperiment", lambda: self.slave.setupExperiment(startTime=start_time))
-        self._call("enterInitializationMode", self.slave.enterInitializationMode)
+        self.api.enter_initialization(self, start_time)
         self.set_start_values(start_values)
         self._call("exitInitializationMode", self.slave.exitInitializationMode)
         self.t = start_time
@@ -187,30 +293,34 @@ class FmuInstance:
         return RealVector(self, self.refs(names))
 
     def set_real(self, refs: list[int], values) -> None:
-        self.slave.setReal(refs, list(values))
+        RealVector(self, refs).set(values)
 
     def get_real(self, refs: list[int]) -> np.ndarray:
-        return np.asarray(self.slave.getReal(refs), dtype=float)
+        return RealVector(self, refs).get()
 
     def do_step(self, t: float, h: float) -> None:
-        self._call(lambda: f"doStep(t = {t:.6g}, h = {h:.3g})", self.slave.doStep, t, h,
-                   self._no_set_prior)
+        self._call(lambda: f"doStep(t = {t:.6g}, h = {h:.3g})", self.api.do_step, self.slave,
+                   t, h)
 
     # ------------------------------------------------------------------ state
+    def _state_call(self, what: str, *args):
+        name = self.api.STATE_CALLS[what]
+        return self._call(name, getattr(self.slave, name), *args)
+
     def get_state(self):
-        return self._call("getFMUstate", self.slave.getFMUstate)
+        return self._state_call("get")
 
     def set_state(self, state) -> None:
-        self._call("setFMUstate", self.slave.setFMUstate, state)
+        self._state_call("set", state)
 
     def free_state(self, state) -> None:
-        self._call("freeFMUstate", self.slave.freeFMUstate, state)
+        self._state_call("free", state)
 
     def serialize_state(self, state) -> bytes:
-        return self._call("serializeFMUstate", lambda: self.slave.serializeFMUstate(state))
+        return self._state_call("serialize", state)
 
     def deserialize_state(self, data: bytes):
-        return self._call("deSerializeFMUstate", lambda: self.slave.deSerializeFMUstate(data))
+        return self._state_call("deserialize", data)
 
     def terminate(self) -> None:
         if self.fatal:
@@ -223,31 +333,29 @@ class FmuInstance:
 
 
 class RealVector:
-    """Real variables of one FMU read or written together every step: the value references
-    and the C arrays of fmpy's ``fmi2GetReal``/``fmi2SetReal`` are built once, so an exchange
-    allocates nothing but the values it returns."""
+    """Real (FMI 3.0: Float64) variables of one FMU read or written together every step: the
+    value references and the C arrays of fmpy's ``fmi2GetReal``/``fmi2SetReal``
+    (``fmi3GetFloat64``/``fmi3SetFloat64``) are built once, so an exchange allocates nothing
+    but the values it returns."""
 
     def __init__(self, fmu: FmuInstance, refs: list[int]):
-        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
-
+        ref_type, real_type = fmu.api.c_types()
         self.fmu = fmu
         self.refs = list(refs)
         self.n = len(self.refs)
-        self._vr = (fmi2ValueReference * self.n)(*self.refs)
-        self._buffer = (fmi2Real * self.n)()
+        self._vr = (ref_type * self.n)(*self.refs)
+        self._buffer = (real_type * self.n)()
         #: the C buffer seen as a numpy array (no copy)
         self._values = np.ctypeslib.as_array(self._buffer) if self.n else np.zeros(0)
+        self._get, self._set = fmu.api.real_calls(fmu.slave)
+        self._names = (f"get{fmu.api.REAL}", f"set{fmu.api.REAL}")
 
     def get(self) -> np.ndarray:
         """The current values (a new array)."""
-        slave = self.fmu.slave
-        self.fmu._call("getReal", slave.fmi2GetReal, slave.component, self._vr, self.n,
-                       self._buffer)
+        self.fmu._call(self._names[0], self._get, self._vr, self.n, self._buffer)
         return self._values.copy()
 
     def set(self, values) -> None:
         """Set the variables to ``values`` (one per reference)."""
         self._values[:] = values
-        slave = self.fmu.slave
-        self.fmu._call("setReal", slave.fmi2SetReal, slave.component, self._vr, self.n,
-                       self._buffer)
+        self.fmu._call(self._names[1], self._set, self._vr, self.n, self._buffer)

@@ -37,6 +37,7 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
                                    # analysis window
     catenary_model = "nonlinear"   # "nonlinear" (reference), "linear" or "modal"
     modal_cutoff_hz = 100.0        # modal model: modes below it (docs/modal-cutoff.md)
+    fmi = 2                        # co-simulation: FMI version of the default FMUs (2 or 3)
 
     [contact]
     stiffness = 50000.0            # k_H [N/m]
@@ -119,6 +120,10 @@ SIMULATION = Section("simulation", [
           doc="nonlinear (reference), linear or modal catenary model"),
     Field("modal_cutoff_hz", unit="Hz", default=DEFAULT_MODAL_CUTOFF_HZ, positive=True,
           doc="modal model: the modes below this frequency are kept"),
+    Field("fmi", "integer", default=2, choices=(2, 3),
+          doc="co-simulation: the FMI version of the FMUs built by `pantocosim build-fmus` "
+          "that the run uses (2: dist/fmus/, 3: dist/fmus/fmi3/); an FMU a pantograph names "
+          "runs in the version its model description says"),
 ], doc="Optional table: every field has a default.")
 CONTACT = Section("contact", [
     Field("stiffness", unit="N/m", default=DEFAULT_CONTACT_STIFFNESS, positive=True,
@@ -172,6 +177,8 @@ class Scenario:
     #: catenary model (pantocosim.catenary.models.CATENARY_MODELS)
     catenary_model: str = "nonlinear"
     modal_cutoff_hz: float = DEFAULT_MODAL_CUTOFF_HZ
+    #: co-simulation: FMI version of the default FMUs (2: dist/fmus/, 3: dist/fmus/fmi3/)
+    fmi: int = 2
 
     @property
     def speed(self) -> float:

@@ -52,8 +52,8 @@ class Fmi2Front(Fmi2Slave):
     def fmi_call(name: str) -> str:
         return "fmi2" + name
 
-    def log(self, msg: str, status=Fmi2Status.ok, category=None, debug: bool = False):
-        super().log(msg, Fmi2Status(int(status)), category, debug)
+    def log(self, msg: str, status=Fmi2Status.ok, category=None):
+        super().log(msg, Fmi2Status(int(status)), category)
 
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
         root = super().to_xml(model_options)
