@@ -35,7 +35,7 @@ model = "dsa380-lumped3"       # runs dist/fmus/dsa380-lumped3.fmu in a co-simul
 position_m = 30.0
 
 [analysis]
-window_m = [60.0, 120.0]
+window_m = [50.0, 95.0]
 
 [simulation]
 duration_s = 1.0
