@@ -18,39 +18,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+#: the tutorial's data files, shown on its page
+FILES = Path(__file__).resolve().parent / "files"
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from own_catenary import LINE  # noqa: E402  (the line of the catenary tutorial)
 
-# --8<-- [start:scenario]
-SCENARIO = """\
-name = "my-line-200"
-catenary = "my-line.toml"      # relative to this file's folder
-speed_kmh = 200.0
+SCENARIO = (FILES / "my-line-200.toml").read_text()
 
-[[pantographs]]
-model = "dsa380-lumped3"
-position_m = 20.0              # starts in the first span, in static equilibrium
-
-[analysis]
-window_supports = [2, 4]       # spans 3 and 4 of the six
-
-[simulation]
-catenary_model = "linear"      # the fast model: linear about the static equilibrium
-"""
-# --8<-- [end:scenario]
-
-# --8<-- [start:sweep]
-SWEEP = """\
-name = "my-line-speeds"
-description = "dsa380-lumped3 on my-line at four speeds, two static uplifts"
-scenario = "my-line-200.toml"
-criteria = "en50367"           # the EN 50367 / TSI checks for AC lines
-
-[axes]
-speed_kmh = [160.0, 200.0, 240.0, 280.0]
-pantographs.0.options.static_force = [70.0, 65.0]   # N: the preset's, and 5 N less
-"""
-# --8<-- [end:sweep]
+SWEEP = (FILES / "my-line-speeds.toml").read_text()
 
 
 def pantocosim(*args: str, cwd: Path) -> str:

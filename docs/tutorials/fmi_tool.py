@@ -21,27 +21,12 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
+#: the tutorial's data files, shown on its page
+FILES = Path(__file__).resolve().parent / "files"
+
 ROOT = Path(__file__).resolve().parents[2]
 
-# --8<-- [start:scenario]
-SHORT = """\
-name = "short"
-catenary = "en50318"
-spans = 4
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "dsa380-lumped3"       # runs dist/fmus/dsa380-lumped3.fmu in a co-simulation
-position_m = 30.0
-
-[analysis]
-window_m = [50.0, 95.0]
-
-[simulation]
-duration_s = 1.0
-catenary_model = "linear"
-"""
-# --8<-- [end:scenario]
+SHORT = (FILES / "short.toml").read_text()
 
 
 def pantocosim(*args: str, cwd: Path) -> str:

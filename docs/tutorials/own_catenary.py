@@ -17,66 +17,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-# --8<-- [start:definition]
-LINE = """\
-# A simple catenary for 200 km/h: 6 spans of 55 m, CuAg 120 contact wire, Bz 70 messenger.
-name = "my-line"
-description = "simple catenary, 55 m spans, 15 kN / 15 kN"
+#: the tutorial's data files, shown on its page
+FILES = Path(__file__).resolve().parent / "files"
 
-[spans]
-count = 6
-length = 55.0
+LINE = (FILES / "my-line.toml").read_text()
 
-[geometry]
-system_height = 1.4          # m, messenger above contact wire at the supports
-contact_wire_height = 5.5    # m above the rail
-stagger = [0.2, -0.2]        # m, alternating
-presag = 0.03                # m at mid-span (about 1/2000 of the span)
-element_size = 1.0           # m
-
-[contact_wire]               # CuAg 120 mm2
-mass_per_length = 1.07       # kg/m
-EA = 1.2e7                   # N
-EI = 150.0                   # N m2
-tension = 15000.0            # N
-
-[messenger_wire]             # Bz 70 mm2
-mass_per_length = 0.6        # kg/m
-EA = 7.0e6                   # N
-EI = 60.0                    # N m2
-tension = 15000.0            # N
-
-[droppers]
-positions = [4.5, 12.0, 20.0, 27.5, 35.0, 43.0, 50.5]   # m from each span start
-mass_per_length = 0.11       # kg/m
-axial_stiffness = 1.0e5      # N/m
-clamp_mass_contact = 0.17    # kg
-clamp_mass_messenger = 0.19  # kg
-
-[contact_support]
-type = "steady_arm"
-length = 1.1                 # m
-mass = 1.2                   # kg
-
-[messenger_support]
-type = "fixed"
-
-[damping]                    # Rayleigh: 1 % at 1 Hz and at 20 Hz
-ratios = [0.01, 0.01]
-frequencies_hz = [1.0, 20.0]
-"""
-# --8<-- [end:definition]
-
-# --8<-- [start:stitch]
-STITCH = """
-[stitch_wire]                # Bz 35 mm2, 18 m centred on every intermediate support
-mass_per_length = 0.31       # kg/m
-EA = 3.5e6                   # N
-EI = 10.0                    # N m2
-tension = 3500.0             # N
-length = 18.0                # m
-"""
-# --8<-- [end:stitch]
+STITCH = (FILES / "stitch-wire.toml").read_text()
 
 
 def pantocosim(*args: str, cwd: Path) -> str:

@@ -19,27 +19,12 @@ import sys
 import tomllib
 from pathlib import Path
 
+#: the tutorial's data files, shown on its page
+FILES = Path(__file__).resolve().parent / "files"
+
 import numpy as np
 
-# --8<-- [start:lumped]
-LUMPED = """\
-# Three-mass model from a data sheet: head, upper frame, lower frame (head first).
-name = "my-3mass"
-description = "three-mass pantograph from the manufacturer's data sheet"
-
-[chain]
-names = ["head", "upper frame", "lower frame"]
-masses = [7.5, 6.5, 10.0]            # kg
-stiffness = [7000.0, 15000.0, 0.1]   # N/m: head-upper, upper-lower, lower-roof
-damping = [20.0, 0.0, 100.0]         # N s/m, same order
-uplift_mass = 3                      # the uplift acts on the lower frame
-working_height = 5.3                 # m, contact height of the static start
-
-[options]
-static_force = 70.0                  # N
-aero_c2 = 0.00097                    # N/(km/h)^2: F_m = 70 + 0.00097 v^2 (EN 50367, AC)
-"""
-# --8<-- [end:lumped]
+LUMPED = (FILES / "my-3mass.toml").read_text()
 
 
 def pantocosim(*args: str, cwd: Path) -> str:
