@@ -25,8 +25,11 @@ def _cell(text) -> str:
 
 # ---------------------------------------------------------------------------- CLI
 def cli_page() -> str:
+    import os
+
     from pantocosim.master.cli import build_parser
 
+    os.environ["COLUMNS"] = "96"   # usage lines wrapped as on a 96-column terminal
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     helps = {c.dest: c.help for c in sub._choices_actions}
@@ -42,8 +45,8 @@ def cli_page() -> str:
         out.append(f"\n## {name}\n\n")
         if p.description:
             out.append(" ".join(p.description.split()) + "\n\n")
-        usage = " ".join(p.format_usage().split())
-        out.append(f"```text\n{usage.removeprefix('usage: ')}\n```\n\n")
+        usage = p.format_usage().removeprefix("usage: ").rstrip()
+        out.append(f"```text\n{usage}\n```\n\n")
         rows = []
         for a in p._actions:
             if isinstance(a, argparse._HelpAction):
