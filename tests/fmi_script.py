@@ -1,8 +1,9 @@
-"""FMI call scripts for the native host (tests/native/fmi2_host.c) and its fmpy twin.
+"""FMI call scripts for the native hosts (tests/native/fmi2_host.c, fmi3_host.c) and their
+fmpy twin.
 
 :class:`Script` writes the script; ``python fmi_script.py < script`` runs it through fmpy's
-``FMU2Slave`` and prints what the C host prints for the ``get`` calls
-(``= LINE get STATUS VALUES``), so the two hosts' outputs compare line by line.
+``FMU2Slave`` or ``FMU3Slave`` (the FMU's version) and prints what the C host prints for the
+``get`` calls (``= LINE get STATUS VALUES``), so the two hosts' outputs compare line by line.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from pathlib import Path
 
 
 def model_info(fmu: Path) -> tuple[str, str, dict]:
-    """(modelIdentifier, guid, {variable name: (value reference, type letter)})."""
+    """(modelIdentifier, guid or instantiation token, {variable name: (value reference, type
+    letter)}) of an FMI 2.0 or 3.0 FMU."""
     with zipfile.ZipFile(fmu) as z:
         md = ET.fromstring(z.read("modelDescription.xml"))
     ident = md.find("CoSimulation").get("modelIdentifier")
@@ -24,7 +26,11 @@ def model_info(fmu: Path) -> tuple[str, str, dict]:
     for v in md.iter("ScalarVariable"):
         kind = next(kinds[c.tag] for c in v if c.tag in kinds)
         variables[v.get("name")] = (int(v.get("valueReference")), kind)
-    return ident, md.get("guid"), variables
+    kinds3 = {"Float64": "r", "Int32": "i", "Boolean": "b", "String": "s"}
+    for v in md.iterfind("ModelVariables/*"):
+        if v.tag in kinds3:
+            variables[v.get("name")] = (int(v.get("valueReference")), kinds3[v.tag])
+    return ident, md.get("guid") or md.get("instantiationToken"), variables
 
 
 class Script:
@@ -93,14 +99,26 @@ def _number(word: str):
 
 
 # ----------------------------------------------------------------------- the fmpy twin
-def _run_fmpy(lines) -> None:
-    from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
+#: per FMI version: the fmpy class, its getters and setters by type letter
+TWIN_CALLS = {
+    "2.0": ("fmpy.fmi2:FMU2Slave",
+            {"r": "getReal", "i": "getInteger", "b": "getBoolean", "s": "getString"},
+            {"r": ("setReal", float), "i": ("setInteger", int), "b": ("setBoolean", int),
+             "s": ("setString", str)}),
+    "3.0": ("fmpy.fmi3:FMU3Slave",
+            {"r": "getFloat64", "i": "getInt32", "b": "getBoolean", "s": "getString"},
+            {"r": ("setFloat64", float), "i": ("setInt32", int),
+             "b": ("setBoolean", lambda x: bool(int(x))), "s": ("setString", str)}),
+}
 
-    fmus: dict[str, FMU2Slave] = {}
-    getters = {"r": "getReal", "i": "getInteger", "b": "getBoolean", "s": "getString"}
-    setters = {"r": ("setReal", float), "i": ("setInteger", int), "b": ("setBoolean", int),
-               "s": ("setString", str)}
+
+def _run_fmpy(lines) -> None:
+    import importlib
+
+    from fmpy.fmi1 import FMICallException
+
+    fmus: dict = {}
+    calls: dict = {}     # alias -> (getters, setters, start time, FMI 3.0)
     for number, line in enumerate(lines, start=1):
         a = line.split()
         if not a:
@@ -109,26 +127,38 @@ def _run_fmpy(lines) -> None:
         try:
             values = []
             if cmd == "load":
-                fmus[a[1]] = FMU2Slave(guid=a[4], unzipDirectory=a[2], modelIdentifier=a[3],
-                                       instanceName=a[1])
+                version = ET.parse(Path(a[2]) / "modelDescription.xml").getroot().get(
+                    "fmiVersion")
+                cls, getters, setters = TWIN_CALLS[version]
+                module, name = cls.split(":")
+                fmus[a[1]] = getattr(importlib.import_module(module), name)(
+                    guid=a[4], unzipDirectory=a[2], modelIdentifier=a[3], instanceName=a[1])
+                calls[a[1]] = [getters, setters, 0.0, version == "3.0"]
             elif cmd == "instantiate":
                 s.instanceName = a[2]
                 s.instantiate(loggingOn=False)
             elif cmd == "setup":
-                s.setupExperiment(startTime=float(a[2]))
+                if calls[a[1]][3]:
+                    calls[a[1]][2] = float(a[2])      # FMI 3.0: given to enter
+                else:
+                    s.setupExperiment(startTime=float(a[2]))
+            elif cmd == "enter" and calls[a[1]][3]:
+                s.enterInitializationMode(startTime=calls[a[1]][2])
             elif cmd in ("enter", "exit", "terminate", "reset"):
                 getattr(s, {"enter": "enterInitializationMode",
                             "exit": "exitInitializationMode"}.get(cmd, cmd))()
             elif cmd == "step":
                 s.doStep(float(a[2]), float(a[3]))
             elif cmd == "set":
-                name, conv = setters[a[2]]
+                name, conv = calls[a[1]][1][a[2]]
                 getattr(s, name)([int(a[3])], [conv(a[4])])
             elif cmd == "get":
-                values = getattr(s, getters[a[2]])([int(x) for x in a[3:]])
+                values = getattr(s, calls[a[1]][0][a[2]])([int(x) for x in a[3:]])
+                if a[2] == "b" and calls[a[1]][3]:    # FMI 3.0: C bool, printed 0/1
+                    values = [int(bool(v)) for v in values]
             elif cmd == "copy":
-                x = s.getReal([int(a[2])])
-                fmus[a[3]].setReal([int(a[4])], x)
+                x = getattr(s, calls[a[1]][0]["r"])([int(a[2])])
+                getattr(fmus[a[3]], calls[a[3]][1]["r"][0])([int(a[4])], x)
             elif cmd == "free":
                 s.freeInstance()
             status = 0
