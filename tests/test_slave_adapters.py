@@ -66,6 +66,42 @@ def test_get_real_in_initialisation_mode_reads_through_the_getters():
     assert s.static_height_1 > 0.0
 
 
+def _count_law_runs(monkeypatch) -> list:
+    from pantocosim.catenary import operating_height
+
+    runs = []
+    original = operating_height.mean_dynamic_wire_height
+
+    def counted(*args, **kwargs):
+        runs.append(1)
+        return original(*args, **kwargs)
+    monkeypatch.setattr(operating_height, "mean_dynamic_wire_height", counted)
+    return runs
+
+
+def test_start_laws_are_computed_only_when_a_master_reads_them(monkeypatch):
+    """The moving-load runs behind the operating-height law cost nothing to a master that
+    reads other outputs (in initialisation mode or after) and never the laws; the first read
+    of a law computes them, in the handshake start (no static force) too."""
+    runs = _count_law_runs(monkeypatch)
+    handshake = dict(LINEAR, static_force_1=0.0, contact_mode=1, pantograph_height_1=5.35)
+    s = CatenarySlave(instance_name="handshake")
+    s.setup_experiment(0.0)
+    s.enter_initialization_mode()
+    for name, value in handshake.items():
+        setattr(s, name, value)
+    assert s.get_real([_vr(s, "train_speed_kmh")]) == [300.0]
+    s.exit_initialization_mode()
+    assert s._error is None, s._error
+    assert s.do_step(0.0, 1e-3)
+    assert s.get_real([_vr(s, "wire_height_1")])[0] > 5.0
+    assert runs == []
+    offset, slope = s.get_real([_vr(s, "operating_height_1"), _vr(s, "operating_height_slope_1")])
+    assert 5.0 < offset < 5.8 and 1e-5 < slope < 1e-3       # m, m/N: a wire under uplift
+    assert len(runs) == 2                                    # two forces of the secant
+    assert s.get_real([_vr(s, "operating_height_1")]) == [offset] and len(runs) == 2
+
+
 def test_fmu_state_puts_every_variable_back(catenary):
     s = catenary
     state = s._get_fmu_state()

@@ -106,6 +106,12 @@ def _discard():
     return Status.discard
 
 
+def _warning():
+    from .front import Status
+
+    return Status.warning
+
+
 class CatenarySlave(IntegratorSlave):
     description = "pantocosim catenary"
 
@@ -191,10 +197,14 @@ class CatenarySlave(IntegratorSlave):
             self.real(force, 0.0, "output", "N",
                       f"contact force of pantograph {k}: mode 1 the penalty force at the end "
                       "of the step, mode 0 the input force")
+        #: the start-law outputs: computed when a master first reads one (:meth:`_output_value`)
+        self._law_names = set()
         for k in range(1, MAX_PANTOGRAPHS + 1):
             for name, unit, text in LAW_OUTPUTS:
                 self.real(f"{name}_{k}", 0.0, "output", unit, f"start law of pantograph {k} "
                           f"(constant; available in initialisation mode): {text}")
+                self._law_names.add(f"{name}_{k}")
+        self._attribute_reals -= {vr for vr, v in self.vars.items() if v.name in self._law_names}
         for j, name in enumerate(ports.uplifts):
             self.real(name, 0.0, "output", "m",
                       f"uplift of the contact wire at support {j} relative to the unloaded "
@@ -355,10 +365,21 @@ class CatenarySlave(IntegratorSlave):
         return self._cache[key]
 
     def update_initial_outputs(self):
-        """In initialisation mode the start laws are outputs as soon as the parameters are
-        set (pantograph FMUs in start_mode 2 read them there), and the train speed."""
+        """In initialisation mode the train speed is an output as soon as it is set."""
         self.train_speed_kmh = self.finite("speed_kmh", self.speed_kmh)
-        self._set_law_outputs(self._laws(self._build_model()))
+
+    def _output_value(self, name: str):
+        """A start-law output is computed when a master reads it (in initialisation mode, where
+        pantograph FMUs in start_mode 2 read them, or later): the moving-load runs behind it
+        cost nothing to a master that never reads them."""
+        if name in self._law_names:
+            try:          # (computed once for the parameters: :meth:`_laws` keeps them)
+                self._set_law_outputs(self._laws(self._build_model()))
+            except Exception as exc:  # noqa: BLE001 - an early read; initialise() decides
+                if self.initialised:
+                    raise             # the read is refused (fmi2Error), never a stale 0
+                self.log(f"start laws not available yet: {exc}", _warning())
+        return super()._output_value(name)
 
     def _set_law_outputs(self, laws):
         values = (laws.operating_offset, laws.operating_slope, laws.static_offset,
@@ -421,9 +442,6 @@ class CatenarySlave(IntegratorSlave):
                 setattr(self, f"contact_force_{k}", float(F0[k - 1]))
             self._integ = integ
         else:
-            if np.all(F0 == 0.0):
-                # the handshake: the start laws are outputs, the pantographs' heights inputs
-                self._set_law_outputs(self._laws(model))
             self._delivered = np.array([F0[k - 1] > 0 or (
                 f"pantograph_height_{k}" in self._given
                 and getattr(self, f"pantograph_height_{k}") > 0.0) for k in range(1, n + 1)])
