@@ -222,3 +222,17 @@ def test_fmu_reference_lists_the_port_contract(reference):
         assert port in text
     for preset in ("dsa380-rigid", "dsa380-flexible", "dsa380-lumped3", "en50318-2mass"):
         assert f"`{preset}.fmu`" in text
+
+
+def test_no_internal_issue_numbers_in_the_docs_or_the_code():
+    """A reader sees the project alone: no internal issue numbers in the pages, the code or
+    the data."""
+    pattern = re.compile(r"\b[Ii]ssues? ?#?\d+|\bissue-\d+")
+    found = []
+    for folder in ("docs", "fmus", "master", "scripts", "tests"):
+        for path in (ROOT / folder).rglob("*"):
+            if path.suffix in (".md", ".py", ".toml", ".c", ".h") and path.is_file():
+                for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+                    if pattern.search(line) and "pattern = re.compile" not in line:
+                        found.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert not found, "\n".join(found)
