@@ -378,10 +378,12 @@ def write_pantograph_ssp(fmu: Path, scenario, dest: Path | None = None) -> tuple
     """The SSP file of a user's pantograph FMU on the catenary FMU baked for ``scenario``
     (preset name or file; its pantograph's model gives the catenary's start values only):
     (path, the scenario's start values). ``dest`` defaults to ``<fmu stem>-<scenario>.ssp``
-    beside the FMU. The FMU's required ports are checked before anything is built."""
+    beside the FMU. The FMU's required ports are checked before anything is built; the
+    catenary FMU is built in the FMU's FMI version (2.0 or 3.0)."""
     import tempfile
 
     from pantocosim.master.fmu_build import CATENARY_FMU, build_fmus
+    from pantocosim.master.fmu_runtime import fmi_version
 
     fmu = Path(fmu)
     pantograph_connections(fmu)
@@ -391,7 +393,7 @@ def write_pantograph_ssp(fmu: Path, scenario, dest: Path | None = None) -> tuple
     with tempfile.TemporaryDirectory(prefix="pantocosim_ssp_") as tmp:
         (catenary,) = build_fmus(Path(tmp), only=[CATENARY_FMU], quiet=True,
                                  start_values={CATENARY_FMU: values["catenary"]},
-                                 scenario=sc.name)
+                                 scenario=sc.name, fmi=fmi_version(fmu))
         write_ssp(dest, sc.name, fmu, catenary, values, sc.dt)
     return dest, values
 

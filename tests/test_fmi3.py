@@ -194,6 +194,54 @@ def test_our_master_runs_fmi3_fmus_as_fmi2_ones(built, tmp_path, coupling):
         assert np.max(np.abs(F3 - Fm)) < 1e-6 * Fm.mean()
 
 
+# ----------------------------------------------------------------------- the SSP
+SSP_SHORT = ROOT / "tests" / "data" / "ssp-short.toml"
+
+
+@pytest.fixture(scope="module")
+def short_packages(tmp_path_factory, built):
+    """The scenario files of tests/data/ssp-short.toml in FMI 3.0 and FMI 2.0."""
+    from pantocosim.master.ssp import write_scenario_package
+
+    out = tmp_path_factory.mktemp("short3")
+    for fmi in (3, 2):
+        write_scenario_package(out / f"fmi{fmi}", scenarios=[SSP_SHORT], quiet=True, fmi=fmi)
+    return out
+
+
+def test_the_fmi3_scenario_ssp_is_valid_and_holds_fmi3_fmus(built):
+    from pantocosim.master.ssp import validate_ssp
+
+    ssp = built / "fmi3" / "dsa380-ave-300.ssp"
+    validate_ssp(ssp)                                   # the SSP 1.0 schemas
+    with zipfile.ZipFile(ssp) as z:
+        fmus = [n for n in z.namelist() if n.endswith(".fmu")]
+        assert sorted(fmus) == ["resources/catenary.fmu", "resources/dsa380-rigid.fmu"]
+        for name in fmus:
+            with zipfile.ZipFile(z.open(name)) as f:
+                assert ET.fromstring(f.read("modelDescription.xml")).get("fmiVersion") \
+                    == "3.0"
+    assert not (built / "fmi3" / "dsa380-ave-300" / "cofmupy.json").exists()
+
+
+def test_ecos_runs_the_fmi3_ssp_as_the_fmi2_one(short_packages, tmp_path):
+    """ecos (ecospy) runs the short scenario's FMI 3.0 SSP as shipped: the contact force of
+    its FMI 2.0 SSP to 1e-9 N. Skipped where ecospy or its libtbb.so.12 is missing."""
+    from recipes import read_csv as read_recipe_csv
+    from recipes import require_ecospy, run_recipe
+
+    require_ecospy()
+    forces = {}
+    for fmi in (3, 2):
+        out = tmp_path / f"ecos{fmi}.csv"
+        stats, _ = run_recipe("ecos", "--ssp", short_packages / f"fmi{fmi}" / "ssp-short.ssp",
+                              "--out", out)
+        assert stats["master"] == "ecos"
+        forces[fmi] = read_recipe_csv(out)["contact_force_1"]
+    assert len(forces[3]) == len(forces[2]) > 100 and np.ptp(forces[2]) > 1.0
+    assert np.max(np.abs(forces[3] - forces[2])) <= 1e-9
+
+
 # ----------------------------------------------------------------------- the native C host
 @pytest.mark.parametrize("name", NAMES)
 def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host3, fmus3, tmp_path, name):
