@@ -116,20 +116,21 @@ SIMULATE = textwrap.dedent("""
     import scipy.sparse.linalg  # noqa: F401  (before any FMU is loaded)
     from fmpy import simulate_fmu
 
-    fmu, port, outputs, params = json.loads(sys.argv[1])
+    fmu, port, outputs, params, events = json.loads(sys.argv[1])
     t = np.arange(0.0, 0.1005, 1e-3)
     signal = 120.0 + 30.0 * np.sin(40.0 * t) if port == "contact_force" else (
         params.pop("_height") + 2e-3 * np.sin(40.0 * t))
     sig = np.array(list(zip(t, signal)), dtype=[("time", float), (port, float)])
     r = simulate_fmu(fmu, start_time=0.0, stop_time=0.1, step_size=1e-3, input=sig,
-                     output=outputs, output_interval=1e-3, start_values=params)
+                     output=outputs, output_interval=1e-3, start_values=params,
+                     use_event_mode=events)
     print(json.dumps({k: r[k].tolist() for k in outputs}))
 """)
 
 
-def simulate(fmu: Path, port: str, outputs: list, params: dict) -> dict:
+def simulate(fmu: Path, port: str, outputs: list, params: dict, events=False) -> dict:
     proc = subprocess.run([sys.executable, "-c", SIMULATE,
-                           json.dumps([str(fmu), port, outputs, params])],
+                           json.dumps([str(fmu), port, outputs, params, events])],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return {k: np.array(v) for k, v in json.loads(proc.stdout.splitlines()[-1]).items()}
@@ -156,6 +157,17 @@ def test_simulate_fmu_gives_the_fmi2_numbers(built, name):
         np.testing.assert_allclose(b[key], a[key], rtol=0.0, atol=tol, err_msg=key)
     if name == "catenary":
         assert np.ptp(a["contact_force_out_1"]) > 10.0    # the contact force moved [N]
+
+
+def test_simulate_fmu_in_event_mode_gives_the_same_numbers(built):
+    """fmpy's simulate_fmu with event mode (the FMU declares hasEventMode: it passes through
+    event mode after initialisation and never asks for event handling)."""
+    params, port, outputs = PANTOGRAPH_RUN
+    fmu = built / "fmi3" / "en50318-2mass.fmu"
+    a = simulate(fmu, port, list(outputs), dict(params))
+    b = simulate(fmu, port, list(outputs), dict(params), events=True)
+    for key in outputs:
+        np.testing.assert_array_equal(b[key], a[key])
 
 
 # ----------------------------------------------------------------------- our master
@@ -331,6 +343,45 @@ def test_refused_calls_return_fmi3_statuses_and_the_instance_stays_usable(host3,
                  "logStatusDiscard fmi3DoStep(t = 0.5, h = 0.001): the communication point",
                  "logStatusError fmi3GetOutputDerivatives: not supported"):
         assert text in proc.stdout, text
+
+
+def test_event_mode_follows_the_fmi3_state_machine(host3, fmus3, tmp_path):
+    s = Script(tmp_path)
+    s.load("A", fmus3["en50318-2mass"])
+    s.load("B", fmus3["en50318-2mass"])
+    s.call("instantiate", "A", "events", "events")
+    s.call("setup", "A", 0.0)
+    s.call("enter", "A")
+    s.set("A", "initial_contact_force", 120.0)
+    s.call("exit", "A")                               # into event mode
+    lines = {
+        "step_in_event_mode": s.call("step", "A", 0.0, 1e-3),
+        "update": s.call("update", "A"),
+        "step_mode": s.call("stepmode", "A"),
+        "step": s.call("step", "A", 0.0, 1e-3),
+        "step_mode_twice": s.call("stepmode", "A"),
+        "event_mode": s.call("eventmode", "A"),
+        "update_again": s.call("update", "A"),
+        "back": s.call("stepmode", "A"),
+        "next_step": s.call("step", "A", 1e-3, 1e-3),
+    }
+    s.start("B", "no_events", PANTOGRAPH_RUN[0])
+    lines["b_event_mode"] = s.call("eventmode", "B")
+    lines["b_update"] = s.call("update", "B")
+    lines["b_step_mode"] = s.call("stepmode", "B")
+    lines["b_step"] = s.call("step", "B", 0.0, 1e-3)
+    proc = run_host3(host3, s, tmp_path)
+    assert_clean_exit(proc)
+    r = results(proc.stdout)
+    expected = {"step_in_event_mode": ERROR, "update": OK, "step_mode": OK, "step": OK,
+                "step_mode_twice": ERROR, "event_mode": OK, "update_again": OK, "back": OK,
+                "next_step": OK, "b_event_mode": ERROR, "b_update": ERROR,
+                "b_step_mode": ERROR, "b_step": OK}
+    assert {k: r[lines[k]][0] for k in expected} == expected
+    assert r[lines["update"]] == [OK, 0, 0, 0, 0, 0]   # nothing to update, no next event
+    assert "fmi3DoStep: in event mode: call fmi3EnterStepMode first" in proc.stdout
+    assert "fmi3EnterEventMode: the instance was made with eventModeUsed = false" \
+        in proc.stdout
 
 
 def test_a_failed_initialisation_returns_fmi3error_and_asks_to_terminate(host3, fmus3,

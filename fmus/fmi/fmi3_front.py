@@ -75,6 +75,9 @@ class Fmi3Front(Fmi3Slave):
 
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
         root = super().to_xml(model_options)
+        # event mode is supported (the export library's bridge); the FMU has no events of
+        # its own
+        root.find("CoSimulation").set("hasEventMode", "true")
         # every output is a state output (no direct feedthrough within a step)
         for output in root.iterfind("ModelStructure/Output"):
             output.set("dependencies", "")

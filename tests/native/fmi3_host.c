@@ -4,7 +4,7 @@
  * master does, and runs a script of FMI calls read from standard input, one call per line,
  * in the script language of fmi2_host.c (tests/fmi_script.py writes it):
  *
- *   load A DIR MODEL_IDENTIFIER TOKEN    instantiate A NAME       free A
+ *   load A DIR MODEL_IDENTIFIER TOKEN    instantiate A NAME [events]       free A
  *   setup A T0 (kept for enter)  enter A      exit A      terminate A      reset A
  *   set A r|i|b|s VR VALUE       get A r|i|b|s VR...       step A T H
  *   copy A VR B VR          (fmi3GetFloat64 of A into fmi3SetFloat64 of B)
@@ -12,6 +12,9 @@
  *   garbage A K    (fmi3DeserializeFMUState of 16 bytes of garbage into slot K)
  *   terminated A   (terminateSimulation of the last fmi3DoStep)
  *   lasttime A     (lastSuccessfulTime of the last fmi3DoStep)    unsupported A
+ *   eventmode A    update A (fmi3UpdateDiscreteStates: prints its five flags)    stepmode A
+ *
+ * "instantiate A NAME events" instantiates with eventModeUsed = true.
  *
  * r, i, b, s are Float64, Int32, Boolean and String. Each call prints
  * "= LINE CALL STATUS [values]"; the FMU's log messages print
@@ -114,8 +117,9 @@ static int run(int line, char **a, int n)
                                   bool, const fmi3ValueReference *, size_t, void *,
                                   LogMessage, void *);
         snprintf(f->name, sizeof f->name, "%s", a[2]);
+        bool events = n > 3 && !strcmp(a[3], "events");
         f->c = CALL(f, "fmi3InstantiateCoSimulation", I, a[2], f->token, f->resources, false,
-                    true, false, false, NULL, 0, f, log_message, NULL);
+                    true, events, false, NULL, 0, f, log_message, NULL);
         s = f->c ? 0 : 3;
     } else if (!strcmp(cmd, "setup")) {
         f->t0 = atof(a[2]);
@@ -216,6 +220,18 @@ static int run(int line, char **a, int n)
             s = CALL(f, "fmi3DeserializeFMUState", R, f->c, from->blobs[k],
                      from->blob_sizes[k], &f->states[k]);
         }
+    } else if (!strcmp(cmd, "eventmode")) {
+        s = CALL(f, "fmi3EnterEventMode", F0, f->c);
+    } else if (!strcmp(cmd, "stepmode")) {
+        s = CALL(f, "fmi3EnterStepMode", F0, f->c);
+    } else if (!strcmp(cmd, "update")) {
+        typedef fmi3Status (*U)(fmi3Instance, bool *, bool *, bool *, bool *, bool *, double *);
+        bool flags[5] = {true, true, true, true, true};
+        double next = -1.0;
+        s = CALL(f, "fmi3UpdateDiscreteStates", U, f->c, &flags[0], &flags[1], &flags[2],
+                 &flags[3], &flags[4], &next);
+        snprintf(extra, sizeof extra, " %d %d %d %d %d", flags[0], flags[1], flags[2],
+                 flags[3], flags[4]);
     } else if (!strcmp(cmd, "terminated")) {
         snprintf(extra, sizeof extra, " %d", (int)f->terminate);
     } else if (!strcmp(cmd, "lasttime")) {

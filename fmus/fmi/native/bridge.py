@@ -297,8 +297,22 @@ class Adapter:
 
 class Adapter3(Adapter):
     """One FMI 3.0 co-simulation instance: the FMI 2.0 rules where FMI 3.0 keeps them, and
-    what FMI 3.0 changes: the start time comes with fmi3EnterInitializationMode, and
-    fmi3DoStep returns its flags and the last successful time with its status."""
+    what FMI 3.0 changes: the start time comes with fmi3EnterInitializationMode, fmi3DoStep
+    returns its flags and the last successful time with its status, and an instance made with
+    ``eventModeUsed`` passes through event mode (the FMU has no events of its own: its
+    discrete states never need an update, and it never asks for event handling)."""
+
+    _event_mode_used = False
+    #: instantiated, initialisation (set by the calls), event, step
+    _mode = "instantiated"
+
+    def use_event_mode(self, used: int):
+        self._event_mode_used = bool(used)
+        return self._status(), None
+
+    def _refused(self, call: str, why: str):
+        self._log.append((ERROR, "logStatusError", f"{call}: {why}"))
+        return self._status(ERROR), None
 
     def enter_initialization_mode(self, tol_defined=0, tol=0.0, start=0.0, stop_defined=0,
                                   stop=0.0):
@@ -307,7 +321,45 @@ class Adapter3(Adapter):
                                         tol if tol_defined else None)
             self.slave.enter_initialization_mode()
 
+        self._mode = "initialisation"
         return self._call("fmi3EnterInitializationMode", enter)
+
+    def exit_initialization_mode(self):
+        result = super().exit_initialization_mode()
+        self._mode = "event" if self._event_mode_used else "step"
+        return result
+
+    def reset(self):
+        self._mode = "instantiated"
+        return super().reset()
+
+    def enter_event_mode(self):
+        if not self._event_mode_used:
+            return self._refused("fmi3EnterEventMode", "the instance was made with "
+                                 "eventModeUsed = false")
+        if self._mode not in ("step", "event"):
+            return self._refused("fmi3EnterEventMode", "only after "
+                                 "fmi3ExitInitializationMode")
+        self._mode = "event"
+        return self._status(), None
+
+    def update_discrete_states(self):
+        """(status, (discreteStatesNeedUpdate, terminateSimulation,
+        nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged,
+        nextEventTimeDefined, nextEventTime))."""
+        if self._mode != "event":
+            return self._refused("fmi3UpdateDiscreteStates", "only in event mode")
+        s = self.slave
+        final = bool(getattr(s, "_terminated", False) or getattr(s, "_error", None))
+        return self._status(), (0, int(final), 0, 0, 0, 0.0)
+
+    def enter_step_mode(self):
+        if self._mode != "event":
+            return self._refused("fmi3EnterStepMode", "only in event mode (after "
+                                 "fmi3ExitInitializationMode with eventModeUsed, or "
+                                 "fmi3EnterEventMode)")
+        self._mode = "step"
+        return self._status(), None
 
     def do_step(self, t: float, h: float):
         """(status, (eventHandlingNeeded, terminateSimulation, earlyReturn,
@@ -315,20 +367,15 @@ class Adapter3(Adapter):
         step asks to terminate only when the instance cannot take any further step (a
         failed initialisation, a step after fmi3Terminate): other discards leave the choice
         to the master (roll back and retry, or stop)."""
-        status, _ = super().do_step(t, h)
         s = self.slave
+        if self._mode == "event":
+            status, _ = self._refused("fmi3DoStep", "in event mode: call fmi3EnterStepMode "
+                                      "first")
+            return status, (0, 0, 0, float(getattr(s, "_time", t)))
+        status, _ = super().do_step(t, h)
         failed = (status & ~STATUS_LOG_FLAG) >= DISCARD
         final = bool(getattr(s, "_terminated", False) or getattr(s, "_error", None))
         return status, (0, int(failed and final), 0, float(getattr(s, "_time", t)))
-
-    def enter_step_mode(self):
-        """fmi3EnterStepMode: the instance is in step mode after initialisation already (it
-        has no event mode); accepted once initialised."""
-        if not getattr(self.slave, "initialised", False):
-            self._log.append((ERROR, "logStatusError", "fmi3EnterStepMode: only after "
-                              "fmi3ExitInitializationMode"))
-            return self._status(ERROR), None
-        return self._status(), None
 
 
 #: FMI major version -> the adapter of its instances

@@ -9,7 +9,8 @@
  * export_common.c.
  *
  * The FMUs are co-simulation FMUs with scalar Float64, Int32, Boolean and String variables,
- * FMU state get/set/serialise, no event mode, no early return, no clocks. Statuses are
+ * FMU state get/set/serialise and event mode (no events of their own), no early return, no
+ * clocks. Statuses are
  * FMI's: a call that is not honoured returns fmi3Error (fmi3Discard from fmi3DoStep) with a
  * categorised log message, and the instance stays usable; instances and FMU states are
  * checked before use: a freed, foreign or forged pointer gives fmi3Error, never a crash.
@@ -96,9 +97,6 @@ EXPORT fmi3Instance fmi3InstantiateCoSimulation(
         free_component(c, call);
         return NULL;
     }
-    if (eventModeUsed)
-        LOGF(c, ST_WARNING, "%s: eventModeUsed: this FMU has no events (hasEventMode is "
-             "false); it never asks for event handling", call);
     resources = resources_path(resourcePath);
     if (resources == NULL) {
         LOGF(c, ST_ERROR, "%s: resourcePath is NULL: the FMU needs its resources", call);
@@ -114,6 +112,8 @@ EXPORT fmi3Instance fmi3InstantiateCoSimulation(
     gil = py.GILEnsure();
     ok = make_adapter(c, resources, BRIDGE, 3, instantiationToken, visible, call);
     if (ok) done(c, py.CallMethod(c->adapter, "status", NULL), call);
+    if (ok) ok = done(c, py.CallMethod(c->adapter, "use_event_mode", "i", (int)eventModeUsed),
+                      call) < ST_ERROR;
     py.GILRelease(gil);
     free(resources);
     if (!ok || !register_component(c)) {
@@ -196,6 +196,7 @@ EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance instance,
     }
 
 SIMPLE_CALL(fmi3ExitInitializationMode, "exit_initialization_mode")
+SIMPLE_CALL(fmi3EnterEventMode, "enter_event_mode")
 SIMPLE_CALL(fmi3EnterStepMode, "enter_step_mode")
 SIMPLE_CALL(fmi3Terminate, "terminate")
 /* FMU states stay valid over a reset: the instance keeps its identity */
@@ -397,31 +398,39 @@ static fmi3Status unsupported(fmi3Instance instance, const char *call, const cha
     return fmi3Error;
 }
 
-#define NO_EVENTS "hasEventMode is false: the FMU has no events"
+#define NO_EVENTS "providesEvaluateDiscreteStates is false: the FMU has no discrete states"
 #define NO_CLOCKS "the FMU has no clocks"
 #define ME_ONLY "a model-exchange call; this FMU supports co-simulation only"
-
-EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance i)
-{
-    return unsupported(i, "fmi3EnterEventMode", NO_EVENTS);
-}
 
 EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance i)
 {
     return unsupported(i, "fmi3EvaluateDiscreteStates", NO_EVENTS);
 }
 
-EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance i, fmi3Boolean *discreteStatesNeedUpdate,
+/* event mode: the FMU has no events of its own; its discrete states never need an update */
+EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance,
+                                           fmi3Boolean *discreteStatesNeedUpdate,
                                            fmi3Boolean *terminateSimulation,
                                            fmi3Boolean *nominalsOfContinuousStatesChanged,
                                            fmi3Boolean *valuesOfContinuousStatesChanged,
                                            fmi3Boolean *nextEventTimeDefined,
                                            fmi3Float64 *nextEventTime)
 {
-    (void)discreteStatesNeedUpdate, (void)terminateSimulation;
-    (void)nominalsOfContinuousStatesChanged, (void)valuesOfContinuousStatesChanged;
-    (void)nextEventTimeDefined, (void)nextEventTime;
-    return unsupported(i, "fmi3UpdateDiscreteStates", NO_EVENTS);
+    ENTER(instance, "fmi3UpdateDiscreteStates");
+    fmi3Boolean *flags[] = {discreteStatesNeedUpdate, terminateSimulation,
+                            nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged,
+                            nextEventTimeDefined};
+    PyObject *result = py.CallMethod(c->adapter, "update_discrete_states", NULL);
+    int status = status_of(c, result, "fmi3UpdateDiscreteStates");
+    PyObject *values = result ? py.TupleGetItem(result, 1) : NULL;
+    for (int k = 0; k < 5; k++) {
+        PyObject *item = values && py.TupleSize(values) == 6 ? py.TupleGetItem(values, k) : NULL;
+        if (flags[k]) *flags[k] = item ? py.LongAsLong(item) != 0 : false;
+    }
+    if (nextEventTime) *nextEventTime = 0.0;
+    if (py.ErrOccurred()) py.ErrClear();
+    if (result) py.DecRef(result);
+    LEAVE(status);
 }
 
 EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance i)
