@@ -171,6 +171,41 @@ def test_step_policy_redo_reuses_factorization_bitwise():
     assert first.refactorizations == 1 and again.refactorizations == 0
 
 
+class _ForcedCubic(_Cubic):
+    """The Duffing oscillator under an input force: q'' + q + eps q^3 = F."""
+
+    def evaluate(self, t, q, v, a, inputs, tangent=True):
+        ev = super().evaluate(t, q, v, a, inputs, tangent)
+        ev.f_rest = ev.f_rest - (0.0 if inputs is None else inputs[0])
+        return ev
+
+
+def test_a_redone_step_with_inputs_seen_is_repeated_and_with_new_inputs_solved():
+    """After a rollback, a step with inputs already taken from that state is its end state
+    at no cost (bit for bit); new inputs are solved by Newton-Raphson."""
+    integ = HHTIntegrator(_ForcedCubic(eps=3.0), HHTSettings.for_runs(-0.1, 1e-8))
+    integ.initialize(0.0, [1.0], [0.0], [0.0])
+    for _ in range(5):
+        integ.step(1e-2, np.array([2.0]))
+    saved = integ.get_state()
+    ends = {}
+    for F in (2.0, 2.5):                          # two passes of one step, as a coupling does
+        integ.set_state(saved)
+        assert integ.step(1e-2, np.array([F])).iterations > 0
+        ends[F] = (integ.q.copy(), integ.v.copy(), integ.a.copy())
+    for F in (2.0, 2.5):
+        integ.set_state(saved)
+        assert integ.step(1e-2, np.array([F])).iterations == 0
+        assert all(np.array_equal(x, y) for x, y in zip((integ.q, integ.v, integ.a), ends[F]))
+    integ.set_state(saved)
+    assert integ.step(1e-2, np.array([2.25])).iterations > 0
+    assert ends[2.0][0][0] < integ.q[0] < ends[2.5][0][0]
+    # the next step goes on from the repeated state as from the computed one
+    integ.set_state(saved)
+    integ.step(1e-2, np.array([2.5]))
+    assert integ.step(1e-2, np.array([2.5])).iterations > 0
+
+
 def test_run_settings_converge_to_the_tight_solution_and_roll_back_bitwise():
     """HHTSettings.for_runs (factorization kept across steps, linear predictor, loose
     tolerance): the solution stays within the tolerance's reach of the tight full-Newton one,

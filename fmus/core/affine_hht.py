@@ -28,8 +28,6 @@ f_{n+1} = (alpha f_n - M a_{n+1}) / c_f follows from (3.16) itself (with M Delta
 
 from __future__ import annotations
 
-import itertools
-import secrets
 import weakref
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -41,6 +39,7 @@ from . import affine_kernels as kern
 from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
+from .state_label import new_label as _new_id
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
@@ -52,10 +51,6 @@ PREFILL_BYTES = 256 * 2**20
 #: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
 #: steps, and neighbouring droppers do so in turn: the same sets come back)
 KEPT_SLACK_SETS = 64
-#: labels of the states a step starts from (a rolled-back step reuses its free response);
-#: the random token keeps a label restored from another process's saved state unique
-_TOKEN = secrets.randbits(64)
-_COUNTER = itertools.count()
 
 
 def check_slack_passes(what: str, passes: int, t: float, step: int) -> None:
@@ -63,10 +58,6 @@ def check_slack_passes(what: str, passes: int, t: float, step: int) -> None:
     if passes >= MAX_SLACK_PASSES:
         raise ConvergenceError(f"{what}: the slack set does not settle at t = {t:.6g} s after "
                                f"{passes} passes", time=t, step=step)
-
-
-def _new_id() -> tuple[int, int]:
-    return _TOKEN, next(_COUNTER)
 
 
 def step_state(st) -> dict:

@@ -27,6 +27,7 @@ from numba import njit
 from .errors import ConvergenceError, ParameterError
 from .hht_defaults import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX  # noqa: F401
 from .model import SecondOrderModel
+from .state_label import new_label
 
 
 
@@ -230,6 +231,15 @@ def _shift(q, v, a, f_rest, dq, dv, da, df, scale):
         f_rest[i] += scale * df[i]
 
 
+#: steps from one state kept for a redo (an implicit coupling's passes over one step)
+KEPT_PASSES = 16
+
+
+def _inputs_key(inputs) -> bytes | None:
+    """Step inputs (None or an array) as a key: equal keys are bitwise equal inputs."""
+    return None if inputs is None else inputs.dtype.str.encode() + inputs.tobytes()
+
+
 def _vector(x, n: int) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64).reshape(n)
 
@@ -267,6 +277,13 @@ class HHTIntegrator:
         self.inputs = None
         self._factor = None  # (key, h, matrix, solve)
         self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
+        self._label = new_label()    # of the current state (:mod:`.state_label`)
+        #: the steps taken from the last state stepped from: (its label, h, {inputs key: end
+        #: state}). A step redone from that state (a co-simulation rollback) with inputs
+        #: already seen is that end state, bit for bit, at no cost. (Starting the Newton
+        #: iteration of a pass with new inputs from the previous pass's a_{n+1} was measured
+        #: on dsa380-ave-300, implicit: 12 % more iterations than the linear predictor.)
+        self._last_step = None
         self.total_iterations = 0
         self.total_factorizations = 0
         self._linear = None     # closed-form step: (LinearForm, w, h, S_inv)
@@ -319,6 +336,7 @@ class HHTIntegrator:
         self.n_steps = 0
         self._factor = None
         self._stale = False
+        self._label, self._last_step = new_label(), None
         self._bind_linear()
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
 
@@ -334,7 +352,11 @@ class HHTIntegrator:
         t1 = self.t + h
         inputs = None if inputs is None else np.asarray(inputs, dtype=float)
 
+        start = self._label
         a_guess = self.a
+        passes = self._passes_from(start, h)
+        if passes and _inputs_key(inputs) in passes:
+            return self._repeat(passes[_inputs_key(inputs)], inputs)
         if s.predictor == "linear" and self.a_prev is not None:
             a_guess = 2.0 * self.a - self.a_prev
         q_p, v_p, q, hist = _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, alpha,
@@ -410,7 +432,33 @@ class HHTIntegrator:
             self._factor = factor
             self._stale = k > s.refresh_after
         model.commit(self.t, self.q, self.v, self.a, self.inputs)
-        return StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
+        info = StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
+        self._label = new_label()
+        end = {"t": t1, "q": q, "v": v, "a": a, "a_prev": self.a_prev, "f_rest": self.f_rest,
+               "factor": self._factor, "stale": self._stale, "residual": res_norm,
+               "label": self._label}
+        passes = passes or {}
+        if len(passes) >= KEPT_PASSES:
+            passes.pop(next(iter(passes)))
+        passes[_inputs_key(self.inputs)] = end
+        self._last_step = (start, h, passes)
+        return info
+
+    def _passes_from(self, start, h: float) -> dict | None:
+        """The steps of size h taken from the state labelled ``start`` (by their inputs)."""
+        last = self._last_step
+        return last[2] if last is not None and last[0] == start and last[1] == h else None
+
+    def _repeat(self, end: dict, inputs) -> StepInfo:
+        """The step last taken from this state with these inputs, again: its end state."""
+        self.t = end["t"]
+        self.q, self.v, self.a, self.a_prev, self.f_rest = (
+            end[k].copy() for k in ("q", "v", "a", "a_prev", "f_rest"))
+        self.inputs = None if inputs is None else inputs.copy()
+        self._factor, self._stale, self._label = end["factor"], end["stale"], end["label"]
+        self.n_steps += 1
+        self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
+        return StepInfo(iterations=0, residual=end["residual"], refactorizations=0)
 
     def _step_linear(self, h: float, inputs) -> StepInfo:
         """The closed-form step of a :class:`LinearForm` model: writes q, v, a, a_prev,
@@ -477,6 +525,7 @@ class HHTIntegrator:
             # matrix it came from (so a deserialized state refactorizes bitwise identically)
             "factor": self._factor,
             "model": self.model.get_internal_state(),
+            "label": self._label,
         }
 
     def set_state(self, state: dict) -> None:
@@ -494,6 +543,7 @@ class HHTIntegrator:
         if factor is not None and (len(factor) < 4 or factor[3] is None):
             factor = (factor[0], factor[1], factor[2], self.model.factorize(factor[2]))
         self._factor = factor
+        self._label = state.get("label") or new_label()
         self.model.set_internal_state(state.get("model"))
 
     @staticmethod
