@@ -108,8 +108,55 @@ def time_to_result(tmp: Path, printer=print) -> dict:
     return out
 
 
+#: what the FMU start measures: a fresh extraction (as fmpy's simulate_fmu makes), then
+#: instantiate, set-up, initialisation and one step of the catenary FMU on the default
+#: scenario's line, the forces given (as our master starts it); prints the seconds taken
+FMU_START_PROBE = """
+import sys, time
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+path = sys.argv[1]
+md = read_model_description(path)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+folder = extract(path)
+t0 = time.perf_counter()
+fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, instanceName="catenary",
+                modelIdentifier=md.coSimulation.modelIdentifier)
+fmu.instantiate()
+fmu.setupExperiment(startTime=0.0)
+fmu.setString([vr["catenary_definition"]], ["ave64"])
+fmu.setInteger([vr["spans"]], [10])
+fmu.setReal([vr["speed_kmh"], vr["position_1"], vr["static_force_1"]], [300.0, 32.0, 120.0])
+fmu.enterInitializationMode()
+fmu.exitInitializationMode()
+fmu.doStep(0.0, 1e-3)
+print(time.perf_counter() - t0)
+fmu.terminate()
+fmu.freeInstance()
+"""
+
+
+def fmu_start(tmp: Path, printer=print) -> dict:
+    """The catenary FMU's instantiate-to-first-step time in fmpy (its own process, a fresh
+    extraction), with an empty set-up cache (cold) and again (warm); the FMU is built into
+    ``dist/fmus`` first if missing or stale."""
+    from pantocosim.master.fmu_build import default_out, ensure_fmus
+
+    fmu = default_out() / "catenary.fmu"
+    ensure_fmus([fmu], default_out())
+    env = dict(os.environ, PANTOCOSIM_CACHE_DIR=str(tmp / "fmu-start-cache"))
+    out = {}
+    for label in ("cold", "warm"):
+        run = subprocess.run([sys.executable, "-c", FMU_START_PROBE, str(fmu)], env=env,
+                             capture_output=True, text=True, check=True)
+        out[label] = {"instantiate_to_first_step_s": float(run.stdout.split()[-1])}
+        printer(f"catenary FMU in fmpy, instantiate to first step, set-up cache {label}: "
+                f"{out[label]['instantiate_to_first_step_s']:.2f} s")
+    return out
+
+
 #: figures other than the step-time cases, by name (``--case NAME``)
-FIGURES = {"time-to-result": time_to_result}
+FIGURES = {"time-to-result": time_to_result, "fmu-start": fmu_start}
 
 
 def step_time_entry(summary: dict) -> dict:

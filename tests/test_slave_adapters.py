@@ -127,3 +127,12 @@ def test_the_catenary_prepares_its_structure_once_at_its_first_step(monkeypatch)
     assert calls == [1e-3]
     assert s.do_step(1e-3, 5e-4)     # a halved step: no second set-up
     assert calls == [1e-3]
+
+
+def test_the_start_values_of_the_law_outputs_compute_nothing(monkeypatch):
+    """Reading every variable before initialisation mode (what pythonfmu's builder does for
+    the model description's start values) runs no moving-load run."""
+    runs = _count_law_runs(monkeypatch)
+    s = CatenarySlave(instance_name="build")
+    values = s.get_real([_vr(s, "operating_height_1"), _vr(s, "static_height_slope_2")])
+    assert values == [0.0, 0.0] and runs == []

@@ -371,8 +371,9 @@ class CatenarySlave(IntegratorSlave):
     def _output_value(self, name: str):
         """A start-law output is computed when a master reads it (in initialisation mode, where
         pantograph FMUs in start_mode 2 read them, or later): the moving-load runs behind it
-        cost nothing to a master that never reads them."""
-        if name in self._law_names:
+        cost nothing to a master that never reads them. Before initialisation mode (the model
+        description's start values) it is its start value, 0."""
+        if name in self._law_names and (self._in_initialization or self.initialised):
             try:          # (computed once for the parameters: :meth:`_laws` keeps them)
                 self._set_law_outputs(self._laws(self._build_model()))
             except Exception as exc:  # noqa: BLE001 - an early read; initialise() decides

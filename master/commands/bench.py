@@ -17,8 +17,9 @@ def add_parser(sub):
     p.add_argument("--case", action="append", metavar="NAME",
                    help="run only this case (repeatable; en50318-300, dsa380-ave-300-40span, "
                    "the fast-model cases, time-to-result: end to end against time stepping "
-                   "with a cold and a warm set-up cache); skips the cold first run and the "
-                   "span scaling")
+                   "with a cold and a warm set-up cache, fmu-start: the catenary FMU's "
+                   "instantiate-to-first-step time in fmpy, cold and warm); skips the cold "
+                   "first run and the span scaling")
     return p
 
 
