@@ -465,7 +465,7 @@ class GuardedSlave:
             return False
 
     def check_build_stamp(self) -> None:
-        """The imported ``pantocosim`` must be the one bundled in this FMU (design §2)."""
+        """The imported ``pantocosim`` must be the one bundled in this FMU (its build stamp)."""
         if not self.resources:
             return
         stamp_file = Path(self.resources) / STAMP_FILE
