@@ -39,7 +39,9 @@ def cache_dir() -> Path:
     base = os.environ.get("PANTOCOSIM_FMU_CACHE")
     if base:
         return Path(base)
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pantocosim" / "fmus"
+    from pantocosim.core.user_cache import cache_root
+
+    return cache_root() / "fmus"
 
 
 def extract_cached(fmu_path: str | Path) -> Path:

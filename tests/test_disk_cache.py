@@ -196,3 +196,18 @@ def test_the_modal_basis_is_kept_bit_for_bit(cache):
     assert 0.5 < cold.frequencies[0] < 2.0 and cold.frequencies[-1] < 40.0    # Hz
     ModalCatenary(linear=lin, cutoff_hz=30.0)                       # another cutoff: missed
     assert len(list(cache.glob("modal-basis-*.npz"))) == 2
+
+
+@pytest.mark.parametrize("value", ["", "relative/cache"])
+def test_an_empty_or_relative_xdg_cache_home_means_the_home_cache(value, monkeypatch, tmp_path):
+    """(XDG base directories: a relative path is ignored) every cache of the package is then
+    under ~/.cache/pantocosim, never relative to the working folder."""
+    from pantocosim.core.user_cache import cache_root
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setenv("XDG_CACHE_HOME", value)
+    monkeypatch.delenv("PANTOCOSIM_CACHE_DIR", raising=False)
+    assert cache_root() == tmp_path / ".cache" / "pantocosim"
+    assert disk_cache.folder() == tmp_path / ".cache" / "pantocosim" / "setup"
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert disk_cache.folder() == tmp_path / "xdg" / "pantocosim" / "setup"

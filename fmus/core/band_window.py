@@ -90,8 +90,9 @@ def _folders():
     """Where generated kernels may be kept, first choice first."""
     if os.environ.get(FOLDER_VARIABLE):
         yield Path(os.environ[FOLDER_VARIABLE])
-    cache_home = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    yield Path(cache_home) / "pantocosim" / "kernels"
+    from .user_cache import cache_root
+
+    yield cache_root() / "kernels"
     user = getattr(os, "getuid", lambda: "user")()
     yield Path(tempfile.gettempdir()) / f"pantocosim-kernels-{user}"
 

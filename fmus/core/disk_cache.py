@@ -39,8 +39,9 @@ def folder() -> Path:
     given = os.environ.get("PANTOCOSIM_CACHE_DIR")
     if given:
         return Path(given)
-    home = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(home) / "pantocosim" / "setup"
+    from .user_cache import cache_root
+
+    return cache_root() / "setup"
 
 
 def _feed(h, part) -> None:

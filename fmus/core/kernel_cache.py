@@ -15,10 +15,11 @@ a stale kernel.
 from __future__ import annotations
 
 import hashlib
-import os
 from pathlib import Path
 
 from numba.core import caching, config
+
+from .user_cache import cache_root
 
 #: modules whose kernels are located here (their names start with it)
 PACKAGE_PREFIX = "pantocosim."
@@ -28,8 +29,7 @@ def root() -> Path:
     """The folder of the package's kernel caches."""
     if config.CACHE_DIR:
         return Path(config.CACHE_DIR) / "pantocosim"
-    home = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(home) / "pantocosim" / "numba"
+    return cache_root() / "numba"
 
 
 class PackageCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
