@@ -109,7 +109,7 @@ def main(argv=None) -> dict:
         fmus.symlink_to(args.fmus.resolve(), target_is_directory=True)
     elif not fmus.exists():
         # --8<-- [start:build]
-        pantocosim("build-fmus", cwd=out)        # dist/fmus/*.fmu, the default SSP
+        pantocosim("build-fmus", "--fmi", "2", "--no-ssp", cwd=out)   # dist/fmus/*.fmu
         # --8<-- [end:build]
 
     # --8<-- [start:couplings]
