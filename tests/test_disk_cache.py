@@ -50,6 +50,21 @@ def test_the_moving_load_run_is_kept_bit_for_bit(cache):
     mean_dynamic_wire_height(line, [150.0], *args[1:])
     mean_dynamic_wire_height(line, args[0], args[1], 1e-3, args[3])
     assert len(list(cache.glob("mean-wire-height-*.npz"))) == 4
+    # another catenary (a field of its definition) or another catenary model is another entry
+    import dataclasses
+
+    from pantocosim.catenary.linear import LinearCatenary
+    from pantocosim.catenary.model import CatenaryModel
+
+    d = line.definition
+    tighter = dataclasses.replace(d, contact=dataclasses.replace(d.contact,
+                                                                 tension=d.contact.tension + 1e3))
+    other = mean_dynamic_wire_height(CatenaryModel(tighter, x0=[5.0], speed=250 / 3.6), *args)
+    assert other[0] != cold[0]
+    linear = mean_dynamic_wire_height(LinearCatenary(d, x0=[5.0], speed=250 / 3.6), *args)
+    assert len(list(cache.glob("mean-wire-height-*.npz"))) == 6
+    # the same linearisation, started from each model's own static state under the force
+    assert linear[0] != cold[0] and linear[0] == pytest.approx(cold[0], abs=1e-4)
 
 
 def test_every_input_and_the_package_stamp_change_the_key(monkeypatch):
