@@ -254,6 +254,21 @@ def test_ecos_runs_the_fmi3_ssp_as_the_fmi2_one(short_packages, tmp_path):
     assert np.max(np.abs(forces[3] - forces[2])) <= 1e-9
 
 
+def test_ssp_command_pairs_an_fmi3_pantograph_with_the_fmi3_catenary(fmus3, tmp_path):
+    fmu = tmp_path / "mine.fmu"
+    shutil.copy(fmus3["en50318-2mass"], fmu)
+    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", "ssp",
+                           "--pantograph", str(fmu), "--scenario", str(SSP_SHORT), "--out",
+                           str(tmp_path / "mine.ssp")], capture_output=True, text=True,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    with zipfile.ZipFile(tmp_path / "mine.ssp") as z:
+        for name in ("resources/mine.fmu", "resources/catenary.fmu"):
+            with zipfile.ZipFile(z.open(name)) as f:
+                assert ET.fromstring(f.read("modelDescription.xml")).get("fmiVersion") \
+                    == "3.0", name
+
+
 # ----------------------------------------------------------------------- the native C host
 @pytest.mark.parametrize("name", NAMES)
 def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host3, fmus3, tmp_path, name):

@@ -146,7 +146,7 @@ def fake_fmu(path: Path, ports: dict, version: str = "2.0") -> Path:
     ("causality", ["wrong.fmu", "port = 'contact_height'", "a Real input instead of a Real "
                    "output"]),
     ("text", ["notes.fmu", "not an FMU", "accepted"]),
-    ("fmi3", ["fmi3.fmu", "fmiVersion = '3.0'", "accepted: 2.0"]),
+    ("fmi1", ["fmi1.fmu", "fmiVersion = '1.0'", "accepted: 2.0 or 3.0"]),
 ])
 def test_ssp_command_refuses_bad_fmus_in_one_line(tmp_path, case, texts):
     full = {"contact_force": "input", "contact_height": "output",
@@ -160,7 +160,7 @@ def test_ssp_command_refuses_bad_fmus_in_one_line(tmp_path, case, texts):
         fmu = tmp_path / "notes.fmu"
         fmu.write_text("not a zip")
     else:
-        fmu = fake_fmu(tmp_path / "fmi3.fmu", full, version="3.0")
+        fmu = fake_fmu(tmp_path / "fmi1.fmu", full, version="1.0")
     proc = cli("--pantograph", fmu, "--scenario", SHORT, "--out", tmp_path / "x.ssp")
     assert proc.returncode == 2, proc.stdout + proc.stderr
     lines = proc.stderr.strip().splitlines()
