@@ -14,28 +14,14 @@ import argparse
 import csv
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
-#: the tutorial's data files, shown on its page
-FILES = Path(__file__).resolve().parent / "files"
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from own_catenary import LINE  # noqa: E402  (the line of the catenary tutorial)
+from own_catenary import LINE  # the line of the catenary tutorial (beside this script)
+from tutorial_cli import FILES, pantocosim
 
 SCENARIO = (FILES / "my-line-200.toml").read_text()
 
 SWEEP = (FILES / "my-line-speeds.toml").read_text()
-
-
-def pantocosim(*args: str, cwd: Path) -> str:
-    """Run ``pantocosim ARGS`` (the installed command line) and return what it prints."""
-    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.exit(f"pantocosim {' '.join(args)} failed:\n{proc.stderr}")
-    return proc.stdout
 
 
 def main(argv=None) -> dict:

@@ -21,21 +21,12 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-#: the tutorial's data files, shown on its page
-FILES = Path(__file__).resolve().parent / "files"
+from tutorial_cli import FILES, pantocosim  # (beside this script)
+
 
 ROOT = Path(__file__).resolve().parents[2]
 
 SHORT = (FILES / "short.toml").read_text()
-
-
-def pantocosim(*args: str, cwd: Path) -> str:
-    """Run ``pantocosim ARGS`` (the installed command line) and return what it prints."""
-    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.exit(f"pantocosim {' '.join(args)} failed:\n{proc.stderr}")
-    return proc.stdout
 
 
 def statistics(summary_json: str) -> dict:

@@ -13,25 +13,14 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
-#: the tutorial's data files, shown on its page
-FILES = Path(__file__).resolve().parent / "files"
+from tutorial_cli import FILES, pantocosim  # (beside this script)
+
 
 LINE = (FILES / "my-line.toml").read_text()
 
 STITCH = (FILES / "stitch-wire.toml").read_text()
-
-
-def pantocosim(*args: str, cwd: Path) -> str:
-    """Run ``pantocosim ARGS`` (the installed command line) and return what it prints."""
-    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.exit(f"pantocosim {' '.join(args)} failed:\n{proc.stderr}")
-    return proc.stdout
 
 
 def main(argv=None) -> dict:

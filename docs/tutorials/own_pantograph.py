@@ -14,26 +14,14 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
-#: the tutorial's data files, shown on its page
-FILES = Path(__file__).resolve().parent / "files"
-
 import numpy as np
 
+from tutorial_cli import FILES, pantocosim  # (beside this script)
+
 LUMPED = (FILES / "my-3mass.toml").read_text()
-
-
-def pantocosim(*args: str, cwd: Path) -> str:
-    """Run ``pantocosim ARGS`` (the installed command line) and return what it prints."""
-    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.exit(f"pantocosim {' '.join(args)} failed:\n{proc.stderr}")
-    return proc.stdout
 
 
 def chain_frequencies(path: Path) -> list[float]:

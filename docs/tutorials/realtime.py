@@ -14,23 +14,12 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
-#: the tutorial's data files, shown on its page
-FILES = Path(__file__).resolve().parent / "files"
+from tutorial_cli import FILES, pantocosim  # (beside this script)
+
 
 HIL = (FILES / "hil.toml").read_text()
-
-
-def pantocosim(*args: str, cwd: Path) -> str:
-    """Run ``pantocosim ARGS`` (the installed command line) and return what it prints."""
-    proc = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        sys.exit(f"pantocosim {' '.join(args)} failed:\n{proc.stderr}")
-    return proc.stdout
 
 
 def python_loop(scenario: Path, n_steps: int) -> dict:
