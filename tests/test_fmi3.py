@@ -183,7 +183,7 @@ def short_scenario(folder: Path, fmi: int) -> Path:
     return p
 
 
-@pytest.mark.parametrize("coupling", ["implicit", "explicit"])
+@pytest.mark.parametrize("coupling", ["implicit", "explicit", "gauss-seidel"])
 def test_our_master_runs_fmi3_fmus_as_fmi2_ones(built, tmp_path, coupling):
     """The short scenario (tight tolerances) through the FMI 3.0 and the FMI 2.0 FMUs of the
     run's build: contact forces equal to 1e-9 N; the implicit run equals the monolithic one
