@@ -139,7 +139,7 @@ def test_real_vector_failure_is_an_fmu_error():
     status and the instance's name (an FMU stand-in: nothing is loaded)."""
     from types import SimpleNamespace
 
-    from pantocosim.master.fmu_runtime import FmuError, FmuInstance, RealVector
+    from pantocosim.master.fmu_runtime import Fmi2Api, FmuError, FmuInstance, RealVector
 
     class Refused(Exception):
         status = 3
@@ -148,7 +148,7 @@ def test_real_vector_failure_is_an_fmu_error():
         raise Refused("fmi2GetReal failed")
 
     fmu = FmuInstance.__new__(FmuInstance)
-    fmu.name, fmu.path, fmu.fatal = "pan", Path("pan.fmu"), False
+    fmu.name, fmu.path, fmu.fatal, fmu.api = "pan", Path("pan.fmu"), False, Fmi2Api
     fmu.slave = SimpleNamespace(component=None, fmi2GetReal=refuse, fmi2SetReal=refuse)
     vector = RealVector(fmu, [1, 2])
     for call in (vector.get, lambda: vector.set([1.0, 2.0])):

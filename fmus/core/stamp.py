@@ -8,7 +8,7 @@ import hashlib
 from pathlib import Path
 
 #: files that make up the model (a change of any of them changes the stamp)
-STAMPED_SUFFIXES = (".py", ".toml", ".c")
+STAMPED_SUFFIXES = (".py", ".toml", ".c", ".h")
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:
