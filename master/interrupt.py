@@ -67,6 +67,14 @@ def remember_interrupts():
         _unseen = False
 
 
+def raise_if_swallowed() -> None:
+    """Raise KeyboardInterrupt for a Ctrl-C that :func:`remember_interrupts` raised and that
+    was swallowed on the way (e.g. raised inside a garbage-collector callback of Dask's): a
+    loop that waits for work calls it between two results."""
+    if _take_unseen():
+        raise KeyboardInterrupt
+
+
 def _take_unseen() -> bool:
     """True once if a Ctrl-C raised by :func:`remember_interrupts` may have been lost."""
     global _unseen

@@ -249,6 +249,8 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
     from distributed import as_completed
     from tqdm import tqdm
 
+    from pantocosim.master.interrupt import raise_if_swallowed
+
     enabled = sys.stderr.isatty() if progress is None else progress
     records = []
     with tqdm(total=len(futures), desc="cases", unit="case", disable=not enabled,
@@ -280,6 +282,7 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
                 bar.write(f"case {case.index + 1} ({case.label}) {record['status']}: {why}")
             table.add(rows_of(record, case, criteria))
             bar.update(1)
+            raise_if_swallowed()    # a Ctrl-C lost inside a callback still stops the sweep
     return records
 
 
