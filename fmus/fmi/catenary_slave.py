@@ -48,6 +48,7 @@ import numpy as np
 from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import DEFAULT_ALPHA
 
+from .front import Status
 from .given import track_sets
 from .slave_base import IntegratorSlave
 
@@ -98,18 +99,6 @@ class PortNames:
             "contact_force", "pantograph_height", "pantograph_velocity", "wire_height",
             "wire_velocity", "contact_force_out")),
             tuple(f"support_uplift_{j}" for j in range(MAX_SUPPORTS)))
-
-
-def _discard():
-    from .front import Status
-
-    return Status.discard
-
-
-def _warning():
-    from .front import Status
-
-    return Status.warning
 
 
 class CatenarySlave(IntegratorSlave):
@@ -379,7 +368,7 @@ class CatenarySlave(IntegratorSlave):
             except Exception as exc:  # noqa: BLE001 - an early read; initialise() decides
                 if self.initialised:
                     raise             # the read is refused (fmi2Error), never a stale 0
-                self.log(f"start laws not available yet: {exc}", _warning())
+                self.log(f"start laws not available yet: {exc}", Status.warning)
         return super()._output_value(name)
 
     def _set_law_outputs(self, laws):
@@ -519,14 +508,14 @@ class CatenarySlave(IntegratorSlave):
 
     def advance(self, current_time, step_size):
         if self._error or self._integ is None:
-            self.log(self._error or "not initialised", _discard())
+            self.log(self._error or "not initialised", Status.discard)
             return False
         try:
             new, err = self._read_inputs()
         except Exception as exc:  # noqa: BLE001
             new, err = None, f"inputs: {exc}"
         if err is not None:
-            self.log(err, _discard())
+            self.log(err, Status.discard)
             return False
         n = int(self.n_substeps)
         # a closed-form step leaves the state alone until it succeeds: no state to save
@@ -538,7 +527,7 @@ class CatenarySlave(IntegratorSlave):
                 problem = self._check_late_heights(new, current_time)
                 if problem:
                     self._error = problem
-                    self.log(problem, _discard())
+                    self.log(problem, Status.discard)
                     return False
             h = step_size / n
             self._prepare_once(h)
@@ -562,7 +551,7 @@ class CatenarySlave(IntegratorSlave):
             if saved is not None:
                 self._integ.set_state(saved)
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: "
-                     f"{type(exc).__name__}: {exc}", _discard())
+                     f"{type(exc).__name__}: {exc}", Status.discard)
             return False
 
     def _prepare_once(self, h: float) -> None:

@@ -9,6 +9,8 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 from pythonfmu.fmi2slave import Fmi2Slave
 from pythonfmu.variables import Boolean, Integer, Real, String
 
+from .front import VariableMaker
+
 
 class UnitReal(Real):
     """A Real variable with a ``unit`` attribute."""
@@ -24,29 +26,13 @@ class UnitReal(Real):
         return node
 
 
-_CLASSES = {"Real": UnitReal, "Integer": Integer, "Boolean": Boolean, "String": String}
-
-
-class Fmi2Front(Fmi2Slave):
+class Fmi2Front(VariableMaker, Fmi2Slave):
     fmi_version = 2
+    VARIABLE_CLASSES = {"Real": UnitReal, "Integer": Integer, "Boolean": Boolean,
+                        "String": String}
+    ENUMS = (Fmi2Causality, Fmi2Variability, Fmi2Initial)
     TYPE_NAMES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean",
                   "String": "String"}
-
-    def make_variable(self, kind: str, name: str, causality: str, variability: str,
-                      initial: str | None = None, unit: str | None = None,
-                      description: str | None = None, getter=None):
-        kwargs = dict(causality=Fmi2Causality[causality],
-                      variability=Fmi2Variability[variability], description=description)
-        if initial:
-            kwargs["initial"] = Fmi2Initial[initial]
-        if getter is not None:
-            kwargs["getter"] = getter
-        if kind == "Real":
-            kwargs["unit"] = unit
-        var = _CLASSES[kind](name, **kwargs)
-        var.kind = kind
-        self.register_variable(var)
-        return var
 
     @staticmethod
     def fmi_call(name: str) -> str:

@@ -14,7 +14,7 @@ from pythonfmu3.enums import Fmi3Causality, Fmi3Initial, Fmi3Status, Fmi3Variabi
 from pythonfmu3.fmi3slave import Fmi3Slave
 from pythonfmu3.variables import Boolean, Float64, Int32, String
 
-_CLASSES = {"Real": Float64, "Integer": Int32, "Boolean": Boolean, "String": String}
+from .front import VariableMaker
 
 #: FMI 2.0 call names (without prefix) whose FMI 3.0 name differs
 _RENAMED = {"SetReal": "SetFloat64", "GetReal": "GetFloat64", "SetInteger": "SetInt32",
@@ -25,8 +25,10 @@ _RENAMED = {"SetReal": "SetFloat64", "GetReal": "GetFloat64", "SetInteger": "Set
             "SetupExperiment": "EnterInitializationMode"}
 
 
-class Fmi3Front(Fmi3Slave):
+class Fmi3Front(VariableMaker, Fmi3Slave):
     fmi_version = 3
+    VARIABLE_CLASSES = {"Real": Float64, "Integer": Int32, "Boolean": Boolean, "String": String}
+    ENUMS = (Fmi3Causality, Fmi3Variability, Fmi3Initial)
     TYPE_NAMES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean",
                   "String": "String"}
 
@@ -36,22 +38,6 @@ class Fmi3Front(Fmi3Slave):
         # then the end of the last accepted step; the core's ``_time``)
         self.make_variable("Real", "time", "independent", "continuous", unit="s",
                            description="time", getter=lambda: self.__dict__.get("_time", 0.0))
-
-    def make_variable(self, kind: str, name: str, causality: str, variability: str,
-                      initial: str | None = None, unit: str | None = None,
-                      description: str | None = None, getter=None):
-        kwargs = dict(causality=Fmi3Causality[causality],
-                      variability=Fmi3Variability[variability], description=description)
-        if initial:
-            kwargs["initial"] = Fmi3Initial[initial]
-        if getter is not None:
-            kwargs["getter"] = getter
-        if kind == "Real":
-            kwargs["unit"] = unit
-        var = _CLASSES[kind](name, **kwargs)
-        var.kind = kind
-        self.register_variable(var)
-        return var
 
     @staticmethod
     def fmi_call(name: str) -> str:

@@ -32,6 +32,32 @@ class Status(IntEnum):
     fatal = 4
 
 
+class VariableMaker:
+    """``make_variable`` of a front, from its ``VARIABLE_CLASSES`` (neutral kind -> the
+    version's variable class) and ``ENUMS`` (the version's causality, variability and initial
+    enums, whose members have the neutral names)."""
+
+    VARIABLE_CLASSES: dict = {}
+    ENUMS: tuple = ()
+
+    def make_variable(self, kind: str, name: str, causality: str, variability: str,
+                      initial: str | None = None, unit: str | None = None,
+                      description: str | None = None, getter=None):
+        causalities, variabilities, initials = self.ENUMS
+        kwargs = dict(causality=causalities[causality],
+                      variability=variabilities[variability], description=description)
+        if initial:
+            kwargs["initial"] = initials[initial]
+        if getter is not None:
+            kwargs["getter"] = getter
+        if kind == "Real":
+            kwargs["unit"] = unit
+        var = self.VARIABLE_CLASSES[kind](name, **kwargs)
+        var.kind = kind
+        self.register_variable(var)
+        return var
+
+
 #: FMI major version -> "module:class" of its front (imported when first asked for: a core
 #: does not need pythonfmu3 to run as FMI 2.0)
 FRONTS = {

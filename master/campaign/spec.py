@@ -51,8 +51,8 @@ DEFAULT_CRITERIA = "en50367"
 #: the declared fields of a sweep file (the loader reads each through its declaration; the
 #: reference page of the format is generated from them)
 ROOT = Section("", [
-    Field("name", "string", default=OPTIONAL, doc="name of the sweep (default: the file's name without "
-          "-sweep)"),
+    Field("name", "string", default=OPTIONAL, doc="name of the sweep (default: the file's "
+          "name without -sweep)"),
     Field("description", "string", default="", doc="free text"),
     Field("scenario", "file", doc="base scenario: preset or TOML file (relative to this "
           "file)"),
