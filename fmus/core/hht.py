@@ -355,8 +355,9 @@ class HHTIntegrator:
         start = self._label
         a_guess = self.a
         passes = self._passes_from(start, h)
-        if passes and _inputs_key(inputs) in passes:
-            return self._repeat(passes[_inputs_key(inputs)], inputs)
+        seen = passes.get(_inputs_key(inputs)) if passes else None
+        if seen is not None:
+            return self._repeat(seen, inputs)
         if s.predictor == "linear" and self.a_prev is not None:
             a_guess = 2.0 * self.a - self.a_prev
         q_p, v_p, q, hist = _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, alpha,

@@ -14,7 +14,9 @@ a stale kernel.
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import os
 from pathlib import Path
 
 from numba.core import caching, config
@@ -32,13 +34,21 @@ def root() -> Path:
     return cache_root() / "numba"
 
 
+@functools.lru_cache(maxsize=None)
+def _source_digest(path: str, mtime_ns: int, size: int) -> str:
+    """The content digest of a source file, read once per version of it (every kernel of a
+    module asks for it)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+
 class PackageCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
     """The cache folder of a package kernel: ``<root>/<module>-<source digest>``."""
 
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        digest = hashlib.sha256(Path(py_file).read_bytes()).hexdigest()[:16]
+        st = os.stat(py_file)
+        digest = _source_digest(py_file, st.st_mtime_ns, st.st_size)
         self._cache_path = str(root() / f"{py_func.__module__}-{digest}")
 
     def get_cache_path(self) -> str:
