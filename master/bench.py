@@ -148,7 +148,11 @@ def fmu_start(tmp: Path, printer=print) -> dict:
     out = {}
     for label in ("cold", "warm"):
         run = subprocess.run([sys.executable, "-c", FMU_START_PROBE, str(fmu)], env=env,
-                             capture_output=True, text=True, check=True)
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            from pantocosim.core.errors import PantocosimError
+
+            raise PantocosimError(f"fmu-start ({fmu}): {run.stderr.strip()[-500:]}")
         out[label] = {"instantiate_to_first_step_s": float(run.stdout.split()[-1])}
         printer(f"catenary FMU in fmpy, instantiate to first step, set-up cache {label}: "
                 f"{out[label]['instantiate_to_first_step_s']:.2f} s")
