@@ -1,4 +1,4 @@
-"""FMI 2.0 co-simulation adapter for the catenary finite-element model.
+"""Co-simulation adapter (FMI 2.0 and 3.0) for the catenary finite-element model.
 
 Port contract (README.md, "The FMUs and their ports"; docs/third-party.md):
 

@@ -266,7 +266,6 @@ class PantographSlave(IntegratorSlave):
         self._force_prev = F0
         self._input_prev = F0
         self.contact_force = F0
-        self._laws_used = self._laws()
         self.apply_pending_state()
         self._update_outputs()
 

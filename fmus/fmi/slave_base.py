@@ -104,7 +104,7 @@ class GuardedSlave:
 
     author = "pantocosim"
     license = "MIT"
-    #: start values baked in by the FMU build (a scenario's FMUs, master/fmu_scenario.py):
+    #: start values baked in by the FMU build (a scenario's FMUs, master/ssp.py):
     #: variable name -> value, given by :meth:`apply_start_values` at the end of __init__
     start_values: dict = {}
 
@@ -124,7 +124,6 @@ class GuardedSlave:
         #: attribute, which its getter reads outside initialisation mode
         self._attribute_reals: set[int] = set()
         #: the FMU's current time: the start time, then the end of each accepted step
-        self._t0 = 0.0
         self._time = 0.0
         self._terminated = False
         self._model_id = self._model_identity()
@@ -257,7 +256,7 @@ class GuardedSlave:
                 self.fail(f"{self.fmi_call('SetupExperiment')}: startTime = "
                           f"{start_time!r}: must be finite")
                 return
-            self._t0 = self._time = t0
+            self._time = t0
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
             self.fail(f"{self.fmi_call('SetupExperiment')}: {type(exc).__name__}: {exc}")
 
