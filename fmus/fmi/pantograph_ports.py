@@ -20,9 +20,8 @@ FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force a
 LAW_INPUTS = LAW_NAMES
 #: the input carrying the catenary's train speed (its output of the same name)
 SPEED_INPUT = SPEED_OUTPUT
-#: the ports every pantograph FMU has (ours and a user's): name -> causality (all Real)
-REQUIRED_PORTS = {"contact_force": "input", "contact_height": "output",
-                  "contact_velocity": "output"}
+#: the optional inputs of the start handshake (a user's pantograph FMU may lack them)
+HANDSHAKE_INPUTS = (*LAW_INPUTS, SPEED_INPUT)
 
 #: meaning of the law inputs (the catenary's outputs say what the laws are)
 _LAW_INPUT_TEXT = {
@@ -100,3 +99,8 @@ VARIABLES = VariableTable((
     _real("newton_iterations", "local", None, 0.0,
           "Newton iterations of the last communication step"),
 ))
+
+#: the ports every pantograph FMU has (ours and a user's): name -> causality (all Real), in
+#: the order force in, contact height out, contact velocity out
+REQUIRED_PORTS = {v.name: v.causality for v in VARIABLES
+                  if v.causality in ("input", "output") and v.name not in HANDSHAKE_INPUTS}
