@@ -132,6 +132,17 @@ class Variable:
                         self.start, self.meaning.format(**index), self.range, self.tunable)
 
 
+def real(name: str, causality: str, unit: str | None, start, meaning: str,
+         range_: Range = ANY) -> Variable:
+    """A Real variable's row."""
+    return Variable(name, causality, "Real", unit, start, meaning, range_)
+
+
+def parameter(kind: str, name: str, start, meaning: str, range_: Range = ANY) -> Variable:
+    """The row of an Integer, Boolean or String parameter (they have no unit)."""
+    return Variable(name, "parameter", kind, None, start, meaning, range_)
+
+
 @dataclass(frozen=True)
 class Each:
     """Rows repeated for every value of an index: ``index`` the placeholder (``k``, ``j``),
