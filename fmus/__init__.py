@@ -1,9 +1,11 @@
-"""pantocosim: pantograph-catenary dynamic interaction as FMI 2.0 co-simulation components.
+"""pantocosim: pantograph-catenary dynamic interaction as FMI 2.0 and 3.0 co-simulation
+components.
 
 This package (source folder ``fmus/``) holds the physics: pantograph models, the catenary
 finite-element model and the shared HHT-alpha integrator. It imports neither pythonfmu nor
-fmpy, and it is bundled unchanged into every FMU. The master, monolithic solver and CLI live
-in ``pantocosim.master`` (source folder ``master/``).
+fmpy, and it is bundled unchanged into every FMU (all but the multibody core of the double
+pendulum, which no FMU uses). The master, monolithic solver and CLI live in
+``pantocosim.master`` (source folder ``master/``).
 """
 
 __version__ = "0.1.0"

@@ -37,7 +37,8 @@ COMMANDS = ["run", "sweep", "report", "modal", "pantograph", "static", "modes", 
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="pantocosim",
-        description="Pantograph-catenary dynamic interaction with FMI 2.0 co-simulation.")
+        description="Pantograph-catenary dynamic interaction as FMI 2.0 and 3.0 co-simulation "
+        "components.")
     parser.add_argument("--version", action="version", version=f"pantocosim {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:

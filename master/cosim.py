@@ -13,8 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
+from pantocosim.fmi.catenary_ports import PortNames
+from pantocosim.fmi.pantograph_ports import REQUIRED_PORTS
 from pantocosim.master.coupling import Coupler, CouplingSettings, scheme_named
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.recorder import Recorder
@@ -107,12 +111,13 @@ class _FmuState:
 
 
 class FmuPantograph(_FmuState):
-    """A pantograph FMU behind the common port contract."""
+    """A pantograph FMU behind the common port contract (:data:`REQUIRED_PORTS`)."""
 
     def __init__(self, fmu):
         self.fmu = fmu
-        self.inputs = fmu.reals(["contact_force"])
-        self.reads = fmu.reals(["contact_height", "contact_velocity"])
+        force, height, velocity = REQUIRED_PORTS
+        self.inputs = fmu.reals([force])
+        self.reads = fmu.reals([height, velocity])
 
     @staticmethod
     def _make_outputs(values):
@@ -124,14 +129,12 @@ class FmuCatenary(_FmuState):
 
     def __init__(self, fmu, n_pantographs: int, n_supports: int):
         self.fmu = fmu
-        k = range(1, n_pantographs + 1)
-        self.inputs = fmu.reals([f"contact_force_{i}" for i in k])
+        ports = PortNames.of(n_pantographs, n_supports)
+        self.inputs = fmu.reals(ports.forces)
         self.n, self.n_supports = n_pantographs, n_supports
         #: wire heights, wire velocities, support uplifts, Newton iterations
-        self.reads = fmu.reals([f"wire_height_{i}" for i in k]
-                               + [f"wire_velocity_{i}" for i in k]
-                               + [f"support_uplift_{j}" for j in range(n_supports)]
-                               + ["newton_iterations"])
+        self.reads = fmu.reals([*ports.wire_heights, *ports.wire_velocities, *ports.uplifts,
+                                CATENARY_VARIABLES["newton_iterations"].name])
 
     def newton_iterations(self) -> float:
         return float(self._values()[-1])
@@ -215,13 +218,14 @@ def fmu_subsystems(prep: Prepared, instances: list, plan=None):
     if sc.spans:
         params["spans"] = sc.spans
     if sc.catenary_model != "nonlinear":
-        from pantocosim.catenary.models import MODEL_NAMES
-
-        params["catenary_model"] = MODEL_NAMES.index(sc.catenary_model)
+        params["catenary_model"] = model_code(sc.catenary_model)
         params["modal_cutoff_hz"] = sc.modal_cutoff_hz
-    for k, spec in enumerate(sc.pantographs, start=1):
-        params[f"position_{k}"] = spec.position_m
-        params[f"static_force_{k}"] = float(prep.static_forces[k - 1])
+    k = range(1, n_p + 1)
+    for spec, force, position_k, force_k in zip(
+            sc.pantographs, prep.static_forces, CATENARY_VARIABLES.names("position_{k}", k),
+            CATENARY_VARIABLES.names("static_force_{k}", k)):
+        params[position_k] = spec.position_m
+        params[force_k] = float(force)
     cat_fmu.initialize(params)
     csub = FmuCatenary(cat_fmu, n_p, len(prep.support_x))
     psubs = []

@@ -3,9 +3,9 @@
 folder and any install.
 
 Every FMU bundles the same copy of the model package ``pantocosim`` (the installed package
-without its ``master`` subpackage), a build stamp that each slave checks at initialisation
-(:func:`pantocosim.core.stamp.package_stamp`), and a small generated slave module with a
-unique name (pythonfmu 0.7.0 lets two FMUs whose slave modules share a name collide).
+without its ``master`` and ``multibody`` subpackages, which no FMU uses), a build stamp that
+each slave checks at initialisation (:func:`pantocosim.core.stamp.package_stamp`), and a
+small generated slave module with a unique name (pythonfmu 0.7.0 lets two FMUs whose slave modules share a name collide).
 
 The FMI 2.0 FMUs go into the output folder (default ``dist/fmus`` of the working folder), the
 FMI 3.0 ones into its subfolder ``fmi3/`` (:data:`FMI_BUILDS`); both are the same slave cores
@@ -14,7 +14,7 @@ with the front of their version (:mod:`pantocosim.fmi.front`). Two sets are buil
 - the generic FMUs ``<out>/<model>.fmu`` and ``<out>/catenary.fmu``, neutral start values,
   which our master and anyone's set up by parameters;
 - the scenario FMUs ``<out>/<scenario>/<model>.fmu`` whose start values are the scenario's
-  (:mod:`pantocosim.master.fmu_scenario`), so a master that sets no parameter runs the
+  (:func:`pantocosim.master.ssp.scenario_start_values`), so a master that sets no parameter runs the
   scenario, with its SSP file ``<out>/<scenario>.ssp`` and CoFmuPy configuration
   (:mod:`pantocosim.master.ssp`).
 """
@@ -91,8 +91,9 @@ def model_package_dir() -> Path:
 
 
 def stage_package(dest: Path) -> tuple[Path, Path]:
-    """Copy the installed model package (without ``master``) and write the build stamp."""
-    from pantocosim.core.stamp import package_stamp
+    """Copy the installed model package (without the subpackages FMUs do not use,
+    :data:`~pantocosim.core.stamp.UNBUNDLED`) and write the build stamp."""
+    from pantocosim.core.stamp import UNBUNDLED, package_stamp
     from pantocosim.fmi.slave_base import STAMP_FILE
 
     src = model_package_dir()
@@ -102,7 +103,7 @@ def stage_package(dest: Path) -> tuple[Path, Path]:
         skip = set(shutil.ignore_patterns("__pycache__", "*.pyc", "*.nbi", "*.nbc")(folder,
                                                                                   names))
         if Path(folder).resolve() == src:
-            skip |= {"master"} & set(names)
+            skip |= set(UNBUNDLED) & set(names)
         return skip
 
     shutil.copytree(src, pkg, ignore=ignore)
@@ -267,7 +268,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-ssp", action="store_true", help="do not write the scenario FMUs "
                         "and SSP file")
     parser.add_argument("--fmi", type=int, nargs="*", default=list(FMI_VERSIONS),
-                        help="FMI versions to build (2, 3; default both: FMI 3.0 in fmi3/)")
+                        help="FMI versions to build (2, 3; default both: FMI 2.0 into --out, FMI "
+                        "3.0 into its fmi3/)")
     args = parser.parse_args(argv)
     try:
         build_all(args.out, args.only, ssp=not args.no_ssp, fmi=args.fmi)

@@ -31,9 +31,12 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import ParameterError
-from pantocosim.fmi.catenary_slave import MAX_SUPPORTS
-from pantocosim.fmi.pantograph_slave import LAW_INPUTS, SPEED_INPUT
+from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT, PortNames
+from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
+from pantocosim.fmi.pantograph_ports import LAW_INPUTS, REQUIRED_PORTS, SPEED_INPUT
+from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -46,16 +49,22 @@ for _prefix, _uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("oms", OMS)):
 PARAMETER_SET = "default"
 #: the scenarios written by ``build-fmus``
 DEFAULT_SCENARIOS = ("dsa380-ave-300",)
-#: the ports every pantograph FMU has: name -> causality (all Real)
-REQUIRED_PORTS = {"contact_force": "input", "contact_height": "output",
-                  "contact_velocity": "output"}
+#: the catenary's ports of its pantograph 1, the one of an SSP file
+CATENARY_PORTS = PortNames.of(1)
 #: the optional pantograph inputs (Real) -> the catenary output each is connected to
-OPTIONAL_INPUTS = {**{law: f"{law}_1" for law in LAW_INPUTS}, SPEED_INPUT: SPEED_INPUT}
-#: connections of the pantograph and the catenary FMU (pantograph k = 1)
-PORTS = [("pantograph", "contact_height", "catenary", "pantograph_height_1"),
-         ("pantograph", "contact_velocity", "catenary", "pantograph_velocity_1"),
-         ("catenary", "contact_force_out_1", "pantograph", "contact_force")] + [
-    ("catenary", out, "pantograph", port) for port, out in OPTIONAL_INPUTS.items()]
+OPTIONAL_INPUTS = {**dict(zip(LAW_INPUTS, CATENARY_PORTS.laws[0])), SPEED_INPUT: SPEED_OUTPUT}
+
+
+def _ports() -> list[tuple]:
+    """Connections of the pantograph and the catenary FMU (pantograph k = 1)."""
+    force, height, velocity = REQUIRED_PORTS
+    return [("pantograph", height, "catenary", CATENARY_PORTS.heights[0]),
+            ("pantograph", velocity, "catenary", CATENARY_PORTS.velocities[0]),
+            ("catenary", CATENARY_PORTS.forces_out[0], "pantograph", force)] + [
+        ("catenary", out, "pantograph", port) for port, out in OPTIONAL_INPUTS.items()]
+
+
+PORTS = _ports()
 
 
 def identifier(name: str) -> str:
@@ -75,7 +84,6 @@ def scenario_start_values(scenario) -> dict:
     t0, fmpy's SSP support, starts from it)."""
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.model import CatenaryModel
-    from pantocosim.catenary.models import MODEL_NAMES
     from pantocosim.catenary.operating_height import contact_height_laws
     from pantocosim.master.run import analysis_window
     from pantocosim.master.scenario import load_scenario
@@ -108,9 +116,9 @@ def scenario_start_values(scenario) -> dict:
            "contact_damping": float(sc.contact_damping), "extrapolate_heights": True,
            "newton_rtol": float(sc.newton_rtol), "window_start": float(window[0]),
            "window_end": float(window[1]), "averaging_step": float(sc.dt),
-           "catenary_model": MODEL_NAMES.index(sc.catenary_model),
+           "catenary_model": model_code(sc.catenary_model),
            "modal_cutoff_hz": float(sc.modal_cutoff_hz or 0.0),
-           "pantograph_height_1": float(pan.contact_height(q0))}
+           CATENARY_PORTS.heights[0]: float(pan.contact_height(q0))}
     pantograph = {"speed_kmh": float(sc.speed_kmh), "hht_alpha": float(sc.alpha),
                   "start_mode": 2, "force_extrapolation": True}
     stop = math.ceil(duration / sc.dt - 1e-9) * sc.dt
@@ -240,11 +248,18 @@ def pantograph_connections(fmu: Path) -> list[tuple]:
             what = ("missing from the model description" if found is None
                     else f"a {found[1]} {found[0]} instead of a Real {causality}")
             raise ParameterError("port", name, f"a required port, {what}; accepted: a "
-                                 "pantograph FMU with the Real input contact_force [N] and the "
-                                 "Real outputs contact_height [m], contact_velocity [m/s]",
-                                 str(fmu))
+                                 f"pantograph FMU with {_required_ports_text()}", str(fmu))
     return [c for c in PORTS if c[2] != "pantograph" or c[3] in REQUIRED_PORTS
             or variables.get(c[3]) == ("input", "Real")]
+
+
+def _required_ports_text() -> str:
+    """The required ports in words: "the Real input contact_force [N] and the Real outputs
+    contact_height [m], contact_velocity [m/s]"."""
+    def names(causality):
+        return ", ".join(f"{n} [{PANTOGRAPH_VARIABLES[n].unit}]"
+                         for n, c in REQUIRED_PORTS.items() if c == causality)
+    return f"the Real input {names('input')} and the Real outputs {names('output')}"
 
 
 def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
@@ -257,10 +272,11 @@ def _connectors(fmu: Path, parameters: dict, ports: list[str]) -> list[tuple]:
             + [(n, variables[n][0], variables[n][1]) for n in ports])
 
 
-def _ssp_parameters(values: dict) -> dict:
-    """The values an SSD binds: non-String parameters (inputs stay connections)."""
+def _ssp_parameters(values: dict, variables) -> dict:
+    """The values an SSD binds: non-String parameters of ``variables`` (the FMU's declared
+    variables; inputs stay connections)."""
     return {k: v for k, v in values.items()
-            if not isinstance(v, str) and not k.startswith("pantograph_")}
+            if not isinstance(v, str) and variables[k].causality == "parameter"}
 
 
 def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
@@ -278,15 +294,15 @@ def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
                              f"builds (stamps {stamps}): they bundle different pantocosim "
                              "copies and cannot run in one process; rebuild them together")
     connections = PORTS if ours else pantograph_connections(pantograph_fmu)
-    pan_params = _ssp_parameters(values["pantograph"]) if ours else {}
-    cat_params = _ssp_parameters(values["catenary"])
+    pan_params = _ssp_parameters(values["pantograph"], PANTOGRAPH_VARIABLES) if ours else {}
+    cat_params = _ssp_parameters(values["catenary"], CATENARY_VARIABLES)
     pan_ports = sorted({p for a, ap, b, bp in connections for el, p in ((a, ap), (b, bp))
                         if el == "pantograph"})
     cat_ports = sorted({p for a, ap, b, bp in connections for el, p in ((a, ap), (b, bp))
                         if el == "catenary"})
     # unconnected outputs a master records with the connectors (fmpy, OMSimulator)
     n_sup = min(len(scenario_support_x(values["catenary"])), MAX_SUPPORTS)
-    cat_ports += ["wire_height_1"] + [f"support_uplift_{j}" for j in range(n_sup)]
+    cat_ports += [*CATENARY_PORTS.wire_heights, *PortNames.of(1, n_sup).uplifts]
     pan_entry = Path(pantograph_fmu).name
     if pan_entry == Path(catenary_fmu).name:
         pan_entry = f"pantograph_{pan_entry}"
@@ -370,7 +386,7 @@ def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
             print(f"wrote {ssp} and {folder}/ (FMI {fmi}.0 scenario FMUs"
                   f"{', cofmupy.json' if fmi == 2 else ''}): stop "
                   f"{values['stop_time']:g} s, window {values['window'][0]:g}.."
-                  f"{values['window'][1]:g} m, start height {cat['pantograph_height_1']:.6f} m")
+                  f"{values['window'][1]:g} m, start height {cat[CATENARY_PORTS.heights[0]]:.6f} m")
     return written
 
 

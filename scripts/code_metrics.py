@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Function sizes per package, from the source at a git revision (docs/architecture.md,
-"Code metrics"): functions (and methods, nested ones included), those longer than
-``--limit`` lines (default 60, a screen), and the longest, per package.
+"""Function sizes per package, from the source at a git revision: functions (and methods,
+nested ones included), those longer than ``--limit`` lines (default 60, a screen), and the
+longest, per package.
 
     python scripts/code_metrics.py [--rev HEAD] [--limit 60] [--repo .]
 

@@ -4,8 +4,8 @@
 - ``reference/scenario.md``, ``catenary.md``, ``pantograph.md``, ``sweep.md``,
   ``criteria.md``: every data-file field from the declarations the loaders read
   (:mod:`pantocosim.core.schema`);
-- ``reference/fmu-ports.md``: the variables of every FMU from its model description, made by the
-  same slave classes the FMUs are built from.
+- ``reference/fmu-ports.md``: the variables of every FMU from the tables the slaves register
+  them from (:mod:`pantocosim.fmi.catenary_ports`, :mod:`pantocosim.fmi.pantograph_ports`).
 
 The documentation build runs it through mkdocs-gen-files (``mkdocs.yml``); run alone it writes
 the pages into a folder (``python scripts/docs_reference.py OUT``).
@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 
@@ -117,75 +116,55 @@ FILE` its time response, and a scenario's `model = "FILE"` runs it.
 
 
 # ---------------------------------------------------------------------------- FMU ports
-def _fmi2(core: type) -> type:
-    """The FMI 2.0 slave class of a slave core (the core itself where the package has no
-    separate FMI fronts)."""
-    try:
-        from pantocosim.fmi.front import slave_class
-    except ImportError:
-        return core
-    return slave_class(core, 2)
+def _start_cell(var, context) -> str:
+    """An input's or parameter's start value as the FMU declares it; none for an output
+    (what the FMU computes at initialisation) or a local."""
+    if var.causality not in ("parameter", "input"):
+        return ""
+    start = var.start_value(context)
+    if var.type == "Real":
+        return f"{float(start):.6g}"
+    if var.type == "Boolean":
+        return str(bool(start)).lower()
+    return _cell(start)
 
 
-def _model_description(slave_cls) -> ET.Element:
-    """The model description the FMU built from ``slave_cls`` carries (pythonfmu builds it the
-    same way: an instance's ``to_xml``)."""
-    slave = _fmi2(slave_cls)(instance_name="reference", resources=".")
-    # an output's start value is what the FMU computes at initialisation (the catenary's start
-    # laws take a moving-load run): the reference lists outputs without one
-    outputs = {v.value_reference for v in slave.vars.values() if v.causality.name == "output"}
-    get_real = slave.get_real
-    slave.get_real = lambda vrs: [float("nan") if vr in outputs else get_real([vr])[0]
-                                  for vr in vrs]
-    return slave.to_xml()
-
-
-def _variables_table(root: ET.Element, causalities: tuple) -> str:
-    rows = []
-    for v in root.iter("ScalarVariable"):
-        if v.get("causality") not in causalities:
-            continue
-        typ = next(iter(v))
-        start = typ.get("start", "") if v.get("causality") != "output" else ""
-        try:
-            start = f"{float(start):.6g}" if typ.tag == "Real" else start
-        except ValueError:
-            pass
-        rows.append(f"| `{v.get('name')}` | {v.get('causality')} | {v.get('variability')} | "
-                    f"{typ.tag} | {typ.get('unit', '') or ''} | {_cell(start)} | "
-                    f"{_cell(v.get('description', ''))} |\n")
+def _variables_table(variables, causalities: tuple, context=None) -> str:
+    """The rows of the declared ``variables`` of ``causalities``: name, causality, type,
+    unit, start, accepted values, meaning."""
+    rows = [f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or ''} | "
+            f"{_start_cell(v, context)} | {_cell(v.range.text())} | {_cell(v.meaning)} |\n"
+            for v in variables if v.causality in causalities]
     if not rows:
         return ""
-    return ("| variable | causality | variability | type | unit | start | description |\n"
+    return ("| variable | causality | type | unit | start | accepted | meaning |\n"
             "|---|---|---|---|---|---|---|\n" + "".join(rows))
 
 
 def fmu_page() -> str:
-    from pantocosim.fmi.catenary_slave import CatenarySlave
-    from pantocosim.fmi.pantograph_slave import PantographSlave
-    from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
+    from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY
+    from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH
+    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
+    from pantocosim.pantograph.presets import preset_defaults
 
     out = ["# FMU ports and parameters\n\n",
-           "Generated from the model descriptions of the FMUs, made by the slave classes they "
-           "are built from (`pantocosim build-fmus` writes them into `dist/fmus/`). Every "
-           "pantograph FMU has the same ports, so a model swap is a file swap; the catenary "
-           "FMU has one set of ports per pantograph (`_1`, `_2`, ...). The recipes for "
-           "third-party masters are in [Third-party masters](../third-party.md).\n"]
-    pantographs = {}
-    for preset, cls_name in PANTOGRAPH_FMUS.items():
-        cls = type(cls_name, (PantographSlave,), {"preset": preset})
-        pantographs[preset] = _model_description(cls)
-    first = next(iter(pantographs.values()))
+           "Generated from the variables the FMUs declare (`pantocosim.fmi.pantograph_ports`, "
+           "`pantocosim.fmi.catenary_ports`: the slaves register them, the master and the SSP "
+           "writer take their port names from them; `pantocosim build-fmus` writes the FMUs "
+           "into `dist/fmus/`). Every pantograph FMU has the same ports, so a model swap is a "
+           "file swap; the catenary FMU has one set of ports per pantograph (`_1`, `_2`, ...). "
+           "A parameter outside its accepted values stops the initialisation with a message "
+           "naming it. The recipes for third-party masters are in "
+           "[Third-party masters](../third-party.md).\n"]
     out.append("\n## Pantograph FMUs: ports\n\n"
-               + _variables_table(first, ("input", "output")))
-    for preset, root in pantographs.items():
+               + _variables_table(PANTOGRAPH, ("input", "output")))
+    for preset in PANTOGRAPH_FMUS:
         out.append(f"\n## Pantograph FMU `{preset}.fmu`: parameters\n\n"
-                   + _variables_table(root, ("parameter", "calculatedParameter")))
-    cat = _model_description(type(CATENARY_CLASS, (CatenarySlave,), {}))
+                   + _variables_table(PANTOGRAPH, ("parameter",), preset_defaults(preset)))
     out.append("\n## Catenary FMU `catenary.fmu`\n\n### Ports\n\n"
-               + _variables_table(cat, ("input", "output"))
+               + _variables_table(CATENARY, ("input", "output"))
                + "\n### Parameters\n\n"
-               + _variables_table(cat, ("parameter", "calculatedParameter")))
+               + _variables_table(CATENARY, ("parameter",)))
     return "".join(out)
 
 

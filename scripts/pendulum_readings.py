@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The readings of the double pendulum's illegible data against the paper's out-of-plane
-maxima of node 12 (seed 002: 9e-7 / 0.025 / 0.08 m for rigid / steel / soft bars).
+maxima of node 12 (the pendulum paper: 9e-7 / 0.025 / 0.08 m for rigid / steel / soft bars).
 
 Fig. 2(a) of the paper shows a torque pulse whose peak reads 200 or 2000 N m over the 0.02 s
 of its time axis, "tipo funcion delta"; its data line gives "m1 = m2 = 1 kg" beside a density

@@ -191,6 +191,24 @@ def test_step_lower_bound_table(tmp_path):
         assert 0.0 < number(r[3]) <= number(r[2]) < 1e6   # best <= median, in microseconds
 
 
+def test_performance_page_tables_are_the_bench_files(tmp_path):
+    """docs/performance.md's tables are what scripts/performance_tables.py writes from
+    docs/bench.json and docs/bench-fast-models.json: rewriting them changes nothing, and a
+    changed figure in a bench file changes the page."""
+    page = tmp_path / "performance.md"
+    shutil.copy(ROOT / "docs" / "performance.md", page)
+    script("performance_tables.py", "--page", page, cwd=tmp_path)
+    assert page.read_text() == (ROOT / "docs" / "performance.md").read_text()
+    bench = json.loads((ROOT / "docs" / "bench.json").read_text())
+    row = bench["cases"]["en50318-300"]["implicit"]
+    row["real_time_factor"] = 7.25
+    (tmp_path / "bench.json").write_text(json.dumps(bench))
+    out = script("performance_tables.py", "--page", page, "--bench", tmp_path / "bench.json",
+                 cwd=tmp_path)
+    assert rows_of(out, "nonlinear")[1][:3] == ["nonlinear", "implicit (FMUs)", "7.25"]
+    assert "| nonlinear | implicit (FMUs) | 7.25 |" in page.read_text()
+
+
 def test_calibrate_dsa380_reproduces_the_recorded_calibration(tmp_path):
     out = script("calibrate_dsa380.py", cwd=tmp_path, timeout=600)
     rec = json.loads((ROOT / "fmus" / "pantograph" / "data"

@@ -31,6 +31,34 @@ def probe(check, fmu, **args):
     return json.loads(lines[-1][7:])
 
 
+def test_the_staged_package_leaves_out_the_master_and_the_pendulum(tmp_path):
+    """The package an FMU bundles: the models without the master and the multibody core
+    (no FMU runs the pendulum), stamped as the installed package is stamped."""
+    from pantocosim.core.stamp import UNBUNDLED, package_stamp
+    from pantocosim.master.fmu_build import model_package_dir, stage_package
+
+    pkg, stamp = stage_package(tmp_path)
+    assert set(UNBUNDLED) == {"master", "multibody"}
+    assert (model_package_dir() / "multibody").is_dir()
+    assert not any((pkg / name).exists() for name in UNBUNDLED)
+    assert (pkg / "pantograph").is_dir() and (pkg / "catenary").is_dir()
+    assert stamp.read_text().strip() == package_stamp(pkg) == package_stamp()
+
+
+def test_every_fmu_bundles_the_models_only(fmus):
+    """No FMU carries the master or the multibody core, and none is stale."""
+    import zipfile
+
+    from pantocosim.master.fmu_build import is_stale
+
+    for name, fmu in fmus.items():
+        names = zipfile.ZipFile(fmu).namelist()
+        assert any(n.startswith("resources/pantocosim/pantograph/") for n in names), name
+        assert not [n for n in names if n.startswith(("resources/pantocosim/multibody/",
+                                                     "resources/pantocosim/master/"))], name
+        assert not is_stale(fmu), name
+
+
 def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
     from fmpy import read_model_description
     from fmpy.validation import validate_fmu

@@ -1,5 +1,5 @@
-"""Joints, contact and the HHT-alpha integrator on pendulums, with seed 004's Lagrange
-equations (9.8, Example 1) as the rigid-body oracle; the double pendulum of seed 002: its data
+"""Joints, contact and the HHT-alpha integrator on pendulums, with Cardona & Jordi's Lagrange
+equations (9.8, Example 1) as the rigid-body oracle; the paper's double pendulum: its data
 file, the readings of its illegible data, and its out-of-plane maxima against the paper."""
 
 import argparse
@@ -33,7 +33,7 @@ STIFF = Section(E=2.1e12, A=9e-4, I1=8.3e-8, I2=8.3e-8, J=4.15e-8, rho=7800.0)
 
 def planar_double_pendulum(phi1, phi2, length=1.0, n=2, section=RIGID):
     """Two equal bars (length 2l = ``length``) hinged about Z at the origin and to each
-    other, angles from the downward vertical (seed 004, Fig. 37)."""
+    other, angles from the downward vertical (Cardona & Jordi, Fig. 37)."""
     s = System(constraint_scale=1e9)
     u1 = np.array([np.sin(phi1), -np.cos(phi1), 0.0])
     u2 = np.array([np.sin(phi2), -np.cos(phi2), 0.0])
@@ -47,7 +47,7 @@ def planar_double_pendulum(phi1, phi2, length=1.0, n=2, section=RIGID):
 
 
 def book_matrices(length=1.0):
-    """Seed 004, 9.8 Example 1: M = [[I + 5ml^2, 2ml^2], [2ml^2, I + ml^2]],
+    """Cardona & Jordi, 9.8 Example 1: M = [[I + 5ml^2, 2ml^2], [2ml^2, I + ml^2]],
     K = diag(3mgl, mgl), bars of length 2l; I includes the section's rotary inertia."""
     m = RIGID.rho * RIGID.A * length
     l = length / 2
@@ -58,7 +58,7 @@ def book_matrices(length=1.0):
 
 
 def lagrange_rhs(m, l, I):
-    """Seed 004 eq. 97 for E_c, E_p of Example 1 (9.8):
+    """Cardona & Jordi eq. 97 for E_c, E_p of Example 1 (9.8):
     (I+5ml^2) f1'' + 2ml^2 cos(f2-f1) f2'' - 2ml^2 sin(f2-f1) f2'^2 + 3mgl sin f1 = 0,
     (I+ml^2) f2'' + 2ml^2 cos(f2-f1) f1'' + 2ml^2 sin(f2-f1) f1'^2 + mgl sin f2 = 0."""
     def rhs(t, y):
@@ -72,7 +72,7 @@ def lagrange_rhs(m, l, I):
 
 
 @pytest.mark.slow
-def test_equilibrium_joint_forces_and_linearisation_seed004():
+def test_equilibrium_joint_forces_and_linearisation_cardona_jordi():
     """9.5: from a displaced start the static solver finds the book's stable equilibrium
     q_eq = {0, 0} (dE_p/dq = 0 with the multipliers, eq. 102); 9.7: the pivot
     multipliers are the joint force (2 m g up); 9.8 Example 1: the two lowest natural
@@ -94,8 +94,8 @@ def test_equilibrium_joint_forces_and_linearisation_seed004():
 
 @pytest.mark.slow
 def test_rigid_limit_against_lagrange_equations():
-    """E = 2.1e15 bars released from rest at (phi1, phi2) = (90, 60) degrees follow seed
-    004's Lagrange equations (solved with solve_ivp at 1e-11) within 1 mm over 0.5 s
+    """E = 2.1e15 bars released from rest at (phi1, phi2) = (90, 60) degrees follow Cardona
+    & Jordi's Lagrange equations (solved with solve_ivp at 1e-11) within 1 mm over 0.5 s
     (HHT alpha = 0, h = 1 ms); the constraints hold to round-off (drift reported)."""
     f1, f2 = np.pi / 2, np.pi / 3
     s, b1, b2 = planar_double_pendulum(f1, f2)
@@ -144,7 +144,7 @@ def test_impact_without_damping_conserves_energy_up_to_hht_dissipation():
 
 @pytest.mark.slow
 def test_out_of_plane_maximum_orders_rigid_steel_soft():
-    """The maximum of |z| of node 12 grows with the flexibility (seed 002: rigid < steel <
+    """The maximum of |z| of node 12 grows with the flexibility (the pendulum paper: rigid < steel <
     soft), short runs of the default reading with 4 elements per bar."""
     peaks = []
     for E in (2.1e15, 2.1e11, 2.1e10):

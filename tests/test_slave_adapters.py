@@ -136,3 +136,45 @@ def test_the_start_values_of_the_law_outputs_compute_nothing(monkeypatch):
     s = CatenarySlave(instance_name="build")
     values = s.get_real([_vr(s, "operating_height_1"), _vr(s, "static_height_slope_2")])
     assert values == [0.0, 0.0] and runs == []
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_slaves_register_the_variables_they_declare(version):
+    """Each slave's FMU variables are its declared table's rows, in order, with their
+    causality, type, unit, start value and meaning (the model description, the master's port
+    names, the SSP writer and the FMU reference read the same table)."""
+    from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY
+    from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH
+    from pantocosim.fmi.pantograph_slave import PantographSlave
+    from pantocosim.pantograph.presets import preset_defaults
+
+    cases = [(catenary_slave.CatenarySlave, CATENARY, None)] + [
+        (type("Preset", (PantographSlave,), {"preset": p}), PANTOGRAPH, preset_defaults(p))
+        for p in ("dsa380-rigid", "en50318-2mass")]
+    for core, table, context in cases:
+        slave = slave_class(core, version)(instance_name="declared", resources=".")
+        registered = [v for v in slave.vars.values() if v.causality.name != "independent"]
+        assert [v.name for v in registered] == [v.name for v in table]
+        for var, row in zip(registered, table):
+            assert (var.causality.name, var.kind, var.description) == (
+                row.causality, row.type, row.meaning), row.name
+            assert getattr(var, "unit", None) == row.unit, row.name
+            assert slave.__dict__[row.name] == row.start_value(context), row.name
+    assert len(CATENARY.names("support_uplift_{j}", range(64))) == 64
+    assert PANTOGRAPH["contact_force"].unit == "N"
+
+
+def test_a_parameter_outside_its_declared_range_is_refused_naming_it():
+    from pantocosim.core.errors import ParameterError
+
+    s = CatenarySlave(instance_name="ranges")
+    for name, bad in (("n_pantographs", 5), ("contact_mode", 2), ("factorization", 3),
+                      ("catenary_model", 3), ("spans", -1), ("averaging_step", 0.0),
+                      ("static_force_2", -1.0), ("n_substeps", 0)):
+        good = getattr(s, name)
+        setattr(s, name, bad)
+        with pytest.raises(ParameterError) as err:
+            s.value(name)
+        assert err.value.field == name
+        setattr(s, name, good)
+        s.value(name)

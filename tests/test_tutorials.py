@@ -236,3 +236,22 @@ def test_no_internal_issue_numbers_in_the_docs_or_the_code():
                     if pattern.search(line) and "pattern = re.compile" not in line:
                         found.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
     assert not found, "\n".join(found)
+
+
+def test_names_and_pages_say_what_a_source_is_not_its_number():
+    """A source is named by what it is (the thesis, the pendulum paper, a textbook), never by
+    its number in the project's file of sources: not in a file name, a page or the code."""
+    pattern = re.compile(r"\bseed[ _-]?0\d\d|\bsecond (source|specification)", re.I)
+    found = []
+    for folder in ("docs", "fmus", "master", "scripts", "tests"):
+        for path in (ROOT / folder).rglob("*"):
+            if pattern.search(path.name):
+                found.append(str(path.relative_to(ROOT)))
+            if path.suffix in (".md", ".py", ".toml", ".c", ".h") and path.is_file():
+                for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+                    if pattern.search(line) and "pattern = re.compile" not in line:
+                        found.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    for n, line in enumerate((ROOT / "README.md").read_text().splitlines(), 1):
+        if pattern.search(line):
+            found.append(f"README.md:{n}: {line.strip()}")
+    assert not found, "\n".join(found)

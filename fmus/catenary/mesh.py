@@ -96,7 +96,7 @@ def _stations(d: CatenaryDefinition) -> np.ndarray:
 
 def station_count(d: CatenaryDefinition) -> tuple[int, int]:
     """(stations, stations under the stitch wires) of the mesh of ``d``, counted without
-    building it (cheap for any size: the size guard, :mod:`.size`)."""
+    building it (cheap for any size: the size guard counts before anything is built)."""
     key = _key_points(d)
     n = _divisions(key, d.element_size)
     first = np.concatenate([[0], np.cumsum(n)])       # station index of each key point

@@ -204,15 +204,6 @@ class ModalCatenary(SecondOrderModel):
                             np.ascontiguousarray(v, dtype=float), out)
         return out
 
-    def free_forces(self, g, y, v, out) -> np.ndarray:
-        """f_rest at (y, v) without the loads and the slack droppers' terms (into out)."""
-        m, nz = self.m, self.nz
-        out[:m] = self.zeta_c * v[:m] + self.omega2 * y[:m]
-        out[m:m + nz] = self.kbar * (y[m:m + nz] + self.linear.beta_r * v[m:m + nz])
-        out[m + nz:] = g.Ginv @ y[m + nz:]
-        out += self.r0
-        return out
-
     def woodbury_base(self, c_a, c_v, c_f) -> tuple:
         """(1 / diag, U = T_K diag^-1, T_K diag^-1 T_K^T) of the Newton matrix's diagonal
         part c_a + c_f (c_v zeta + omega^2) on eta, c_f k (1 + c_v beta) on zeta (1 when

@@ -19,22 +19,12 @@ import numpy as np
 import scipy.linalg as sla
 from numba import njit
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 #: eigenvalues closer than this (relative) are iterated together as a cluster
 CLUSTER_RTOL = 1e-5
 #: inverse iterations per mode (the shift is the eigenvalue: each gains ~1e-6 or better)
 ITERATIONS = 3
-
-
-def count_below(K, M, omega2: float) -> int:
-    """Number of eigenvalues of (K, M) below omega2 (Sylvester's inertia: negative pivots of
-    an unpivoted LU of K - omega2 M in the banded order)."""
-    A = sp.csc_matrix(K - omega2 * M)
-    lu = spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
-    return int(np.sum(lu.U.diagonal() < 0.0))
 
 
 # ---------------------------------------------------------------------- LAPACK band routines

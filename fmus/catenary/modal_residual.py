@@ -147,10 +147,3 @@ class InterfaceFlexibility:
         s = self.elem_s[element]
         ok = s >= 0
         return s[ok], weights[ok], dweights[ok]
-
-    def k0_inv(self, sa, wa, sb, wb) -> float:
-        """w_a^T K0^-1[S_a, S_b] w_b from the band (the pair must lie within it)."""
-        off = sb[None, :] - sa[:, None] + self.band
-        if np.any(off < 0) or np.any(off > 2 * self.band):
-            raise ValueError("contact points farther apart than the tabulated band")
-        return float(wa @ self.C_band[sa[:, None], off] @ wb)

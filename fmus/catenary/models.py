@@ -48,6 +48,11 @@ CATENARY_MODELS = {"nonlinear": _nonlinear, "linear": _linear, "modal": _modal}
 MODEL_NAMES = tuple(CATENARY_MODELS)
 
 
+def model_code(name: str) -> int:
+    """The FMU code of the model ``name`` (the catenary FMU's ``catenary_model``)."""
+    return MODEL_NAMES.index(model_name(name))
+
+
 def model_name(code_or_name) -> str:
     """The model name of an FMU code (0, 1, 2) or a name."""
     if isinstance(code_or_name, str):

@@ -9,12 +9,15 @@ from pathlib import Path
 
 #: files that make up the model (a change of any of them changes the stamp)
 STAMPED_SUFFIXES = (".py", ".toml", ".c", ".h")
+#: subpackages that are not part of the FMUs' model: the master (the FMUs are driven by one)
+#: and the multibody core (the double pendulum, which no FMU runs). FMUs do not bundle them
+#: and the stamp does not cover them.
+UNBUNDLED = ("master", "multibody")
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:
-    """SHA-256 over the model package's source and data files (relative path + content); the
-    ``master`` subpackage of an installed package is not part of the model (FMUs do not
-    bundle it)."""
+    """SHA-256 over the model package's source and data files (relative path + content),
+    without the :data:`UNBUNDLED` subpackages."""
     if package_dir is None:
         import pantocosim
 
@@ -23,7 +26,7 @@ def package_stamp(package_dir: str | Path | None = None) -> str:
     h = hashlib.sha256()
     for f in sorted(root.rglob("*")):
         rel = f.relative_to(root)
-        if rel.parts[0] == "master":
+        if rel.parts[0] in UNBUNDLED:
             continue
         if f.suffix in STAMPED_SUFFIXES and "__pycache__" not in f.parts and f.is_file():
             h.update(rel.as_posix().encode())

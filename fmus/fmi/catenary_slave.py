@@ -1,29 +1,10 @@
-"""FMI 2.0 co-simulation adapter for the catenary finite-element model.
+"""Co-simulation adapter (FMI 2.0 and 3.0) for the catenary finite-element model.
 
-Port contract (README.md, "The FMUs and their ports"; docs/third-party.md):
-
-parameters
-  ``catenary`` (String, preset name or TOML path; relative paths are also looked up in the
-  FMU resources), ``spans`` (0 = as defined), ``element_size`` [m] (0 = as defined),
-  ``speed_kmh``, ``n_pantographs`` (1..4), ``position_k`` [m] (x of pantograph k at the
-  experiment's start time t0; the model runs on the time since t0, x_k = position_k + V (t - t0)),
-  ``static_force_k`` [N] (upward static contact force at t0 for the static start, 0 = none),
-  ``hht_alpha``, ``contact_mode`` (0 = contact forces are inputs, 1 = built-in penalty
-  contact), ``contact_stiffness`` [N/m], ``contact_damping`` [N s/m], ``n_substeps``,
-  ``factorization`` (HHT Newton matrix policy: 0 full Newton, 1 once per step, 2 reuse
-  across steps, the default), ``newton_rtol`` (Newton residual tolerance),
-  ``catenary_model`` (Integer: 0 nonlinear, the default; 1 linear; 2 modal) and
-  ``modal_cutoff_hz`` [Hz] (modal model: modes below it; 0 = the default cutoff).
-inputs
-  ``contact_force_k`` [N] (mode 0), ``pantograph_height_k`` [m] and
-  ``pantograph_velocity_k`` [m/s] (mode 1).
-outputs
-  ``wire_height_k`` [m], ``wire_velocity_k`` [m/s] (including the convective term V dz/dx
-  seen by the moving pantograph), ``contact_force_out_k`` [N], ``support_uplift_j`` [m]
-  (j = 0..63; uplift of the contact wire at support j relative to the unloaded static
-  configuration; 0 beyond the last support; a line of more supports logs a warning at
-  initialisation) and ``n_supports``; ``train_speed_kmh`` (the speed, for pantograph FMUs) and
-  the start laws ``operating_height_k``, ... are available in initialisation mode.
+Its variables (parameters, the ports of pantographs 1..4 ``_k``, the support uplifts
+``_j``, the start laws) are declared in :mod:`pantocosim.fmi.catenary_ports`, which the FMU
+reference page of the documentation lists. The start's physics is the model's
+(:mod:`pantocosim.catenary.start`); this adapter reads the parameters and inputs, checks them
+against their declared ranges and drives the integrator.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
 ``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
@@ -40,69 +21,29 @@ height first delivered after t0 that is off the settled one is refused). With
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.catenary.start import (START_FORCE_TOL_N, settled_start, start_laws,
+                                       static_contact_heights)
 
+from .catenary_ports import MAX_PANTOGRAPHS, MAX_SUPPORTS, TIMING, VARIABLES, PortNames
 from .front import Status
 from .given import track_sets
 from .slave_base import IntegratorSlave
 
-MAX_PANTOGRAPHS = 4
 #: a pantograph height at t0 that differs from the settled one by more settles it again [m]
 HEIGHT_TOL_M = 1e-9
-#: a pantograph height first delivered after t0 may differ from the height the start was
-#: settled against by at most the height of this static contact force [N] (a pantograph that
-#: started on this catenary moves micrometres in a step; one that did not is centimetres off)
-START_FORCE_TOL_N = 1.0
-#: support_uplift_j outputs: the FMU's port limit (a longer line reports the first ones)
-MAX_SUPPORTS = 64
 #: model field -> this FMU's parameter, for errors raised by the model side
 FIELD_NAMES = {"alpha": "hht_alpha", "rtol": "newton_rtol",
                "contact.stiffness": "contact_stiffness", "contact.damping": "contact_damping"}
 
-#: the start laws offered to pantograph FMUs in start_mode 2 (operating_height.py)
-LAW_OUTPUTS = (
-    ("operating_height", "m", "contact height where a pantograph of mean uplift F operates: "
-     "operating_height + operating_height_slope F (mean dynamic wire height over the "
-     "analysis window + F / k_H)"),
-    ("operating_height_slope", "m/N", "slope of the operating-height law"),
-    ("static_height", "m", "contact height at t0 under a static contact force F: "
-     "static_height + static_height_slope F"),
-    ("static_height_slope", "m/N", "slope of the static-height law"))
-
-TIMING = ("the value set before doStep(t, h) is the value at t + h; the value at t is the "
-          "previous accepted step's (kept in the FMU state)")
-
-
-@dataclass(frozen=True)
-class PortNames:
-    """The names of the ports of pantographs 1..n and of the support uplifts (a step sets
-    and reads its variables by these names, built once)."""
-
-    forces: tuple            # contact_force_k (input, contact_mode 0)
-    heights: tuple           # pantograph_height_k (input, contact_mode 1)
-    velocities: tuple        # pantograph_velocity_k (input, contact_mode 1)
-    wire_heights: tuple      # wire_height_k
-    wire_velocities: tuple   # wire_velocity_k
-    forces_out: tuple        # contact_force_out_k
-    uplifts: tuple           # support_uplift_j, j = 0 .. MAX_SUPPORTS - 1
-
-    @classmethod
-    def of(cls, n: int) -> "PortNames":
-        k = range(1, n + 1)
-        return cls(*(tuple(f"{base}_{i}" for i in k) for base in (
-            "contact_force", "pantograph_height", "pantograph_velocity", "wire_height",
-            "wire_velocity", "contact_force_out")),
-            tuple(f"support_uplift_{j}" for j in range(MAX_SUPPORTS)))
-
 
 class CatenarySlave(IntegratorSlave):
     description = "pantocosim catenary"
+
+    variables = VARIABLES
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -110,100 +51,11 @@ class CatenarySlave(IntegratorSlave):
                             + ". contact_mode 0: contact forces are inputs (at t0: "
                             "static_force_k); contact_mode 1: built-in penalty contact from "
                             "pantograph_height_k/pantograph_velocity_k.")
-        self.string("catenary_definition", "en50318", "catenary definition: preset name "
-                    "(en50318, ave64, benchmark55) or TOML file (relative paths are also looked "
-                    "up in the FMU resources)")
-        self.integer("spans", 0, "number of spans (span data cycled); 0 = as defined")
-        self.integer("catenary_model", 0, "catenary model: 0 = nonlinear (finite elements, "
-                     "the reference), 1 = linear (about the static equilibrium, droppers "
-                     "slacken), 2 = modal (the linear model on its modes below "
-                     "modal_cutoff_hz, static corrections at the droppers and contact points)")
-        self.real("modal_cutoff_hz", 0.0, "parameter", "Hz", "catenary_model 2: modes below "
-                  "this frequency; 0 = the default cutoff")
-        self.real("element_size", 0.0, "parameter", "m",
-                  "target finite-element length; 0 = as defined")
-        self.real("speed_kmh", 0.0, "parameter", "km/h", "train speed")
-        self.integer("n_pantographs", 1, "number of pantographs (1..4)")
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            self.real(f"position_{k}", 30.0, "parameter", "m",
-                      f"track position x of pantograph {k} at t0")
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            self.real(f"static_force_{k}", 0.0, "parameter", "N",
-                      f"upward static contact force of pantograph {k} at t0 (static start); "
-                      "0 = none")
-        self.real("hht_alpha", DEFAULT_ALPHA, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
-        self.integer("contact_mode", 0, "0 = contact forces are inputs (contact_force_k); "
-                     "1 = built-in penalty contact from pantograph_height_k and "
-                     "pantograph_velocity_k")
-        self.real("contact_stiffness", DEFAULT_CONTACT_STIFFNESS, "parameter", "N/m",
-                  "penalty stiffness k_H (contact_mode 1)")
-        self.real("contact_damping", 0.0, "parameter", "N.s/m",
-                  "penalty contact damping c_H (contact_mode 1)")
-        self.boolean("extrapolate_heights", True,
-                     "contact_mode 1: take pantograph_height_k as the height at the start of "
-                     "the communication step (what a zero-order-hold master sets) and "
-                     "extrapolate it with pantograph_velocity_k over the step; false: take it "
-                     "as the height at t + h (an iterating master)")
-        self.real("window_start", 0.0, "parameter", "m", "analysis window start x: the "
-                  "operating-height law averages the wire height there (window_end <= "
-                  "window_start: the middle span of the line)")
-        self.real("window_end", 0.0, "parameter", "m", "analysis window end x")
-        self.real("averaging_step", 1e-3, "parameter", "s", "time step of the moving-load "
-                  "run behind the operating-height law")
-        self.integer("n_substeps", 1, "integration steps per communication step (inputs "
-                     "interpolated linearly)")
-        self.integer("max_dofs", 0, "largest catenary model the FMU builds (degrees of "
-                     "freedom); 0 = the default limit (the size guard refuses larger models "
-                     "before building them)")
-        self.integer("factorization", 2, "Newton matrix policy of the HHT solver: 0 = full "
-                     "Newton (refactorize every iteration), 1 = factorize once per step "
-                     "(chord), 2 = reuse across steps (refreshed when droppers change state "
-                     "or a step needs more than 2 iterations; linear predictor)")
-        from pantocosim.core.hht import RUN_RTOL
-
-        self.real("newton_rtol", RUN_RTOL, "parameter", "1", "Newton residual tolerance, "
-                  "relative to the largest force in the residual")
+        self.declare()
         ports = PortNames.of(MAX_PANTOGRAPHS)
-        for k, name in enumerate(ports.forces, start=1):
-            self.real(name, 0.0, "input", "N",
-                      f"contact_mode 0: upward contact force of pantograph {k} on the wire, "
-                      f">= 0; {TIMING}; at t0 it is static_force_{k}")
-        for k, (height, velocity) in enumerate(zip(ports.heights, ports.velocities), start=1):
-            self.real(height, 0.0, "input", "m",
-                      f"contact_mode 1: contact height of pantograph {k} above the rail; "
-                      f"{TIMING}")
-            self.real(velocity, 0.0, "input", "m/s",
-                      f"contact_mode 1: vertical velocity of pantograph {k}'s contact point; "
-                      f"{TIMING}")
-        for k, names in enumerate(zip(ports.wire_heights, ports.wire_velocities,
-                                      ports.forces_out), start=1):
-            height, velocity, force = names
-            self.real(height, 0.0, "output", "m",
-                      f"contact-wire height above the rail under pantograph {k}")
-            self.real(velocity, 0.0, "output", "m/s",
-                      f"vertical velocity of the contact wire seen by pantograph {k} "
-                      "(including the convective term V dz/dx)")
-            self.real(force, 0.0, "output", "N",
-                      f"contact force of pantograph {k}: mode 1 the penalty force at the end "
-                      "of the step, mode 0 the input force")
         #: the start-law outputs: computed when a master first reads one (:meth:`_output_value`)
-        self._law_names = set()
-        for k in range(1, MAX_PANTOGRAPHS + 1):
-            for name, unit, text in LAW_OUTPUTS:
-                self.real(f"{name}_{k}", 0.0, "output", unit, f"start law of pantograph {k} "
-                          f"(constant; available in initialisation mode): {text}")
-                self._law_names.add(f"{name}_{k}")
+        self._law_names = {name for names in ports.laws for name in names}
         self._attribute_reals -= {vr for vr, v in self.vars.items() if v.name in self._law_names}
-        for j, name in enumerate(ports.uplifts):
-            self.real(name, 0.0, "output", "m",
-                      f"uplift of the contact wire at support {j} relative to the unloaded "
-                      "static configuration (0 beyond the last support)")
-        self.real("n_supports", 0.0, "output", "1", "number of supports of the line (spans + 1)")
-        self.real("train_speed_kmh", 0.0, "output", "km/h", "the train speed (speed_kmh; "
-                  "available in initialisation mode): pantograph FMUs take it as their input "
-                  "of the same name")
-        self.real("newton_iterations", 0.0, "local", None,
-                  "Newton iterations of the last communication step")
         self._model = None       # CatenaryModel
         self._system = None      # the model the integrator drives (catenary or coupled)
         self._standins = []      # PrescribedPantograph per pantograph (mode 1)
@@ -274,22 +126,13 @@ class CatenarySlave(IntegratorSlave):
         from pantocosim.catenary.models import make_catenary, model_name
         from pantocosim.core.errors import ParameterError
 
-        n = int(self.n_pantographs)
-        if not 1 <= n <= MAX_PANTOGRAPHS:
-            raise ParameterError("n_pantographs", n, f"must be 1..{MAX_PANTOGRAPHS}")
-        speed = self.finite("speed_kmh", self.speed_kmh) / 3.6
-        esize = self.finite("element_size", self.element_size)
-        if esize < 0:
-            raise ParameterError("element_size", esize, "must be >= 0 (0 = as defined)")
-        spans = int(self.spans)
-        if spans < 0:
-            raise ParameterError("spans", spans, "must be >= 0 (0 = as defined)")
-        x0 = [self.finite(f"position_{k}", getattr(self, f"position_{k}"))
-              for k in range(1, n + 1)]
-        kind = model_name(int(self.catenary_model))
-        cutoff = self.finite("modal_cutoff_hz", self.modal_cutoff_hz)
-        if cutoff < 0:
-            raise ParameterError("modal_cutoff_hz", cutoff, "must be >= 0 (0 = default)")
+        n = self.value("n_pantographs")
+        speed = self.value("speed_kmh") / 3.6
+        esize = self.value("element_size")
+        spans = self.value("spans")
+        x0 = [self.value(name) for name in VARIABLES.names("position_{k}", range(1, n + 1))]
+        kind = model_name(self.value("catenary_model"))
+        cutoff = self.value("modal_cutoff_hz")
         key = ("model", str(self.catenary_definition), spans, esize, speed, tuple(x0), kind,
                cutoff)
         if key not in self._cache:
@@ -330,27 +173,14 @@ class CatenarySlave(IntegratorSlave):
             raise exc.renamed(FIELD_NAMES) from None
 
     def _laws(self, model):
-        """The start laws (operating_height.ContactHeightLaws) of the current parameters."""
-        from pantocosim.catenary.analysis import central_window
-        from pantocosim.catenary.operating_height import contact_height_laws, passage_duration
-        from pantocosim.core.errors import ParameterError
-
-        window = (self.finite("window_start", self.window_start),
-                  self.finite("window_end", self.window_end))
-        if window[1] <= window[0]:
-            window = central_window(model.support_x)
-        dt = self.finite("averaging_step", self.averaging_step)
-        if not dt > 0:
-            raise ParameterError("averaging_step", dt, "must be > 0")
-        duration = passage_duration(window[1], model.x0, model.speed if model.speed > 0
-                                    else 1.0)
+        """The start laws (operating_height.ContactHeightLaws) of the current parameters
+        (:func:`~pantocosim.catenary.start.start_laws`; kept for them)."""
+        window = (self.value("window_start"), self.value("window_end"))
+        dt = self.value("averaging_step")
         alpha = self._run_settings().alpha
         key = ("laws", window, dt, alpha, self._contact().stiffness)
         if key not in self._cache:
-            from pantocosim.catenary.models import law_model
-
-            self._cache[key] = contact_height_laws(law_model(model), self._contact().stiffness,
-                                                   window, dt, duration, alpha)
+            self._cache[key] = start_laws(model, self._contact().stiffness, window, dt, alpha)
         return self._cache[key]
 
     def update_initial_outputs(self):
@@ -372,53 +202,28 @@ class CatenarySlave(IntegratorSlave):
         return super()._output_value(name)
 
     def _set_law_outputs(self, laws):
-        values = (laws.operating_offset, laws.operating_slope, laws.static_offset,
-                  laws.static_slope)
-        for (name, _, _), v in zip(LAW_OUTPUTS, values):
-            for k in range(1, len(v) + 1):
-                setattr(self, f"{name}_{k}", float(v[k - 1]))
+        values = np.column_stack((laws.operating_offset, laws.operating_slope,
+                                  laws.static_offset, laws.static_slope))
+        names = PortNames.of(len(values)).laws
+        for k in range(len(values)):
+            self.__dict__.update(zip(names[k], map(float, values[k])))
 
     def _static_forces(self, n):
-        from pantocosim.core.errors import ParameterError
-
-        F0 = []
-        for k in range(1, n + 1):
-            F = self.finite(f"static_force_{k}", getattr(self, f"static_force_{k}"))
-            if F < 0:
-                raise ParameterError(f"static_force_{k}", F, "must be >= 0 (upward force)")
-            F0.append(F)
-        return np.array(F0)
-
-    def _settle(self, model, heights, contact, forces):
-        """q0 of the catenary in static equilibrium with pantographs held at ``heights``
-        (penalty contact), from the static state under ``forces`` as the first guess."""
-        from pantocosim.core.coupled import CoupledSystem
-        from pantocosim.core.prescribed import PrescribedPantograph
-
-        system = CoupledSystem(model, [PrescribedPantograph(z, 0.0) for z in heights],
-                               contact)
-        return system.static_solve(model.static_state(forces))
+        return np.array([self.value(name)
+                         for name in VARIABLES.names("static_force_{k}", range(1, n + 1))])
 
     def initialise(self):
-        from pantocosim.core.errors import ParameterError
-
         self.check_build_stamp()
         if self._error:
             return
-        mode = int(self.contact_mode)
-        if mode not in (0, 1):
-            raise ParameterError("contact_mode", mode, "must be 0 (force inputs) or 1 "
-                                 "(built-in penalty)")
+        mode = self.value("contact_mode")
         self.substeps()
         self._settings = self._run_settings()
         model = self._model = self._build_model()
         n = len(model.x0)
         contact = self._contact()
         F0 = self._static_forces(n)
-        policy = int(self.factorization)
-        if policy not in (0, 1, 2):
-            raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
-                                 "per step) or 2 (reuse across steps)")
+        policy = self.value("factorization")
         self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
         self._mode, self._n = mode, n
         self._port_names = PortNames.of(n)
@@ -428,13 +233,12 @@ class CatenarySlave(IntegratorSlave):
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
             self._system = model
             self._prev_inputs = F0.copy()
-            for k in range(1, n + 1):
-                setattr(self, f"contact_force_{k}", float(F0[k - 1]))
+            self.__dict__.update(zip(self._port_names.forces, F0.tolist()))
             self._integ = integ
         else:
-            self._delivered = np.array([F0[k - 1] > 0 or (
-                f"pantograph_height_{k}" in self._given
-                and getattr(self, f"pantograph_height_{k}") > 0.0) for k in range(1, n + 1)])
+            self._delivered = np.array([force > 0 or (name in self._given
+                                                      and getattr(self, name) > 0.0)
+                                        for force, name in zip(F0, self._port_names.heights)])
             self._start_penalty(model, contact, F0, self._input_heights(n, F0))
         self.train_speed_kmh = self.finite("speed_kmh", self.speed_kmh)
         self.n_supports = float(len(model.support_x))
@@ -442,44 +246,34 @@ class CatenarySlave(IntegratorSlave):
         self._update_outputs(initial=True)
 
     def _input_heights(self, n, F0):
-        """Pantograph heights and velocities at t0: at z_w(F) + F / k_H for a static force F,
-        else the inputs."""
+        """Pantograph heights and velocities at t0: where pressing with a static force F
+        (:func:`~pantocosim.catenary.start.static_contact_heights`), else the inputs."""
         model = self._build_model()
-        k_h = self._contact().stiffness
-        zw = model.wire_height(0.0, model.static_state(F0)) if np.any(F0 > 0) else None
+        if np.any(F0 > 0):
+            pressing = static_contact_heights(model, self._contact().stiffness, F0)
         out = np.empty((n, 2))
-        for k in range(1, n + 1):
-            if F0[k - 1] > 0:
-                out[k - 1] = (float(zw[k - 1] + F0[k - 1] / k_h), 0.0)
+        names = zip(self._port_names.heights, self._port_names.velocities)
+        for k, (height, velocity) in enumerate(names):
+            if F0[k] > 0:
+                out[k] = (float(pressing[k]), 0.0)
             else:
-                name = f"pantograph_height_{k}"
-                out[k - 1] = (self.finite(name, self.given_or_start(name, lambda z: z > 0.0)),
-                              self.finite(f"pantograph_velocity_{k}",
-                                          getattr(self, f"pantograph_velocity_{k}")))
+                out[k] = (self.finite(height, self.given_or_start(height, lambda z: z > 0.0)),
+                          self.value(velocity))
         return out
 
     def _start_penalty(self, model, contact, F0, heights):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
-        static start (settled against the heights where no static force is given)."""
-        from pantocosim.catenary.operating_height import static_height_law
+        static start (:func:`~pantocosim.catenary.start.settled_start`: settled against the
+        heights where no static force is given)."""
         from pantocosim.core.coupled import CoupledSystem
         from pantocosim.core.hht import HHTIntegrator
         from pantocosim.core.prescribed import PrescribedPantograph
 
-        if np.all(F0 > 0):
-            q0 = model.static_state(F0)
-        else:
-            guess = F0.copy()
-            self._late_height_tol = np.zeros(len(F0))
-            for k in np.flatnonzero(F0 == 0):
-                off, slope = static_height_law(model, k)
-                guess[k] = max(0.0, (heights[k, 0] - off) / (slope + 1.0 / contact.stiffness))
-                self._late_height_tol[k] = START_FORCE_TOL_N * (slope + 1.0 / contact.stiffness)
-            q0 = self._settle(model, heights[:, 0], contact, guess)
+        q0, self._late_height_tol = settled_start(model, contact, F0, heights[:, 0])
         standins = [PrescribedPantograph(z, v) for z, v in heights]
-        for k, (z, v) in enumerate(heights, start=1):
-            setattr(self, f"pantograph_height_{k}", float(z))
-            setattr(self, f"pantograph_velocity_{k}", float(v))
+        names = self._port_names
+        self.__dict__.update(zip(names.heights, heights[:, 0].tolist()))
+        self.__dict__.update(zip(names.velocities, heights[:, 1].tolist()))
         system = CoupledSystem(model, standins, contact)
         integ = HHTIntegrator(system, self._settings)
         integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
@@ -591,7 +385,7 @@ class CatenarySlave(IntegratorSlave):
             self._delivered[k] = True
             z, held = float(new[k, 0]), float(self._prev_inputs[k, 0])
             if abs(z - held) > self._late_height_tol[k]:
-                name = f"pantograph_height_{k + 1}"
+                name = self._port_names.heights[k]
                 return (f"{name} = {z:.6g} m at t = {t:.6g} s: the pantograph is "
                         f"{(z - held) * 1e3:+.1f} mm from the height this catenary settled "
                         f"against at t0 ({held:.6g} m, the start value of {name}; more than "

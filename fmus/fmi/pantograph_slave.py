@@ -1,13 +1,15 @@
 """Co-simulation adapter for every pantograph model (one port contract; FMI 2.0 and 3.0
 through the fronts of :mod:`pantocosim.fmi.front`).
 
-Ports (identical for all variants; README.md, "The FMUs and their ports"):
+Ports (identical for all variants; declared with the parameters in
+:mod:`pantocosim.fmi.pantograph_ports`, which the FMU reference page lists):
   input  ``contact_force`` [N] >= 0: pushes the collector down;
   output ``contact_height`` [m] above the rail, ``contact_velocity`` [m/s];
   optional inputs (read in initialisation mode) the catenary's start laws
   (``operating_height``, ...; start_mode 2) and ``train_speed_kmh`` (where ``speed_kmh`` was
   not set). A start on the laws that lacks them or the speed is refused at
-  fmi2ExitInitializationMode, naming what the master did not give.
+  fmi2ExitInitializationMode, naming what the master did not give. The start itself is the
+  model's (:func:`pantocosim.pantograph.static_start.start_state`).
 
 Timing of the force input: the value set before ``doStep(t, h)`` is the contact force at
 ``t + h``; the force at ``t`` is the one of the previous accepted step, kept in the FMU state
@@ -28,97 +30,27 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.hht import DEFAULT_ALPHA
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
+from pantocosim.pantograph.static_start import start_state
 
 from .front import Status
 from .given import track_sets
+from .pantograph_ports import FORCE_TIMING, LAW_INPUTS, SPEED_INPUT, VARIABLES
 from .slave_base import IntegratorSlave
-
-#: 0 = static at initial_height under initial_contact_force, 1 = ramp raising (3.3.1),
-#: 2 = static on the catenary's start laws (the FMU handshake)
-START_MODES = (0, 1, 2)
-#: inputs carrying the catenary's start laws (catenary.operating_height.ContactHeightLaws)
-LAW_INPUTS = ("operating_height", "operating_height_slope", "static_height",
-              "static_height_slope")
-#: the input carrying the catenary's train speed (its output of the same name)
-SPEED_INPUT = "train_speed_kmh"
-
-FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
-                "force at t is the previous accepted step's (kept in the FMU state).")
 
 
 class PantographSlave(IntegratorSlave):
     preset = "dsa380-rigid"
     description = "pantocosim pantograph"
+    variables = VARIABLES
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.description = f"pantocosim pantograph '{self.preset}'. {FORCE_TIMING}"
-        # ports
-        self.real("contact_force", 0.0, "input", "N",
-                  "contact force [N] >= 0 pushing the collector down. " + FORCE_TIMING)
-        self.real("contact_height", 0.0, "output", "m", "height of the contact point above "
-                  "the rail")
-        self.real("contact_velocity", 0.0, "output", "m/s", "vertical velocity of the contact "
-                  "point")
-        # common parameters: start values are the preset's (a broken bundled preset fails
+        # start values of the parameters are the preset's (a broken bundled preset fails
         # the build with the file, field and value)
-        defaults = preset_defaults(self.preset)
-        opts = defaults.options
-        ramp = opts.ramp or Ramp()
-        self.real("static_force", opts.static_force, "parameter", "N",
-                  "static uplift force")
-        self.real("aero_c1", opts.aero_c1, "parameter", "N.h/km",
-                  "aerodynamic uplift, linear coefficient: F = c1 v + c2 v^2, v in km/h")
-        self.real("aero_c2", opts.aero_c2, "parameter", "N.h2/km2",
-                  "aerodynamic uplift, quadratic coefficient")
-        self.real("speed_kmh", opts.speed_kmh, "parameter", "km/h", "train speed (aerodynamic "
-                  f"law); not set: the input {SPEED_INPUT} if given, else (start_mode 0, 1) "
-                  "this start value")
-        self.real("friction_force", opts.friction_force, "parameter", "N",
-                  "collector friction amplitude f_r (thesis 2.16)")
-        self.real("friction_smoothing", opts.friction_smoothing, "parameter", "m/s",
-                  "friction smoothing k_t (thesis 2.16)")
-        self.boolean("one_way_damper", opts.one_way_damper,
-                     "the damper acts only while the mechanism moves down")
-        self.real("hht_alpha", DEFAULT_ALPHA, "parameter", "1", "HHT-alpha parameter in [-1/3, 0]")
-        self.real("initial_height", defaults.working_height, "parameter", "m",
-                  "contact height at t0 (static start: equilibrium at this height)")
-        self.real("initial_contact_force", -1.0, "parameter", "N",
-                  "contact force at t0 for a static start; < 0 means static + aerodynamic "
-                  "uplift")
-        self.integer("start_mode", 0, "0 = static start in contact at initial_height under "
-                     "initial_contact_force, 1 = ramp raising (thesis 3.3.1), 2 = static start "
-                     "on the catenary's start laws (inputs operating_height.., connected to the "
-                     "catenary FMU's outputs of the same names)")
-        self.real("ramp_start_time", ramp.start, "parameter", "s", "ramp raising: start time")
-        self.real("ramp_duration", ramp.duration, "parameter", "s", "ramp raising: duration")
-        self.real("lowered_height", ramp.lowered_height, "parameter", "m",
-                  "ramp raising: contact height of the lowered pantograph at t0")
-        self.integer("n_substeps", 1, "integration steps per communication step")
-        self.boolean("force_extrapolation", False,
-                     "take contact_force as the force at the start of the communication step "
-                     "(what a zero-order-hold master sets) and extrapolate it linearly to "
-                     "t + h from the previous input: F(t+h) = max(0, 2 F(t) - F(t-h)); the "
-                     "input of the first step is not read (the force at t0 is the start's)")
-        for name, unit, text in (
-                ("operating_height", "m", "operating contact height h_op = operating_height + "
-                 "operating_height_slope F under a mean uplift F: the actuation delivers the "
-                 "mean uplift there"),
-                ("operating_height_slope", "m/N", "slope of the operating-height law"),
-                ("static_height", "m", "contact height at t0 under a static contact force F: "
-                 "static_height + static_height_slope F"),
-                ("static_height_slope", "m/N", "slope of the static-height law")):
-            self.real(name, 0.0, "input", unit, f"start_mode 2: the catenary's start law, "
-                      f"read in initialisation mode: {text}")
-        self.real(SPEED_INPUT, 0.0, "input", "km/h", "the catenary's train speed, read in "
-                  "initialisation mode where speed_kmh was not set")
-        self.string("parameter_file", "", "parameter file (TOML) replacing the preset; a path "
-                    "or a file name in the FMU resources")
-        self.real("newton_iterations", 0.0, "local", None,
-                  "Newton iterations of the last communication step")
+        self.declare(preset_defaults(self.preset))
         self._model = None
         self._u = np.zeros(1)   # the step's input (reused: a step allocates nothing)
         self._force_prev = 0.0
@@ -141,25 +73,15 @@ class PantographSlave(IntegratorSlave):
             if not p.exists():
                 raise ParameterError("parameter_file", self.parameter_file, "no such file")
             source = str(p)
-        overrides = {
-            "static_force": self.finite("static_force", self.static_force),
-            "aero_c1": self.finite("aero_c1", self.aero_c1),
-            "aero_c2": self.finite("aero_c2", self.aero_c2),
-            "speed_kmh": self._speed_kmh(),
-            "friction_force": self.finite("friction_force", self.friction_force),
-            "friction_smoothing": self.finite("friction_smoothing", self.friction_smoothing),
-            "one_way_damper": bool(self.one_way_damper),
-        }
-        if self.start_mode not in START_MODES:
-            raise ParameterError("start_mode", self.start_mode, "must be 0 (static at "
-                                 "initial_height), 1 (ramp) or 2 (static on the catenary's "
-                                 "start laws)")
+        overrides = {name: self.value(name) for name in (
+            "static_force", "aero_c1", "aero_c2", "friction_force", "friction_smoothing")}
+        overrides.update(speed_kmh=self._speed_kmh(), one_way_damper=bool(self.one_way_damper))
+        start_mode = self.value("start_mode")
         self.substeps()
-        if self.start_mode == 1:
-            overrides["ramp"] = Ramp(start=self.finite("ramp_start_time", self.ramp_start_time),
-                                     duration=self.finite("ramp_duration", self.ramp_duration),
-                                     lowered_height=self.finite("lowered_height",
-                                                                self.lowered_height))
+        if start_mode == 1:
+            overrides["ramp"] = Ramp(start=self.value("ramp_start_time"),
+                                     duration=self.value("ramp_duration"),
+                                     lowered_height=self.value("lowered_height"))
         return load_pantograph(source, **overrides)
 
     def _speed_input(self) -> float | None:
@@ -215,19 +137,13 @@ class PantographSlave(IntegratorSlave):
                      for name, value in zip(LAW_INPUTS, self._law_values()))
 
     def _start(self, model):
-        """(q0, F0): the start shape and the contact force at t0 of ``start_mode``."""
+        """(q0, F0): the start shape and the contact force at t0 of ``start_mode``
+        (:func:`~pantocosim.pantograph.static_start.start_state`)."""
         if self.start_mode == 2:
-            from pantocosim.pantograph.static_start import static_start_on_laws
-
-            return static_start_on_laws(model, *self._laws())
-        height = self.finite("initial_height", self.initial_height)
-        F0 = self.finite("initial_contact_force", self.initial_contact_force)
-        if F0 < 0:
-            F0 = model.options.mean_uplift
-        q_static = model.static_equilibrium(F0, height)
-        if self.start_mode == 1:
-            return model.lowered_equilibrium(self.lowered_height), 0.0
-        return q_static, F0
+            return start_state(model, 2, laws=self._laws())
+        return start_state(model, self.start_mode, height=self.value("initial_height"),
+                           force=self.value("initial_contact_force"),
+                           lowered_height=self.lowered_height)
 
     def update_initial_outputs(self):
         """In initialisation mode the contact height of the start is an output as soon as
@@ -266,7 +182,6 @@ class PantographSlave(IntegratorSlave):
         self._force_prev = F0
         self._input_prev = F0
         self.contact_force = F0
-        self._laws_used = self._laws()
         self.apply_pending_state()
         self._update_outputs()
 

@@ -41,6 +41,7 @@ import numpy as np
 from pantocosim.core.stamp import package_stamp
 
 from .front import Status
+from .variables import VariableTable
 
 STAMP_FILE = "pantocosim_build_stamp.txt"
 
@@ -104,7 +105,9 @@ class GuardedSlave:
 
     author = "pantocosim"
     license = "MIT"
-    #: start values baked in by the FMU build (a scenario's FMUs, master/fmu_scenario.py):
+    #: the declared variables (:mod:`pantocosim.fmi.variables`) :meth:`declare` registers
+    variables = VariableTable(())
+    #: start values baked in by the FMU build (a scenario's FMUs, master/ssp.py):
     #: variable name -> value, given by :meth:`apply_start_values` at the end of __init__
     start_values: dict = {}
 
@@ -124,7 +127,6 @@ class GuardedSlave:
         #: attribute, which its getter reads outside initialisation mode
         self._attribute_reals: set[int] = set()
         #: the FMU's current time: the start time, then the end of each accepted step
-        self._t0 = 0.0
         self._time = 0.0
         self._terminated = False
         self._model_id = self._model_identity()
@@ -179,6 +181,30 @@ class GuardedSlave:
         return getattr(self, name)
 
     # ------------------------------------------------------------------ variables
+    def declare(self, context=None) -> None:
+        """Register the variables of :attr:`variables`, in order (``context``: what a start
+        that depends on the model reads, the preset's defaults)."""
+        register = {"Real": lambda v, start: self.real(v.name, start, v.causality, v.unit,
+                                                         v.meaning, v.tunable),
+                    "Integer": lambda v, start: self.integer(v.name, start, v.meaning),
+                    "Boolean": lambda v, start: self.boolean(v.name, start, v.meaning),
+                    "String": lambda v, start: self.string(v.name, start, v.meaning)}
+        for v in self.variables:
+            if v.type != "Real" and v.causality != "parameter":
+                raise ValueError(f"{v.name}: only Real variables are ports")
+            register[v.type](v, v.start_value(context))
+
+    def value(self, name: str):
+        """The value of variable ``name`` as its type (a Real finite), checked against its
+        declared range (ParameterError naming it)."""
+        var = self.variables[name]
+        x = getattr(self, name)
+        if var.type == "Real":
+            x = self.finite(name, x)
+        elif var.type == "Integer":
+            x = int(x)
+        return var.checked(x)
+
     def real(self, name: str, value: float, causality: str, unit: str | None = None,
              description: str | None = None, tunable: bool = False) -> None:
         setattr(self, name, float(value))
@@ -257,7 +283,7 @@ class GuardedSlave:
                 self.fail(f"{self.fmi_call('SetupExperiment')}: startTime = "
                           f"{start_time!r}: must be finite")
                 return
-            self._t0 = self._time = t0
+            self._time = t0
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
             self.fail(f"{self.fmi_call('SetupExperiment')}: {type(exc).__name__}: {exc}")
 
@@ -481,14 +507,8 @@ class GuardedSlave:
                       f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
 
     def substeps(self) -> int:
-        """``n_substeps``, checked: 1 .. :data:`MAX_SUBSTEPS`."""
-        n = int(self.n_substeps)
-        if not 1 <= n <= MAX_SUBSTEPS:
-            from pantocosim.core.errors import ParameterError
-
-            raise ParameterError("n_substeps", n, f"must be 1..{MAX_SUBSTEPS} (integration "
-                                 "steps per communication step)")
-        return n
+        """``n_substeps``, checked: 1 .. :data:`MAX_SUBSTEPS` (its declared range)."""
+        return self.value("n_substeps")
 
     @staticmethod
     def finite(name: str, value: float) -> float:

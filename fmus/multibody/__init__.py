@@ -15,10 +15,10 @@ One thing per file:
 - ``prismatic.py``     prismatic joint (a guide: sliding without relative rotation)
 - ``planar.py``        planar joint (a body kept in a plane)
 - ``distance.py``      distance between body points: massless link or linear actuator
-- ``ground_contact.py`` penalty-damper ground contact (seed 002, eq. 17)
+- ``ground_contact.py`` penalty-damper ground contact (the pendulum paper, eq. 17)
 - ``loads.py``         gravity and nodal moments (the torque pulse)
 - ``statics.py``       static equilibrium by Newton with load stepping
 - ``linearize.py``     linearised inertia and stiffness on the constraint manifold,
-                       natural frequencies (seed 004, 9.8)
-- ``double_pendulum.py`` the spatial double pendulum of seed 002 and its runner
+                       natural frequencies (Cardona & Jordi, 9.8)
+- ``double_pendulum.py`` the paper's spatial double pendulum and its runner
 """

@@ -1,14 +1,15 @@
-"""Geometrically exact 3D beam with directors (Simo-Reissner kinematics; seed 002, eqs. 5-8).
+"""Geometrically exact 3D beam with directors (Simo-Reissner kinematics; the pendulum paper,
+eqs. 5-8).
 
 A node carries its position x and the orthonormal triad R = [d1 d2 d3] of its cross-section
 (d3 along the axis in the reference configuration, d1, d2 the principal axes of the section).
 A point of the section at material coordinates (xi1, xi2) sits at x + xi1 d1 + xi2 d2
-(seed 002, eq. 5), so the triad is the rotation of seed 002 (1) written through its columns:
-finite rotations without rotation parameters, no singularity at 2 pi, and a constant mass
+(the pendulum paper, eq. 5), so the triad is the paper's rotation (1) written through its
+columns: finite rotations without rotation parameters, no singularity at 2 pi, and a constant mass
 matrix. Orthonormality is a constraint of the system (``constraint_set.orthonormality``).
 
-Element (two nodes, linear interpolation of x and of the directors, seed 002 eq. 12, one
-Gauss point at mid-length: no shear locking). The material strains of seed 002 (7),
+Element (two nodes, linear interpolation of x and of the directors, the paper's eq. 12, one
+Gauss point at mid-length: no shear locking). The material strains of the paper (7),
 Gamma = R^T x' - e3 and the curvature K = axial(R^T R'), are evaluated with the interpolated
 directors in the frame-indifferent form of Betsch & Steinmann (2002):
 
@@ -26,8 +27,8 @@ element exact (curvature phi/L, chord 2 R sin(phi/2), no spurious axial strain),
 roll-up of a cantilever under an end moment closes exactly. e = h(s) e~ reduces to e~ for
 small element rotations and is frame-indifferent like e~.
 
-With the linear elastic law N = C_Gamma Gamma, M = C_K K (seed 002, eq. 8) the strain energy
-of an element is
+With the linear elastic law N = C_Gamma Gamma, M = C_K K (the paper's eq. 8) the strain
+energy of an element is
 
     W_e = L/2 sum_k c_k (e_k - e_k0)^2,   c = [k G A, k G A, E A, E I1, E I2, G J],
 
@@ -35,7 +36,7 @@ whose gradient and Hessian (internal force and tangent) are written out in
 :meth:`DirectorBeam.element_forces` (exact; checked against central differences). e_k0 are
 the strains of the reference configuration (a straight or curved stress-free beam).
 
-Mass: the kinetic energy of seed 002 (after eq. 9), T = 1/2 (m x'.x' + Omega.J Omega), is in
+Mass: the paper's kinetic energy (after eq. 9), T = 1/2 (m x'.x' + Omega.J Omega), is in
 director form 1/2 int (rho A |x'|^2 + rho I2 |d1'|^2 + rho I1 |d2'|^2) ds (I2 = int xi1^2 dA,
 I1 = int xi2^2 dA), which gives J = rho diag(I1, I2, I1 + I2) exactly; with linear shape
 functions the consistent mass matrix is constant. d3 carries no mass.

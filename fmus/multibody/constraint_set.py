@@ -10,9 +10,9 @@ coordinates q_l = q[idx_j]:
 
 so the constraint Jacobian is exact and the multiplier term sum_j lambda_j H_j of the tangent
 is exact too. The equations of motion are the Lagrange equations with multipliers
-(seed 004, eq. 112): M a + f(q, v) + G^T lambda = 0, g(q) = 0.
+(Cardona & Jordi, eq. 112): M a + f(q, v) + G^T lambda = 0, g(q) = 0.
 
-Rheonomic constraints (an actuator imposing a motion, seed 004, 9.6) add a known function of
+Rheonomic constraints (an actuator imposing a motion, Cardona & Jordi, 9.6) add a known function of
 time, g_j(q, t) = ... + r_j(t): a set's ``drive`` returns (r, r', r'') at t, and the second
 time derivative of g_j becomes G_j a + v^T H_j v + r_j''(t).
 """

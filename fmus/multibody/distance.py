@@ -1,5 +1,5 @@
 """Distance between two body points: a massless rigid link with spherical ends (constant
-length) or a linear actuator (length imposed as a function of time; seed 004, 9.6: "a linear
+length) or a linear actuator (length imposed as a function of time; Cardona & Jordi, 9.6: "a linear
 actuator imposes only the distance between two points").
 
 A point attached to node A's body sits at p_A = x_A + sum_i alpha_i d_i = T_A q_A (alpha its

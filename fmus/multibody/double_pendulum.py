@@ -1,10 +1,11 @@
-"""The spatial double pendulum with impacts of seed 002 ("Resultados y discusion", Fig. 2b).
+"""The spatial double pendulum with impacts of the pendulum paper ("Resultados y discusion",
+Fig. 2b).
 
 Two bars of 1 m, 10 director-beam elements each (paper numbering: node 1 is the ground,
 bar 1 = nodes 2-12, bar 2 = nodes 13-23). Bar 1 hangs from the ground by a revolute joint
 about Z at node 2 (the paper's "rotula", which keeps its first element in the XY plane); a
 universal joint joins node 12 (bar 1) to node 13 (bar 2); node 23 strikes the ground plane
-y = -1.8 m through the penalty-damper contact of seed 002, eq. 17. Gravity is -Y.
+y = -1.8 m through the penalty-damper contact of the pendulum paper, eq. 17. Gravity is -Y.
 
 The data are in ``data/double_pendulum.toml`` (:func:`load_spec`). Where the paper is silent,
 inconsistent or illegible:
@@ -47,7 +48,7 @@ from .joints import Revolute, Universal
 from .loads import Gravity, NodalMoment, triangular_pulse
 from .system import System
 
-#: the three cases of seed 002: Young's modulus (Pa) and the paper's maximum out-of-plane
+#: the three cases of the pendulum paper: Young's modulus (Pa) and the paper's maximum out-of-plane
 #: displacement of node 12 (m)
 CASES = {"rigid": (2.1e15, 9e-7), "steel": (2.1e11, 0.025), "soft": (2.1e10, 0.08)}
 
@@ -226,7 +227,7 @@ class Run:
 
 
 def rotation_vector(R, previous=None) -> np.ndarray:
-    """The rotation vector phi = theta u of R (seed 002, eq. 1), the one of the family
+    """The rotation vector phi = theta u of R (the pendulum paper, eq. 1), the one of the family
     (theta + 2 pi k) u nearest ``previous``: continuous through theta = pi and over
     several turns."""
     phi = Rotation.from_matrix(R).as_rotvec()

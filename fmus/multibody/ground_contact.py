@@ -1,10 +1,10 @@
-"""Penalty-damper contact of a node with a rigid plane (the cam-follower element of seed 002,
-eq. 17): with the normal gap q_n = n . x - h,
+"""Penalty-damper contact of a node with a rigid plane (the cam-follower element of the
+pendulum paper, eq. 17): with the normal gap q_n = n . x - h,
 
     F = k q_n + c q_n'   while q_n < 0,   zero otherwise,
 
 pushing the node along +n. The elastic part derives from the pseudo-elastic potential
-1/2 k q_n^2 (seed 002, after eq. 16), the damping part from the Rayleigh function
+1/2 k q_n^2 (the pendulum paper, after eq. 16), the damping part from the Rayleigh function
 1/2 c q_n'^2, whose rate c q_n'^2 the energy account reports as contact dissipation. As in
 the paper the force is not clipped: while the node leaves the plane fast the damper may pull.
 """

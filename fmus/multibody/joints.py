@@ -1,7 +1,7 @@
 """Joints between two nodes, or between a node and the ground, as quadratic constraints.
 
 A vector fixed in the body of a node is u = sum_i alpha_i d_i with alpha = R0^T u0 (its
-components in the reference triad). The joints combine two kinds of equations (seed 002
+components in the reference triad). The joints combine two kinds of equations (the pendulum paper
 treats its joints as constraints with multipliers, eq. 15):
 
 - coincidence of positions x_A - x_B = 0 (linear; B may be a fixed point),
@@ -17,7 +17,7 @@ treats its joints as constraints with multipliers, eq. 15):
 
 With the six orthonormality equations of each node the counts are independent (the clamp
 uses d1.e2 = d1.e3 = d2.e3 = 0, not nine director equations, so nothing is redundant).
-The multipliers of the coincidence equations are the joint forces (seed 004, 9.7).
+The multipliers of the coincidence equations are the joint forces (Cardona & Jordi, 9.7).
 """
 
 from __future__ import annotations

@@ -1,14 +1,14 @@
-"""Linearisation about an equilibrium and natural frequencies (seed 004, 9.8).
+"""Linearisation about an equilibrium and natural frequencies (Cardona & Jordi, 9.8).
 
-With dependent coordinates and multipliers (seed 004, eq. 112) the linearised equations
-M eps'' + K eps = 0 (seed 004, eq. 106) live on the tangent space of the constraint
+With dependent coordinates and multipliers (Cardona & Jordi, eq. 112) the linearised equations
+M eps'' + K eps = 0 (Cardona & Jordi, eq. 106) live on the tangent space of the constraint
 manifold: with Z a basis of the null space of the constraint Jacobian G at q_eq,
 
     M_r = Z^T M Z,    K_r = Z^T (K + sum_j lambda_j H_j) Z,
 
 where K is the tangent of the forces (elastic and geometric stiffness) and the multiplier
 term the curvature of the constraints, which carries e.g. the gravity stiffness of a hanging
-pendulum (seed 004, eq. 108). Eigenvalues of K_r phi = omega^2 M_r phi are the squared
+pendulum (Cardona & Jordi, eq. 108). Eigenvalues of K_r phi = omega^2 M_r phi are the squared
 natural frequencies.
 """
 

@@ -1,4 +1,4 @@
-"""Loads on nodes: gravity, nodal forces and nodal moments (the torque pulse of seed 002,
+"""Loads on nodes: gravity, nodal forces and nodal moments (the torque pulse of the pendulum paper,
 Fig. 2a).
 
 A moment m acting on a node does the virtual work m . delta theta, and with directors
@@ -110,7 +110,7 @@ class NodalMoment:
 
 def triangular_pulse(peak: float, duration: float, axis=(0.0, 0.0, 1.0)):
     """m(t) = peak * axis * tri(t): 0 at t = 0, peak at duration/2, 0 from duration on
-    (our reading of the 'delta-like' torque of seed 002, Fig. 2a)."""
+    (our reading of the 'delta-like' torque of the pendulum paper, Fig. 2a)."""
     axis = np.asarray(axis, dtype=float)
 
     def m(t):

@@ -1,5 +1,5 @@
 """Prismatic joint: node B's body slides along an axis fixed in node A's body and does not
-turn relative to it (the guide of the block of seed 004, Fig. 35).
+turn relative to it (the guide of the block of Cardona & Jordi, Fig. 35).
 
 Five quadratic constraints (joints.py explains the two kinds of equation of the other joints):
 

@@ -1,4 +1,4 @@
-"""A rigid body carried by one node (the rigid solids of seed 004's mechanisms).
+"""A rigid body carried by one node (the rigid solids of Cardona & Jordi's mechanisms).
 
 A point of the body sits at x + sum_i xi_i d_i (xi its body components, d_i the node's
 directors), so the kinetic energy of the body is

@@ -1,12 +1,12 @@
 """Static equilibrium of a multibody system: Newton-Raphson on
-f(q) + s G^T lambda = 0, s g(q) = 0 (the rest condition of seed 004, eq. 102, with the
+f(q) + s G^T lambda = 0, s g(q) = 0 (the rest condition of Cardona & Jordi, eq. 102, with the
 multipliers of eq. 112), with the loads ramped in ``steps`` equal increments.
 
 Large rotations: a Newton correction moves the directors along the tangent of the rotation
 group and breaks their orthonormality at second order, which the stiff axial and shear terms
 turn into large residuals. The corrections of a node's directors are therefore applied as a
 rotation, d_i <- exp(dtheta) d_i with dtheta = 1/2 sum_i d_i x dd_i (the spatial incremental
-rotation of seed 002, eq. 4), which keeps every triad orthonormal."""
+rotation of the pendulum paper, eq. 4), which keeps every triad orthonormal."""
 
 from __future__ import annotations
 

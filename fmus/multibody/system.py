@@ -7,8 +7,8 @@ cardillo's pattern: they contribute mass, forces with tangents and quadratic con
 system collects them (one thing per file, one collector).
 
 The unknowns handed to the HHT-alpha integrator are q = [node coordinates, lambda], the
-multipliers of the constraints g(q) = 0 (Lagrange equations with multipliers, seed 004,
-eq. 112; seed 002 eq. 15 without the augmented-Lagrangian penalty):
+multipliers of the constraints g(q) = 0 (Lagrange equations with multipliers, Cardona & Jordi,
+eq. 112; the pendulum paper eq. 15 without the augmented-Lagrangian penalty):
 
     f_inertia = [M a_x ; 0],
     f_rest    = [f(t, q, v) + s G(q)^T lambda ; s g(q)],

@@ -1,4 +1,5 @@
-"""The static start of a pantograph against the start laws a catenary gives it
+"""The start of a pantograph in a co-simulation (:func:`start_state`, what the pantograph
+FMU's ``start_mode`` selects), and its static start against the start laws a catenary gives it
 (:class:`pantocosim.catenary.operating_height.ContactHeightLaws`), so that a pantograph and a
 catenary settle their static start between themselves through ports (the FMU handshake).
 
@@ -20,6 +21,26 @@ from pantocosim.core.errors import ParameterError
 
 #: residual tolerance of the static start [N]
 STATIC_TOL_N = 1e-7
+#: the starts of a pantograph: code -> what it is (the pantograph FMU's ``start_mode``)
+START_MODES = {0: "static at a height", 1: "ramp raising", 2: "static on the start laws"}
+
+
+def start_state(pantograph, mode: int, *, height: float | None = None, force: float = -1.0,
+                lowered_height: float | None = None, laws: tuple | None = None
+                ) -> tuple[np.ndarray, float]:
+    """(q0, F0): the start shape and the contact force at t0 of :data:`START_MODES`
+    ``mode``; sets the pantograph's actuation. 0: static in contact at ``height`` under
+    ``force`` (< 0: the mean uplift); 1: lowered at ``lowered_height``, no contact, the
+    actuation set as for 0 (ramp raising, thesis 3.3.1); 2: on the catenary's start ``laws``
+    (:func:`static_start_on_laws`)."""
+    if mode == 2:
+        return static_start_on_laws(pantograph, *laws)
+    if force < 0:
+        force = pantograph.options.mean_uplift
+    q_static = pantograph.static_equilibrium(force, height)
+    if mode == 1:
+        return pantograph.lowered_equilibrium(lowered_height), 0.0
+    return q_static, force
 
 
 def static_start_on_laws(pantograph, operating_offset: float, operating_slope: float,

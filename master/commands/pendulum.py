@@ -1,4 +1,5 @@
-"""``pantocosim pendulum``: the spatial flexible double pendulum with impacts of seed 002.
+"""``pantocosim pendulum``: the spatial flexible double pendulum with impacts
+of the pendulum paper (docs/pendulum.md).
 
 Runs the paper's three cases (E = 2.1e15 "rigid", 2.1e11 steel, 2.1e10 Pa) with the
 multibody core on the HHT-alpha integrator, and writes into OUT (``--out docs/figures``
@@ -34,9 +35,10 @@ OUTPUT_FILES = ("pendulum_trajectories.png", "pendulum_node23.png", "pendulum_en
 
 def add_parser(sub):
     p = sub.add_parser("pendulum", help="spatial flexible double pendulum with impacts",
-                       description="The three cases of the spatial double pendulum of seed "
-                       "002 (rigid, steel, E = 2.1e10): figures, out-of-plane maxima against "
-                       "the paper, energy account.")
+                       description="The three cases (rigid, steel, E = 2.1e10) of the spatial "
+                       "double pendulum with impacts of the pendulum paper (ENIEF 9, "
+                       "docs/pendulum.md): figures, out-of-plane maxima against the paper, "
+                       "energy account.")
     p.add_argument("--out", default="pendulum_out", help="output folder (default pendulum_out)")
     p.add_argument("--duration", type=float, default=1.5, help="simulated time [s]")
     p.add_argument("--step", type=float, default=2.5e-4,

@@ -13,7 +13,8 @@ def add_parser(sub):
                        "write an SSP 1.0 file holding it and the catenary FMU baked for the "
                        "scenario (docs/third-party.md, 'Pantograph FMU contract').")
     p.add_argument("--pantograph", required=True, metavar="FMU",
-                   help="your pantograph FMU (FMI 2.0 co-simulation)")
+                   help="your pantograph FMU (FMI 2.0 or 3.0 co-simulation; the catenary FMU "
+                   "of the SSP file is of the same version)")
     p.add_argument("--scenario", default="dsa380-ave-300",
                    help="scenario preset or TOML file (default dsa380-ave-300): the catenary, "
                    "speed, position, window and step")

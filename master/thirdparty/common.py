@@ -170,7 +170,7 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     """What a recipe needs of the SSP named by its arguments: ``ssd`` (:func:`read_ssd`),
     ``cat`` (the catenary component's parameters), ``support_x``, ``stop``, ``window``,
     ``out``, ``n_sup`` (support uplift columns written, at most the FMU's MAX_SUPPORTS) and ``tool``."""
-    from pantocosim.fmi.catenary_slave import MAX_SUPPORTS
+    from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
 
     ssd = read_ssd(a.ssp)
     cat = ssd["parameters"]["catenary"]

@@ -1,4 +1,4 @@
-"""Seed 004 (the textbook on equations of motion) sections 9.6 and 10.1 as oracles of the
+"""Cardona & Jordi's textbook on equations of motion, sections 9.6 and 10.1 as oracles of the
 multibody core: each mechanism is built from our rigid bodies, joints and distance
 constraints, and its accelerations and multipliers are compared with the book's Lagrange
 equations (closed forms at consistent states, and a short HHT run against solve_ivp).
