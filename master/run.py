@@ -20,7 +20,8 @@ import numpy as np
 
 from pantocosim.core.errors import Interrupted, ParameterError, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS, PenaltyContact
+from pantocosim.core.contact_laws import ContactLaw, make_contact
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.output_folder import writing
 from pantocosim.master.recorder import Recorder
@@ -39,7 +40,7 @@ class Prepared:
     definition: object
     catenary: object            # a model of pantocosim.catenary.models (CatenaryModel...)
     pantographs: list           # PantographModel per pantograph
-    contact: PenaltyContact
+    contact: ContactLaw         # the scenario's contact law (pantocosim.core.contact_laws)
     window_m: tuple[float, float]
     duration: float
     n_steps: int
@@ -203,7 +204,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     n_steps = int(math.ceil(duration / sc.dt - 1e-9))
     dofs = check_size(sc, base, definition, element_size, max_dofs, n_steps)
     check_steps(n_steps, "simulation.dt", sc.dt, src, max_steps, dofs)
-    contact = PenaltyContact(sc.contact_stiffness, sc.contact_damping)
+    contact = make_contact(sc.contact_law, sc.contact_stiffness, sc.contact_damping)
     pantographs = [scenario_pantograph(sc, k) for k in range(len(sc.pantographs))]
     x0 = [p.position_m for p in sc.pantographs]
     catenary = make_catenary(sc.catenary_model, definition, x0=x0, speed=sc.speed,
@@ -221,13 +222,13 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []
-    actuation_height = z_mean + F0 / contact.stiffness
+    actuation_height = z_mean + F0 * contact.compliance
     for k, (pan, spec) in enumerate(zip(pantographs, sc.pantographs)):
-        pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+        pan.static_equilibrium(F0[k], z_mean[k] + F0[k] * contact.compliance)
         if spec.start == "static":
             q = pan.static_equilibrium(F0[k], catenary.wire_height(0.0, q_cat_guess)[k]
-                                       + F0[k] / contact.stiffness)
-            pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+                                       + F0[k] * contact.compliance)
+            pan.static_equilibrium(F0[k], z_mean[k] + F0[k] * contact.compliance)
             q_pan_guess.append(q)
         else:
             q_pan_guess.append(pan.lowered_equilibrium(spec.ramp.lowered_height))
@@ -248,7 +249,8 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     duration=float(duration), n_steps=n_steps,
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
                     support_x=np.asarray(support_x, float), dropper_x=dropper_x,
-                    extra={"actuation_height": actuation_height, "mean_wire_height": z_mean})
+                    extra={"actuation_height": actuation_height, "mean_wire_height": z_mean,
+                           "contact_law_state": system.law.get_state()})
 
 
 def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
