@@ -2,24 +2,31 @@
 (``[contact] law = "constraint"``; derivation in docs/en50318-validation.md, "The constraint
 contact").
 
-Contact k has the gap (penetration) g_k(q, t) = z_p(q_p) - z_w(q_c, t) (3.9)-(3.13) and the
-force lambda_k, acting as lambda_k u_k with u_k = dg_k/dq (+ the pantograph's contact-height
-gradient, - the wire's Hermite weights), with the complementarity
+Contact k has the gap (penetration) g_k(q, t) = z_p(q_p) - z_w(q_c, t) (3.9)-(3.13), its rate
+g'_k = v_p - v_w (the wire's convective term included) and the force lambda_k, acting as
+lambda_k u_k with u_k = dg_k/dq (+ the pantograph's contact-height gradient, - the wire's
+Hermite weights). The step enforces the complementarity on the gap a time tau ahead,
 
-    lambda_k >= 0,   g_k <= 0,   lambda_k g_k = 0,
+    c_k = g_k + tau g'_k,   lambda_k >= 0,   c_k <= 0,   lambda_k c_k = 0,
 
-enforced at the end of every step (position level, index 3) in the same Newton-Raphson
-iteration as the HHT equations (3.16): the residual R(q, lambda) has dR/dlambda = c_f U, so
-a Newton correction of (q, lambda) on the active set A (primal-dual active set:
-A = {k : lambda_k + kappa_k g_k > 0}) is
+with tau = LOOKAHEAD / c_v (about one step; c_v = gamma / (beta h) of (3.18)). tau = 0 would
+be the gap itself (index 3), whose Newmark velocities flip the sign of g' every step in
+contact, so the head leaves the wire and hits it again step after step; with tau g'
+the relative velocity of a closed contact decays by (tau - h/2) / (tau + h/2) per step
+(trapezoidal rule), a gap left by an impact within a few steps, and a closed contact holds
+g = g' = 0: the rigid contact, to which the solution converges as h -> 0. The condition is
+solved in the same Newton-Raphson iteration as the HHT equations (3.16): with
+dR/dlambda = c_f U and dc/dq = j U^T, j = 1 + tau c_v, a correction of (q, lambda) on the
+active set A (primal-dual active set: A = {k : lambda_k + kappa_k c_k > 0}) is
 
-    x = S^-1 (R + c_f U dlambda),   c_f (U_A^T S^-1 U) dlambda_A = g_A - U_A^T S^-1 R - ...,
+    x = S^-1 (R + c_f U dlambda),
+    c_f (U_A^T S^-1 U_A) dlambda_A = c_A / j - U_A^T S^-1 R - c_f U_A^T S^-1 U_I dlambda_I,
     dlambda_k = -lambda_k off A,
 
 with the system's own factorization of S (no contact term in it). The residual the
 integrator checks carries the complementarity error phi_k = lambda_k - max(0, lambda_k +
-kappa_k g_k) as a force phi_k u_k, so a step converges only when the contact is closed or
-open as it must be. A step whose contact still violates it by more than
+kappa_k c_k) as a force phi_k u_k, so a step converges only when each contact is closed or
+open as it must be; a converged step that still violates it by more than
 :attr:`ConstraintContact.gap_tolerance` raises :class:`~.errors.ConvergenceError`.
 
 The law has no stiffness: there is no contact mode, the wire and the head move together
@@ -40,13 +47,15 @@ from .params import check_number
 #: scale kappa [N/m] of the complementarity function before the first Newton matrix gives
 #: the step's own stiffness at the contact point (it changes no converged result)
 DEFAULT_KAPPA = 1.0e7
+#: tau c_v: the look-ahead of the enforced gap in units of 1 / c_v (about one step)
+LOOKAHEAD = 2.0
 
 
 @register("constraint")
 @dataclass(frozen=True)
 class ConstraintContact:
-    #: largest gap [m] a converged step may leave: penetration while in contact, or while
-    #: the force is zero
+    #: largest violation [m] of c = g + tau g' a converged step may leave: while in contact,
+    #: or penetration while the force is zero
     gap_tolerance: float = 1.0e-6
 
     compliance = 0.0
@@ -82,7 +91,8 @@ class ConstraintInSystem:
         m = len(system.pantographs)
         self.lam = np.zeros(m)
         self.kappa = np.full(m, DEFAULT_KAPPA)
-        self._last = None           # (time, gaps, multipliers) of the last evaluation
+        self.tau = 0.0              # look-ahead [s] (0 in a static solve)
+        self._last = None           # (time, c, multipliers) of the last evaluation
 
     def force(self, k, z_p, z_w, v_p, v_w):
         """(lambda_k, 0, 0): the force is an unknown, not a function of the gap."""
@@ -91,7 +101,7 @@ class ConstraintInSystem:
     def add_residual(self, ev, states, f_rest) -> None:
         """phi_k u_k into ``f_rest``; the gaps and unit vectors into ``ev.constraint``."""
         sys_ = self.system
-        gaps = np.array([s[1] - s[2] for s in states])
+        gaps = np.array([s[1] - s[2] + self.tau * (s[3] - s[4]) for s in states])
         phi = self.lam - np.maximum(0.0, self.lam + self.kappa * gaps)
         units = [_unit(sys_, k, s[5], s[6]) for k, s in enumerate(states)]
         for u, p in zip(units, phi):
@@ -104,21 +114,23 @@ class ConstraintInSystem:
         """The Newton correction of q (returned) and of the multipliers (applied)."""
         units, gaps, phi = ev.constraint
         t = ev.contact_lin[0]
-        c_f = solve.c_f
+        c_f, c_v = solve.c_f, solve.c_v
         R = np.asarray(rhs, dtype=float) - c_f * sum(p * u for p, u in zip(phi, units))
         x0 = solve(R, (t, []))
         if c_f == 0.0:              # acceleration at the start: the multipliers stay
             return x0
+        self.tau = LOOKAHEAD / c_v if c_v > 0.0 else 0.0
+        j = 1.0 + self.tau * c_v
         Y = np.column_stack([solve(u, (t, [])) for u in units])
         U = np.column_stack(units)
         W = U.T @ Y
-        self.kappa = 1.0 / (c_f * np.maximum(np.diag(W), 1e-300))
+        self.kappa = 1.0 / (j * c_f * np.maximum(np.diag(W), 1e-300))
         active = self.lam + self.kappa * gaps > 0.0
         dlam = -self.lam.copy()
         if active.any():
             A = np.flatnonzero(active)
             I = np.flatnonzero(~active)
-            b = gaps[A] - U[:, A].T @ x0 - c_f * W[np.ix_(A, I)] @ dlam[I]
+            b = gaps[A] / j - U[:, A].T @ x0 - c_f * W[np.ix_(A, I)] @ dlam[I]
             try:
                 dlam[A] = np.linalg.solve(c_f * W[np.ix_(A, A)], b)
             except np.linalg.LinAlgError:
@@ -142,13 +154,14 @@ class ConstraintInSystem:
             k = int(np.argmax(bad))
             raise ConvergenceError(
                 f"constraint contact {k + 1} not satisfied at the end of a step"
-                f"{'' if t is None else f' (t = {t:.6g} s)'}: gap {gaps[k]:.3g} m, force "
+                f"{'' if t is None else f' (t = {t:.6g} s)'}: gap {gaps[k]:.3g} m (a time "
+                f"tau = {self.tau:.3g} s ahead), force "
                 f"{lam[k]:.4g} N (tolerance {tol:g} m); a smaller simulation.dt or "
                 "newton_rtol", time=float("nan") if t is None else t)
 
     def get_state(self):
-        return self.lam.copy(), self.kappa.copy()
+        return self.lam.copy(), self.kappa.copy(), self.tau
 
     def set_state(self, state) -> None:
         if state is not None:
-            self.lam, self.kappa = state[0].copy(), state[1].copy()
+            self.lam, self.kappa, self.tau = state[0].copy(), state[1].copy(), state[2]

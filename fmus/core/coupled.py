@@ -191,7 +191,7 @@ class CoupledSystem(SecondOrderModel):
             return x - AU @ np.linalg.solve(small, vx)
 
         #: the weight of the forces in this Newton matrix (a multiplier's correction needs it)
-        solve.c_f = S.c_f
+        solve.c_f, solve.c_v = S.c_f, S.c_v
         return solve
 
     def assembled(self, ev, c_a=0.0, c_v=0.0, c_f=1.0):
