@@ -36,6 +36,9 @@ ROOT = Path(__file__).resolve().parents[1]
 READINGS = ROOT / "master" / "validation" / "en50318-readings"
 SPEEDS = (250, 300)
 CUTOFF_HZ = 20.0
+#: frequency bands [Hz] of the sigma decomposition: span passing and its first harmonics;
+#: the pantograph's own modes; dropper passing and the 5e4 N/m contact mode; the rest
+BANDS = ((0.0, 3.0), (3.0, 10.0), (10.0, 15.0), (15.0, 20.0))
 #: the quantities of the table: (column, ContactStatistics field, scale, range key)
 COLUMNS = [("mean", "mean_n", 1.0, "mean"), ("sigma", "std_n", 1.0, "std"),
            ("stat max", "stat_max_n", 1.0, "stat_max"), ("stat min", "stat_min_n", 1.0,
@@ -194,14 +197,31 @@ def table(readings: list[dict], rows: list[dict]) -> str:
             "range.\n\n" + markdown_table(head, cells))
 
 
+def band_sigma(force: np.ndarray, dt: float) -> list[float]:
+    """The standard deviation of ``force`` carried by each of :data:`BANDS` (Parseval on
+    the samples, mean removed: the squares add up to the variance)."""
+    x = force - force.mean()
+    X = np.fft.rfft(x)
+    f = np.fft.rfftfreq(len(x), dt)
+    w = np.full(len(X), 2.0)
+    w[0] = 1.0
+    if len(x) % 2 == 0:
+        w[-1] = 1.0
+    p = w * np.abs(X) ** 2 / len(x) ** 2
+    return [float(np.sqrt(p[(f >= lo) & (f < hi if hi < BANDS[-1][1] else f <= hi)].sum()))
+            for lo, hi in BANDS]
+
+
 def spectrum(runs: dict, speed: int, page: Path | None) -> str:
     """The amplitude spectrum of the filtered contact force in the window for each named
-    run, with the span, dropper and contact-mode frequencies; the peak after each support.
-    Returns the peaks' table."""
+    run, with the span, dropper and contact-mode frequencies; the sigma each frequency band
+    carries and the peak after each support. Returns the two tables."""
     from pantocosim.master.statistics import force_spectrum, window_mask
 
     v = speed / 3.6
     heads, cells = ["reading", "support x [m]", "peak [N]", "at [m] after the support"], []
+    bhead = ["reading", "sigma [N]", *(f"{lo:g}-{hi:g} Hz" for lo, hi in BANDS)]
+    bcells = []
     fig = None
     if page is not None:
         import matplotlib
@@ -215,6 +235,9 @@ def spectrum(runs: dict, speed: int, page: Path | None) -> str:
         f = lowpass("zero-phase", run["force"], float(np.median(np.diff(t))))
         mask = window_mask(x, *run["window"])
         freqs, amp = force_spectrum(t, f, mask)
+        dt = float(np.median(np.diff(t)))
+        bcells.append((name, f"{f[mask].std():.1f}",
+                       *(f"{b:.1f}" for b in band_sigma(f[mask], dt))))
         if fig is not None:
             keep = freqs <= 25.0
             ax.plot(freqs[keep], amp[keep], label=name)
@@ -248,7 +271,10 @@ def spectrum(runs: dict, speed: int, page: Path | None) -> str:
         dest = page.parent / "figures" / "en50318-spectrum.png"
         dest.parent.mkdir(exist_ok=True)
         fig.savefig(dest, dpi=110)
-    return markdown_table(heads, cells)
+    return ("sigma of the 0-20 Hz force by frequency band (the squares add up to sigma "
+            "squared):\n\n" + markdown_table(bhead, bcells)
+            + "\nThe largest filtered force after each support of the window (x from the "
+            "support to 15 m after it):\n\n" + markdown_table(heads, cells))
 
 
 def main(argv=None) -> int:
