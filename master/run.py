@@ -257,6 +257,7 @@ def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
     """The start state of the scenario (:meth:`CoupledSystem.static_solve`); a failure names
     the scenario, the start (static start in contact, or the ramp start's lowered
     pantographs) and the setting that makes it hard."""
+    from pantocosim.core.contact_laws import CONTACT_LAWS
     from pantocosim.core.errors import ConvergenceError
 
     try:
@@ -268,11 +269,14 @@ def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
         in_contact = any(p.start == "static" for p in sc.pantographs)
         what = (f"the start state ({'; '.join(starts)}) did not converge: residual "
                 f"{exc.residual:.3g} N against the tolerance {exc.tolerance:.3g} N")
-        if in_contact:
+        if in_contact and "stiffness" in CONTACT_LAWS[sc.contact_law].fields:
             raise ConvergenceError(
                 f"{sc.source}: contact.stiffness = {sc.contact_stiffness:g}: {what}; a softer "
                 f"contact (default {DEFAULT_CONTACT_STIFFNESS:g} N/m) starts",
                 residual=exc.residual) from None
+        if in_contact:
+            raise ConvergenceError(f'{sc.source}: contact.law = "{sc.contact_law}": {what}',
+                                   residual=exc.residual) from None
         raise ConvergenceError(f"{sc.source}: catenary = {sc.catenary!r}: {what} (the "
                                "catenary under its weight with the pantographs lowered)",
                                residual=exc.residual) from None

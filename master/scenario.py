@@ -327,14 +327,14 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario",
 
 
 def contact_law(contact: Table, source: str) -> str:
-    """The ``[contact]`` law; a law without stiffness refuses the penalty law's fields."""
+    """The ``[contact]`` law; a value the law does not take is refused (its ``fields``)."""
     law = CONTACT.read(contact, "law")
-    if CONTACT_LAWS[law].compliance == 0.0:
-        for name in ("stiffness", "damping"):
-            if contact.has(name):
-                raise ParameterError(f"contact.{name}", contact.data[name], f'not used by law '
-                                     f'= "{law}" (a rigid contact has no {name}); remove it or '
-                                     'use law = "penalty"', source)
+    for name in ("stiffness", "damping"):
+        if contact.has(name) and name not in CONTACT_LAWS[law].fields:
+            raise ParameterError(f"contact.{name}", contact.data[name], f'not used by law = '
+                                 f'"{law}"; remove it or use a law that takes it (laws: '
+                                 + ", ".join(f'"{n}"' for n, c in CONTACT_LAWS.items()
+                                             if name in c.fields) + ")", source)
     return law
 
 

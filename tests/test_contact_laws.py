@@ -51,8 +51,10 @@ def test_registry_declares_both_laws():
     assert pen.compliance == pytest.approx(5e-6) and pen.damping == 3.0
     assert con.compliance == 0.0 and not con.across_ports and not con.condensable
     assert pen.across_ports and pen.condensable
+    assert pen.fields == ("stiffness", "damping") and con.fields == ()
 
 
+@pytest.mark.slow
 def test_constraint_is_the_limit_of_a_stiffening_penalty(constraint_250):
     ref = constraint_250.statistics()[0]
     gaps = []

@@ -61,6 +61,8 @@ class ConstraintContact:
     compliance = 0.0
     condensable = False
     across_ports = False
+    #: the scenario's [contact] values the law takes: none (a rigid contact)
+    fields = ()
 
     def __post_init__(self):
         check_number("contact.gap_tolerance", self.gap_tolerance, positive=True)
@@ -107,8 +109,7 @@ class ConstraintInSystem:
         for u, p in zip(units, phi):
             f_rest += p * u
         ev.constraint = (units, gaps, phi)
-        self._last = (ev.contact_lin[0] if hasattr(ev, "contact_lin") else None, gaps,
-                      self.lam.copy())
+        self._last = (ev.contact_lin[0], gaps, self.lam.copy())
 
     def newton_solve(self, solve, ev, rhs):
         """The Newton correction of q (returned) and of the multipliers (applied)."""

@@ -9,6 +9,7 @@ A law declares what the solvers need to know of it (:class:`ContactLaw`):
   (:mod:`.condensed`, the linear and modal catenaries' closed-form path);
 - ``across_ports``: the law is a force of the two sides' heights, so it can be evaluated on
   one side of an FMU interface (the co-simulation couplings and the catenary FMU);
+- ``fields``: the scenario's ``[contact]`` values it takes (the loader refuses the others);
 - ``bind(system)``: its part in the assembled monolithic system (:mod:`.coupled`): the force of
   each contact, any term it adds to the residual, the Newton correction with the system's
   factorization, and its own state (a multiplier's value) across steps.
@@ -29,6 +30,7 @@ class ContactLaw(Protocol):
     compliance: float
     condensable: bool
     across_ports: bool
+    fields: tuple
 
     def bind(self, system) -> Any:
         """The law's part in an assembled :class:`~.coupled.CoupledSystem`."""

@@ -81,6 +81,8 @@ class PenaltyContact:
 
     condensable = True
     across_ports = True
+    #: the scenario's [contact] values the law takes
+    fields = ("stiffness", "damping")
 
     def __post_init__(self):
         check_number("contact.stiffness", self.stiffness, positive=True)
