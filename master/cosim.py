@@ -278,7 +278,10 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     from pantocosim.master import stability
     from pantocosim.master.pacing import StepClock
 
+    from pantocosim.master.scenario import require_port_contact
+
     sc = prep.scenario
+    require_port_contact(sc, f"the {scheme} coupling")
     warnings = stability.check(prep, scheme)
     clock = StepClock(sc.dt, realtime=realtime)
     if tolerance is None:

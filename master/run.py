@@ -20,7 +20,8 @@ import numpy as np
 
 from pantocosim.core.errors import Interrupted, ParameterError, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS, PenaltyContact
+from pantocosim.core.contact_laws import ContactLaw, make_contact
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.output_folder import writing
 from pantocosim.master.recorder import Recorder
@@ -39,7 +40,7 @@ class Prepared:
     definition: object
     catenary: object            # a model of pantocosim.catenary.models (CatenaryModel...)
     pantographs: list           # PantographModel per pantograph
-    contact: PenaltyContact
+    contact: ContactLaw         # the scenario's contact law (pantocosim.core.contact_laws)
     window_m: tuple[float, float]
     duration: float
     n_steps: int
@@ -203,7 +204,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     n_steps = int(math.ceil(duration / sc.dt - 1e-9))
     dofs = check_size(sc, base, definition, element_size, max_dofs, n_steps)
     check_steps(n_steps, "simulation.dt", sc.dt, src, max_steps, dofs)
-    contact = PenaltyContact(sc.contact_stiffness, sc.contact_damping)
+    contact = make_contact(sc.contact_law, sc.contact_stiffness, sc.contact_damping)
     pantographs = [scenario_pantograph(sc, k) for k in range(len(sc.pantographs))]
     x0 = [p.position_m for p in sc.pantographs]
     catenary = make_catenary(sc.catenary_model, definition, x0=x0, speed=sc.speed,
@@ -221,13 +222,13 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     q_cat_guess = catenary.static_state(np.where(
         [spec.start == "static" for spec in sc.pantographs], F0, 0.0))
     q_pan_guess = []
-    actuation_height = z_mean + F0 / contact.stiffness
+    actuation_height = z_mean + F0 * contact.compliance
     for k, (pan, spec) in enumerate(zip(pantographs, sc.pantographs)):
-        pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+        pan.static_equilibrium(F0[k], z_mean[k] + F0[k] * contact.compliance)
         if spec.start == "static":
             q = pan.static_equilibrium(F0[k], catenary.wire_height(0.0, q_cat_guess)[k]
-                                       + F0[k] / contact.stiffness)
-            pan.static_equilibrium(F0[k], z_mean[k] + F0[k] / contact.stiffness)
+                                       + F0[k] * contact.compliance)
+            pan.static_equilibrium(F0[k], z_mean[k] + F0[k] * contact.compliance)
             q_pan_guess.append(q)
         else:
             q_pan_guess.append(pan.lowered_equilibrium(spec.ramp.lowered_height))
@@ -248,13 +249,15 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
                     duration=float(duration), n_steps=n_steps,
                     q_cat0=q_cat0, q_pan0=q_pan0, static_forces=static, wave_speed=wave,
                     support_x=np.asarray(support_x, float), dropper_x=dropper_x,
-                    extra={"actuation_height": actuation_height, "mean_wire_height": z_mean})
+                    extra={"actuation_height": actuation_height, "mean_wire_height": z_mean,
+                           "contact_law_state": system.law.get_state()})
 
 
 def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
     """The start state of the scenario (:meth:`CoupledSystem.static_solve`); a failure names
     the scenario, the start (static start in contact, or the ramp start's lowered
     pantographs) and the setting that makes it hard."""
+    from pantocosim.core.contact_laws import CONTACT_LAWS
     from pantocosim.core.errors import ConvergenceError
 
     try:
@@ -266,11 +269,14 @@ def static_start(sc: Scenario, system, q_guess) -> np.ndarray:
         in_contact = any(p.start == "static" for p in sc.pantographs)
         what = (f"the start state ({'; '.join(starts)}) did not converge: residual "
                 f"{exc.residual:.3g} N against the tolerance {exc.tolerance:.3g} N")
-        if in_contact:
+        if in_contact and "stiffness" in CONTACT_LAWS[sc.contact_law].fields:
             raise ConvergenceError(
                 f"{sc.source}: contact.stiffness = {sc.contact_stiffness:g}: {what}; a softer "
                 f"contact (default {DEFAULT_CONTACT_STIFFNESS:g} N/m) starts",
                 residual=exc.residual) from None
+        if in_contact:
+            raise ConvergenceError(f'{sc.source}: contact.law = "{sc.contact_law}": {what}',
+                                   residual=exc.residual) from None
         raise ConvergenceError(f"{sc.source}: catenary = {sc.catenary!r}: {what} (the "
                                "catenary under its weight with the pantographs lowered)",
                                residual=exc.residual) from None

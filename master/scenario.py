@@ -40,8 +40,9 @@ A scenario is a TOML file (presets in ``master/scenarios/``)::
     fmi = 2                        # co-simulation: FMI version of the default FMUs (2 or 3)
 
     [contact]
-    stiffness = 50000.0            # k_H [N/m]
-    damping = 0.0                  # c_H [N s/m]
+    law = "penalty"                # "penalty" or "constraint" (rigid, unilateral; monolithic)
+    stiffness = 50000.0            # penalty law: k_H [N/m]
+    damping = 0.0                  # penalty law: c_H [N s/m]
 
 Loading validates every field and names the file, the field and the value in its errors.
 """
@@ -53,6 +54,7 @@ from pathlib import Path
 
 from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ, MODEL_NAMES
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.contact_laws import CONTACT_LAWS, DEFAULT_LAW
 from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
@@ -126,10 +128,15 @@ SIMULATION = Section("simulation", [
           "runs in the version its model description says"),
 ], doc="Optional table: every field has a default.")
 CONTACT = Section("contact", [
+    Field("law", "string", default=DEFAULT_LAW, choices=tuple(CONTACT_LAWS),
+          doc='"penalty": F = k_H max(0, z_pantograph - z_wire) (every coupling); '
+          '"constraint": rigid, unilateral contact, its force a Lagrange multiplier (the '
+          'monolithic coupling only: no contact stiffness, no contact mode)'),
     Field("stiffness", unit="N/m", default=DEFAULT_CONTACT_STIFFNESS, positive=True,
-          doc="penalty stiffness k_H"),
-    Field("damping", unit="N s/m", default=0.0, nonnegative=True, doc="contact damping c_H"),
-], doc="Optional table: the penalty contact law F = k_H max(0, z_pantograph - z_wire).")
+          doc="penalty law: stiffness k_H", rule='not with law = "constraint"'),
+    Field("damping", unit="N s/m", default=0.0, nonnegative=True,
+          doc="penalty law: contact damping c_H", rule='not with law = "constraint"'),
+], doc="Optional table: the contact law between each pantograph and the contact wire.")
 FORMAT = Format("scenario", "Scenario files", """A scenario says which pantographs run on which catenary, how fast, and what is analysed. It is
 read by `pantocosim run SCENARIO` and is the base of a sweep. Presets live in
 `master/scenarios/` (`pantocosim run` lists them in its help); any of them is a good start for a
@@ -172,6 +179,8 @@ class Scenario:
     duration_s: float | None = None
     contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
     contact_damping: float = 0.0
+    #: contact law (pantocosim.core.contact_laws.CONTACT_LAWS)
+    contact_law: str = DEFAULT_LAW
     spans: int | None = None
     description: str = ""
     #: catenary model (pantocosim.catenary.models.CATENARY_MODELS)
@@ -311,9 +320,32 @@ def parse_scenario(data: dict, source: str, default_name: str = "scenario",
         spans=ROOT.read(root, "spans"), speed_kmh=ROOT.read(root, "speed_kmh"),
         pantographs=specs, window_supports=window_supports, window_m=window_m,
         **{f.name: f.read(sim) for f in SIMULATION.fields},
+        contact_law=contact_law(contact, source),
         contact_stiffness=CONTACT.read(contact, "stiffness"),
         contact_damping=CONTACT.read(contact, "damping"))
     return sc
+
+
+def contact_law(contact: Table, source: str) -> str:
+    """The ``[contact]`` law; a value the law does not take is refused (its ``fields``)."""
+    law = CONTACT.read(contact, "law")
+    for name in ("stiffness", "damping"):
+        if contact.has(name) and name not in CONTACT_LAWS[law].fields:
+            raise ParameterError(f"contact.{name}", contact.data[name], f'not used by law = '
+                                 f'"{law}"; remove it or use a law that takes it (laws: '
+                                 + ", ".join(f'"{n}"' for n, c in CONTACT_LAWS.items()
+                                             if name in c.fields) + ")", source)
+    return law
+
+
+def require_port_contact(sc: Scenario, what: str) -> None:
+    """A coupling through FMU ports exchanges a force of the heights: refuse a law that is
+    not one (``what``: the coupling or export that asked)."""
+    if not CONTACT_LAWS[sc.contact_law].across_ports:
+        raise ParameterError("contact.law", sc.contact_law,
+                             f"{what} exchanges the contact force through FMU ports, which "
+                             f'holds the "penalty" law only; the "{sc.contact_law}" law runs '
+                             "with --coupling monolithic", sc.source)
 
 
 def scenario_catenary(sc: Scenario):

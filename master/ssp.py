@@ -90,7 +90,10 @@ def scenario_start_values(scenario) -> dict:
     from pantocosim.pantograph.presets import load_pantograph
     from pantocosim.pantograph.static_start import static_start_on_laws
 
+    from pantocosim.master.scenario import require_port_contact
+
     sc = load_scenario(scenario)
+    require_port_contact(sc, "an SSP export")
     if len(sc.pantographs) != 1 or sc.pantographs[0].start != "static":
         raise ParameterError("pantographs", len(sc.pantographs), "an SSP export takes one "
                              "pantograph with a static start", sc.source)

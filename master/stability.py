@@ -114,7 +114,9 @@ def estimates(prep) -> list[Estimate]:
         out.append(Estimate(mass=m, impedance=z,
                             gain=exchange_gain(sc.contact_stiffness, sc.contact_damping,
                                                sc.dt, m, z),
-                            frequency=contact_frequency(sc.contact_stiffness, m)))
+                            # a rigid contact (compliance 0) has no contact mode
+                            frequency=(contact_frequency(sc.contact_stiffness, m)
+                                       if prep.contact.compliance > 0.0 else 0.0)))
     return out
 
 

@@ -24,6 +24,7 @@ class AssembledStepper:
 
         self.prep = prep
         self.system = CoupledSystem(prep.catenary, prep.pantographs, prep.contact)
+        self.system.law.set_state(prep.extra.get("contact_law_state"))   # static start's
         self.integ = HHTIntegrator(self.system, settings)
         q0 = np.concatenate([prep.q_cat0] + list(prep.q_pan0))
         self.integ.initialize(0.0, q0, np.zeros(self.system.n_dofs), None)
@@ -93,7 +94,9 @@ def warm_up(stepper, h: float) -> None:
 
 
 def make_stepper(prep, settings):
-    """The monolithic integrator for ``prep``'s catenary model."""
-    if hasattr(prep.catenary, "affine_form") or hasattr(prep.catenary, "closed_form"):
+    """The monolithic integrator for ``prep``'s catenary model (assembled when the contact
+    law cannot be condensed)."""
+    if prep.contact.condensable and (hasattr(prep.catenary, "affine_form")
+                                     or hasattr(prep.catenary, "closed_form")):
         return CondensedRunStepper(prep, settings)
     return AssembledStepper(prep, settings)

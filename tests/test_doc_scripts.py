@@ -231,3 +231,44 @@ def test_compare_flexible_rigid(tmp_path):
         assert number(row[1]) == pytest.approx(rigid, abs=1e-4)
         assert number(row[2]) == pytest.approx(flexible, rel=1e-3)
 
+
+
+@pytest.mark.slow
+def test_en50318_readings(tmp_path, short_ref):
+    page = page_copy("en50318-validation.md", tmp_path)
+    out = script("en50318_readings.py", "--quick", "--only", "preset", "preset-constraint",
+                 "--spectrum", "preset", "--out", tmp_path / "out", "--docs", page,
+                 cwd=tmp_path, timeout=600)
+    rows = json.loads((tmp_path / "out" / "readings.json").read_text())
+    assert [(r["reading"], r["speed"]) for r in rows] == [
+        ("preset", 250), ("preset", 300), ("preset-constraint", 250),
+        ("preset-constraint", 300)]
+    pen, con = rows[0]["statistics"], rows[2]["statistics"]
+    # the same pantograph uplift: the same mean force whatever the contact law
+    assert con["mean_n"] == pytest.approx(pen["mean_n"], abs=1.0)
+    # no contact mode: a smoother force than the 5e4 N/m penalty's
+    assert con["std_n"] < pen["std_n"]
+    assert len(rows_of(out, "a: preset")) == 2 and len(rows_of(out, "c: preset-constraint")) == 2
+    text = page.read_text()
+    assert "c: preset-constraint" in text.split("<!-- readings:start -->")[1]
+    assert (tmp_path / "figures" / "en50318-spectrum.png").stat().st_size > 10_000
+    # the zero-phase filter of a reading is that of every run (master/statistics.py)
+    sys.path.insert(0, str(SCRIPTS))
+    try:
+        import en50318_readings as R
+    finally:
+        sys.path.remove(str(SCRIPTS))
+    import numpy as np
+
+    from pantocosim.master.statistics import contact_statistics
+
+    t = np.arange(0.0, 2.0, 1e-3)
+    F = 100 + 20 * np.sin(2 * np.pi * 3 * t) + 5 * np.sin(2 * np.pi * 40 * t)
+    x = 30 + 70 * t
+    run = {"time": t, "x": x, "force": F, "uplift": np.zeros((t.size, 2)),
+           "support_x": np.array([0.0, 200.0])}
+    mine = R.statistics(run, (60.0, 120.0))
+    ref = contact_statistics(t, F, x, (60.0, 120.0), run["uplift"], run["support_x"])
+    assert mine["std_n"] == pytest.approx(ref.std_n, rel=1e-12)
+    ideal = R.statistics(run, (60.0, 120.0), "ideal")
+    assert ideal["std_n"] == pytest.approx(20 / np.sqrt(2), rel=0.02)   # the 3 Hz part only

@@ -211,7 +211,8 @@ def test_declared_defaults_are_the_loaded_defaults():
                          "analysis": {"window_supports": [4, 6]}}, "sc.toml")
     for f in SIMULATION.fields:
         assert getattr(sc, f.name) == (None if f.name == "duration_s" else f.default)
-    assert (sc.contact_stiffness, sc.contact_damping) == tuple(f.default for f in CONTACT.fields)
+    assert (sc.contact_law, sc.contact_stiffness, sc.contact_damping) == tuple(
+        f.default for f in CONTACT.fields)
 
 
 def test_fmu_reference_lists_the_port_contract(reference):

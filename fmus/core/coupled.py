@@ -1,8 +1,10 @@
-"""Catenary + pantographs + penalty contacts assembled into one model (thesis 3.2-3.3).
+"""Catenary + pantographs + contacts assembled into one model (thesis 3.2-3.3).
 
 The catenary and any number of pantographs are assembled into one
-:class:`~pantocosim.core.model.SecondOrderModel` coupled by penalty contact elements
-(:mod:`pantocosim.core.penalty_contact`). The monolithic reference solver
+:class:`~pantocosim.core.model.SecondOrderModel` coupled by contact elements of the
+scenario's law (:mod:`pantocosim.core.contact_laws`: the penalty law
+:mod:`~pantocosim.core.penalty_contact`, or the rigid :mod:`~pantocosim.core.constraint_contact`
+whose multipliers the Newton correction solves with the coordinates). The monolithic reference solver
 (``master/run.py``) advances it with the one HHT-alpha integrator, Newton-Raphson on all
 coordinates at once. Contact is lost and recovered through the penalty law; droppers
 slacken inside the catenary model.
@@ -22,9 +24,8 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from .contact_laws import ContactLaw
 from .model import Evaluation, SecondOrderModel
-from .penalty_contact import PenaltyContact
-
 
 
 #: relative round-off of the coordinates: a static Newton update below it has converged
@@ -32,10 +33,9 @@ STATIC_ROUNDOFF = 16.0 * np.finfo(float).eps
 
 
 class CoupledSystem(SecondOrderModel):
-    """Catenary + pantographs + penalty contacts as one second-order system."""
+    """Catenary + pantographs + contacts as one second-order system."""
 
-    def __init__(self, catenary, pantographs: Sequence,
-                 contact: PenaltyContact):
+    def __init__(self, catenary, pantographs: Sequence, contact: ContactLaw):
         self.catenary = catenary
         self.pantographs = list(pantographs)
         self.contact = contact
@@ -43,6 +43,8 @@ class CoupledSystem(SecondOrderModel):
         sizes = [p.n_dofs for p in self.pantographs]
         self.offsets = np.concatenate([[self.n_cat], self.n_cat + np.cumsum(sizes)]).astype(int)
         self.n_dofs = int(self.offsets[-1])
+        #: the law's part in this system (its force, Newton correction and state)
+        self.law = contact.bind(self)
 
     # ------------------------------------------------------------------ helpers
     def split(self, x: np.ndarray):
@@ -67,7 +69,7 @@ class CoupledSystem(SecondOrderModel):
             g = np.asarray(pant.contact_height_gradient(qps[k]), dtype=float)
             z_p = pant.contact_height(qps[k])
             v_p = float(pant.contact_velocity(qps[k], vps[k]))
-            F, dF, cF = self.contact.force_and_derivatives(z_p, z_w, v_p, v_w)
+            F, dF, cF = self.law.force(k, z_p, z_w, v_p, v_w)
             out.append((F, z_p, z_w, v_p, v_w, cp, g, dF, cF))
         return out
 
@@ -86,8 +88,8 @@ class CoupledSystem(SecondOrderModel):
         f_rest = np.concatenate([ev_c.f_rest] + [e.f_rest for e in ev_p])
         speed = float(getattr(self.catenary, "speed", 0.0))
         lin = []
-        for k, (F, z_p, z_w, v_p, v_w, cp, g, dF, cF) in enumerate(
-                self.contact_state(t, q, v)):
+        states = self.contact_state(t, q, v)
+        for k, (F, z_p, z_w, v_p, v_w, cp, g, dF, cF) in enumerate(states):
             o = self.offsets[k]
             f_rest[o:o + g.size] += F * g
             if cp.dofs.size:
@@ -105,6 +107,7 @@ class CoupledSystem(SecondOrderModel):
         # the contact linearisation of this evaluation: newton_solve adds it to the (possibly
         # reused) factorization as a low-rank update
         ev.contact_lin = (t, lin)
+        self.law.add_residual(ev, states, f_rest)
         # the global tangents are never assembled (mass, damping, stiffness stay None): the
         # Newton matrix comes from the parts in effective_matrix; assembled() builds it for
         # checks
@@ -121,8 +124,8 @@ class CoupledSystem(SecondOrderModel):
 
     def newton_solve(self, solve, ev, rhs):
         """The Newton correction with the blocks' factorization ``solve`` and the contact
-        linearisation of the evaluation ``ev``."""
-        return solve(rhs, ev.contact_lin)
+        linearisation of the evaluation ``ev`` (the contact law's, :meth:`law.newton_solve`)."""
+        return self.law.newton_solve(solve, ev, rhs)
 
     def factorize(self, S):
         """Factorize the subsystem blocks once (catenary: banded Cholesky); the returned
@@ -187,6 +190,8 @@ class CoupledSystem(SecondOrderModel):
             vx = np.array([v_dot(row, x) for row in rows])
             return x - AU @ np.linalg.solve(small, vx)
 
+        #: the weight of the forces in this Newton matrix (a multiplier's correction needs it)
+        solve.c_f, solve.c_v = S.c_f, S.c_v
         return solve
 
     def assembled(self, ev, c_a=0.0, c_v=0.0, c_f=1.0):
@@ -248,10 +253,11 @@ class CoupledSystem(SecondOrderModel):
         self.catenary.commit(t, qc, vc, ac, None)
         for k, p in enumerate(self.pantographs):
             p.commit(t, qps[k], vps[k], aps[k], None)
+        self.law.commit()
 
     def get_internal_state(self):
         return (self.catenary.get_internal_state(),
-                [p.get_internal_state() for p in self.pantographs])
+                [p.get_internal_state() for p in self.pantographs], self.law.get_state())
 
     def set_internal_state(self, state):
         if state is None:
@@ -259,6 +265,7 @@ class CoupledSystem(SecondOrderModel):
         self.catenary.set_internal_state(state[0])
         for p, s in zip(self.pantographs, state[1]):
             p.set_internal_state(s)
+        self.law.set_state(state[2])
 
 
 class RigidWire(SecondOrderModel):

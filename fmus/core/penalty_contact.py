@@ -5,7 +5,8 @@
 with z_p the pantograph contact height, z_w the contact-wire height at the contact point
 (Hermite interpolation in the wire element, (3.12)-(3.13)) and k_H = 50 kN/m by default.
 Used by the monolithic solver, the co-simulation master and the catenary FMU (built-in
-penalty option for third-party masters).
+penalty option for third-party masters). The scenario's default law (``[contact] law =
+"penalty"``, :mod:`.contact_laws`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .contact_laws import register
 from .params import check_number
 from .small_dense import gauss_jordan
 
@@ -71,14 +73,32 @@ def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
     return F
 
 
+@register("penalty")
 @dataclass(frozen=True)
 class PenaltyContact:
     stiffness: float = DEFAULT_CONTACT_STIFFNESS   # k_H [N/m]
     damping: float = 0.0          # c_H [N s/m], optional contact damping
 
+    condensable = True
+    across_ports = True
+    #: the scenario's [contact] values the law takes
+    fields = ("stiffness", "damping")
+
     def __post_init__(self):
         check_number("contact.stiffness", self.stiffness, positive=True)
         check_number("contact.damping", self.damping, nonnegative=True)
+
+    @classmethod
+    def from_fields(cls, stiffness: float, damping: float) -> "PenaltyContact":
+        return cls(stiffness, damping)
+
+    @property
+    def compliance(self) -> float:
+        """1 / k_H [m/N]."""
+        return 1.0 / self.stiffness
+
+    def bind(self, system) -> "PenaltyInSystem":
+        return PenaltyInSystem(self)
 
     def force(self, z_p: float, z_w: float, v_p: float = 0.0, v_w: float = 0.0) -> float:
         """Contact force [N] >= 0."""
@@ -112,3 +132,30 @@ class PenaltyContact:
                              np.ascontiguousarray(H), active, active.copy(), A, np.empty(m))
         Mi = A[:, m + 1:] * np.outer(active, active)
         return F, self.stiffness * Mi, self.damping * Mi
+
+
+class PenaltyInSystem:
+    """The penalty law in an assembled system (:mod:`.coupled`): a force of the gap, its
+    linearisation added to the Newton matrix by the system's low-rank update; no state."""
+
+    def __init__(self, law: PenaltyContact):
+        self.law = law
+
+    def force(self, k, z_p, z_w, v_p, v_w):
+        """(F, dF/dgap, dF/dvrel) of contact ``k``."""
+        return self.law.force_and_derivatives(z_p, z_w, v_p, v_w)
+
+    def add_residual(self, ev, states, f_rest) -> None:
+        """Nothing: the force is all the law puts in the residual."""
+
+    def newton_solve(self, solve, ev, rhs):
+        return solve(rhs, ev.contact_lin)
+
+    def commit(self) -> None:
+        pass
+
+    def get_state(self):
+        return None
+
+    def set_state(self, state) -> None:
+        pass

@@ -175,7 +175,9 @@ def simulate(args, scenario, coupling: str, out: Path):
     plan = None
     if coupling != "monolithic":
         from pantocosim.master.cosim import fmu_paths
+        from pantocosim.master.scenario import require_port_contact
 
+        require_port_contact(scenario, f"the {coupling} coupling")   # before the set-up
         plan = fmu_paths(scenario)   # the FMU files are checked before the long set-up
     prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
                    max_steps=args.max_steps)

@@ -1,0 +1,55 @@
+"""The contact laws between a pantograph and the contact wire, by the name a scenario gives
+them (``[contact] law``): one module per law, behind the registry :data:`CONTACT_LAWS`.
+
+A law declares what the solvers need to know of it (:class:`ContactLaw`):
+
+- ``compliance``: static compression of the contact per newton [m/N] (1 / k_H for the
+  penalty law, 0 for a rigid contact); the static start places the pantograph with it;
+- ``condensable``: the law can be solved on a structure condensed on its contact points
+  (:mod:`.condensed`, the linear and modal catenaries' closed-form path);
+- ``across_ports``: the law is a force of the two sides' heights, so it can be evaluated on
+  one side of an FMU interface (the co-simulation couplings and the catenary FMU);
+- ``fields``: the scenario's ``[contact]`` values it takes (the loader refuses the others);
+- ``bind(system)``: its part in the assembled monolithic system (:mod:`.coupled`): the force of
+  each contact, any term it adds to the residual, the Newton correction with the system's
+  factorization, and its own state (a multiplier's value) across steps.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+#: contact laws by their scenario name
+CONTACT_LAWS: dict[str, type] = {}
+#: the law of a scenario that names none
+DEFAULT_LAW = "penalty"
+
+
+class ContactLaw(Protocol):
+    name: str
+    compliance: float
+    condensable: bool
+    across_ports: bool
+    fields: tuple
+
+    def bind(self, system) -> Any:
+        """The law's part in an assembled :class:`~.coupled.CoupledSystem`."""
+
+
+def register(name: str):
+    """Class decorator: make a law available as ``law = "<name>"``."""
+    def deco(cls):
+        cls.name = name
+        CONTACT_LAWS[name] = cls
+        return cls
+    return deco
+
+
+def make_contact(law: str, stiffness: float, damping: float):
+    """The law ``law`` with the scenario's ``[contact]`` values (each law takes those it uses,
+    :meth:`from_fields`)."""
+    return CONTACT_LAWS[law].from_fields(stiffness=stiffness, damping=damping)
+
+
+# registration: one import per law
+from . import constraint_contact, penalty_contact  # noqa: E402,F401

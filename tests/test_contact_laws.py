@@ -1,0 +1,145 @@
+"""The contact laws of a scenario (``[contact] law``): the penalty law and the constraint
+(rigid, unilateral) contact of the monolithic solver.
+
+The constraint contact is the limit of the penalty law as its stiffness grows: on the short
+EN 50318 scenario (250 km/h, no loss of contact with either law) the statistics of a
+penalty run approach those of the constraint run from 5e4 to 5e6 N/m, and at 5e6 N/m lie
+within 0.5 % of sigma and 0.05 N of the mean (above that the contact mode is no longer
+resolved by the 1 ms step; the raw force of the rigid contact leaves the wire for a few
+samples where the penalty spring stays compressed, which the 0-20 Hz statistics do not
+see). Loss of contact and re-contact: at 300 km/h the head leaves the
+wire and comes back; off the wire the force is zero and the head below it, on the wire the
+gap is closed. A step the constraint cannot satisfy stops the run with a non-zero exit.
+"""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pantocosim.core.errors import ConvergenceError, ParameterError
+
+ROOT = Path(__file__).resolve().parents[1]
+SHORT = ROOT / "tests" / "data" / "short-en50318.toml"
+
+
+def short(**changes):
+    from pantocosim.master.scenario import load_scenario
+
+    return dataclasses.replace(load_scenario(SHORT), newton_rtol=1e-6, **changes)
+
+
+def run(sc):
+    from pantocosim.master.run import prepare, run_monolithic
+
+    res = run_monolithic(prepare(sc), None, progress=False)
+    assert res.error is None, res.error
+    return res
+
+
+@pytest.fixture(scope="module")
+def constraint_250():
+    return run(short(contact_law="constraint"))
+
+
+def test_registry_declares_both_laws():
+    from pantocosim.core.contact_laws import CONTACT_LAWS, make_contact
+
+    assert set(CONTACT_LAWS) >= {"penalty", "constraint"}
+    pen, con = make_contact("penalty", 2e5, 3.0), make_contact("constraint", 5e4, 0.0)
+    assert pen.compliance == pytest.approx(5e-6) and pen.damping == 3.0
+    assert con.compliance == 0.0 and not con.across_ports and not con.condensable
+    assert pen.across_ports and pen.condensable
+    assert pen.fields == ("stiffness", "damping") and con.fields == ()
+
+
+@pytest.mark.slow
+def test_constraint_is_the_limit_of_a_stiffening_penalty(constraint_250):
+    ref = constraint_250.statistics()[0]
+    gaps = []
+    for k in (5e4, 5e5, 5e6):
+        st = run(short(contact_law="penalty", contact_stiffness=k)).statistics()[0]
+        gaps.append(abs(st.std_n - ref.std_n))
+        if k == 5e6:
+            assert st.std_n == pytest.approx(ref.std_n, rel=0.005)
+            assert st.mean_n == pytest.approx(ref.mean_n, abs=0.05)
+            assert st.max_n == pytest.approx(ref.max_n, rel=0.01)
+            assert st.min_n == pytest.approx(ref.min_n, rel=0.01)
+    assert gaps[0] > gaps[1] > gaps[2]
+    assert gaps[0] > 1.0              # the 5e4 N/m contact mode is a real difference
+
+
+def test_closed_contact_has_no_gap(constraint_250):
+    c = constraint_250.columns
+    F = c["contact_force_1"][1:]
+    gap = (c["contact_height_1"] - c["wire_height_1"])[1:]
+    on = F > 0.0
+    assert on.mean() > 0.95
+    assert np.max(np.abs(gap[on])) < 1e-4      # penalty 5e4 N/m: about 2 mm at 100 N
+    assert np.median(np.abs(gap[on])) < 1e-5     # a thousandth of the penalty's
+
+
+def test_loss_of_contact_and_recontact():
+    res = run(short(contact_law="constraint", speed_kmh=300.0))
+    c = res.columns
+    F = c["contact_force_1"][1:]
+    gap = (c["contact_height_1"] - c["wire_height_1"])[1:]
+    off = F == 0.0
+    assert off.any() and (~off[np.argmax(off):]).any()     # leaves the wire, comes back
+    assert np.max(gap[off]) < 1e-6                          # off the wire: the head below it
+    assert (F >= 0.0).all()
+    assert 0.0 < off.mean() < 0.1                           # brief separations
+
+
+def test_a_failing_constraint_step_is_an_error_not_a_result(tmp_path, monkeypatch, capsys):
+    from pantocosim.core import constraint_contact as cc
+    from pantocosim.master.cli import main
+
+    monkeypatch.setattr(cc.ConstraintContact, "from_fields",
+                        classmethod(lambda cls, stiffness, damping: cls(gap_tolerance=1e-30)))
+    sc = tmp_path / "s.toml"
+    sc.write_text(SHORT.read_text() + '\n[contact]\nlaw = "constraint"\n')
+    code = main(["run", str(sc), "--out", str(tmp_path / "out"), "--quiet", "--no-plots"])
+    assert code != 0
+    assert "constraint contact 1 not satisfied" in capsys.readouterr().err
+
+
+def test_commit_check_names_the_violation():
+    from pantocosim.core.constraint_contact import ConstraintContact, ConstraintInSystem
+
+    class Sys:
+        pantographs = [object()]
+
+    bound = ConstraintInSystem(ConstraintContact(), Sys())
+    bound._last = (1.25, np.array([3e-3]), np.array([0.0]))   # penetration without force
+    with pytest.raises(ConvergenceError, match=r"t = 1.25 s\).*gap 0.003 m"):
+        bound.commit()
+    bound._last = (1.25, np.array([-3e-3]), np.array([0.0]))  # open, no force: fine
+    bound.commit()
+
+
+def test_scenario_contact_law_fields(tmp_path):
+    from pantocosim.master.scenario import load_scenario
+
+    base = SHORT.read_text()
+    f = tmp_path / "a.toml"
+    f.write_text(base + '\n[contact]\nlaw = "constraint"\nstiffness = 1e5\n')
+    with pytest.raises(ParameterError, match="contact.stiffness.*not used by law"):
+        load_scenario(f)
+    f.write_text(base + '\n[contact]\nlaw = "rigid"\n')
+    with pytest.raises(ParameterError, match="contact.law"):
+        load_scenario(f)
+    f.write_text(base + '\n[contact]\nlaw = "constraint"\n')
+    assert load_scenario(f).contact_law == "constraint"
+    assert load_scenario(SHORT).contact_law == "penalty"
+
+
+def test_cosimulation_refuses_the_constraint_law(tmp_path):
+    from pantocosim.master.scenario import load_scenario, require_port_contact
+
+    f = tmp_path / "a.toml"
+    f.write_text(SHORT.read_text() + '\n[contact]\nlaw = "constraint"\n')
+    with pytest.raises(ParameterError, match='contact.law.*"penalty" law only.*monolithic'):
+        require_port_contact(load_scenario(f), "the jacobi coupling")
+    require_port_contact(load_scenario(SHORT), "the jacobi coupling")
