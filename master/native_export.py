@@ -82,3 +82,27 @@ def linear_catenary(model, settings, h: float, static_forces, contact, definitio
             "drop_val": _f64(vec.val).ravel(), "drop_ka": _f64(dr.ka),
             "drop_N0": _f64(dr.N0), "drop_tension": _i32(dr.tension_only),
             **wire, "support_dof": s_dof, "support_z": s_z, "definition": _text(definition)}
+
+
+def lumped_pantograph(model, settings, h: float, height: float, force: float,
+                      name: str) -> dict:
+    """The sections of a constant-matrix pantograph (its ``linear_form``) stepped with HHT
+    ``settings`` at internal step ``h``, in the static start at contact height ``height``
+    under the contact force ``force`` (the Python pantograph FMU's start_mode 0)."""
+    q0 = model.static_equilibrium(force, height)
+    form = model.linear_form()
+    if form is None:
+        raise ParameterError("pantograph", name, "has no constant-matrix form (collector "
+                             "friction or a one-way damper): it stays a Python FMU")
+    n = model.n_dofs
+    w0 = np.zeros(3)
+    form.fill(0.0, np.array([force]), w0)
+    lo, hi = model.height_range()
+    o = model.options
+    scalars = [h, settings.alpha, settings.beta, settings.gamma, lo, hi, o.static_force,
+               o.aero_c1, o.aero_c2, o.speed_kmh, height, force, o.friction_force,
+               o.friction_smoothing, 0.0, 0.0]
+    return {"sizes": _i32([n, 0]), "scalars": _f64(scalars),
+            "M": _f64(form.M).ravel(), "C": _f64(form.C).ravel(), "K": _f64(form.K).ravel(),
+            "B": _f64(np.atleast_2d(form.B).reshape(n, 3)).ravel(), "w0": _f64(w0),
+            "q0": _f64(q0), "preset": _text(name)}

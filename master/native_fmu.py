@@ -250,6 +250,8 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
         raise ParameterError("--win64", True, f"{MINGW} is not installed (apt-get install "
                              "gcc-mingw-w64-x86-64)")
     win64 = mingw is not None if win64 is None else win64
+    if fmi not in FRONTS:
+        raise ParameterError("--fmi", fmi, f"native FMUs are written for FMI {', '.join(map(str, FRONTS))}")
     files = source_files(model, fmi)
     c_files = [n for n in files if n.endswith(".c")]
     with tempfile.TemporaryDirectory() as tmp:
@@ -382,7 +384,107 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
     sections = native_export.linear_catenary(
         prep.catenary, settings, sc.dt, prep.static_forces, prep.contact, sc.catenary,
         int(sc.spans or 0), settings.rtol)
-    return build_fmu(out, CATENARY, "pantocosim_catenary_native", "catenary",
+    from pantocosim.master.fmu_build import CATENARY_CLASS
+
+    return build_fmu(out, CATENARY, "pantocosim_catenary_native", CATENARY_CLASS,
                      f"pantocosim {model_name} catenary '{sc.catenary}' at {sc.speed_kmh:g} km/h "
                      f"(native C, internal step {sc.dt:g} s)", catenary_variables(sections),
                      model_name, sections, sc.dt, fmi=fmi, win64=win64)
+
+
+# ---------------------------------------------------------------------- the pantograph FMU
+LUMPED = NativeModel("lumped.c", "lumped_vars.h")
+
+
+def pantograph_variables(sections: dict) -> list[Variable]:
+    """The native pantograph's variables: the Python pantograph FMU's names
+    (fmus/fmi/pantograph_slave.py), the export's values as fixed parameters."""
+    vr = value_references(LUMPED.header)
+    sc = sections["scalars"]
+    fixed = "fixed at export (pantocosim export-native)"
+    timing = ("the value set before doStep(t, h) is the force at t + h; the force at t is the "
+              "previous accepted step's (kept in the FMU state)")
+    out = [Variable("contact_force", "Real", vr["CONTACT_FORCE"], "input", "continuous",
+                    sc[11], "N", f"contact force [N] >= 0 pushing the collector down; {timing}"),
+           Variable("contact_height", "Real", vr["CONTACT_HEIGHT"], "output", "continuous",
+                    None, "m", "height of the contact point above the rail"),
+           Variable("contact_velocity", "Real", vr["CONTACT_VELOCITY"], "output",
+                    "continuous", None, "m/s", "vertical velocity of the contact point")]
+    for key, i, unit, text in (
+            ("static_force", 6, "N", "static uplift force"),
+            ("aero_c1", 7, "N.h/km", "aerodynamic uplift, linear coefficient"),
+            ("aero_c2", 8, "N.h2/km2", "aerodynamic uplift, quadratic coefficient"),
+            ("speed_kmh", 9, "km/h", "train speed (aerodynamic law)"),
+            ("friction_force", 12, "N", "collector friction amplitude (0: constant matrices)"),
+            ("friction_smoothing", 13, "m/s", "friction smoothing"),
+            ("hht_alpha", 1, "1", "HHT-alpha parameter"),
+            ("initial_height", 10, "m", "contact height at t0 (static start)"),
+            ("initial_contact_force", 11, "N", "contact force at t0 (static start); < 0 means "
+             "the mean uplift")):
+        out.append(Variable(key, "Real", vr[key.upper()], "parameter", "fixed", sc[i], unit,
+                            f"{text}; {fixed}"))
+    out += [Variable("start_mode", "Integer", vr["START_MODE"], "parameter", "fixed", 0,
+                     description="0 = static start in contact (the only start of the native "
+                     "FMU)"),
+            Variable("one_way_damper", "Boolean", vr["ONE_WAY_DAMPER"], "parameter", "fixed",
+                     False, description="false: the native FMU has constant matrices"),
+            Variable("force_extrapolation", "Boolean", vr["FORCE_EXTRAPOLATION"], "parameter",
+                     "fixed", False, description="take contact_force as the force at the start "
+                     "of the communication step and extrapolate it: F(t+h) = max(0, 2 F(t) - "
+                     "F(t-h))"),
+            Variable("newton_iterations", "Real", vr["NEWTON_ITERATIONS"], "local",
+                     "continuous", None, None, "closed-form steps of the last communication "
+                     "step"),
+            Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
+                     float(sc[0]), "s", "the fixed internal step: a communication step is a "
+                     "whole number of it")]
+    return out
+
+
+def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
+                      win64: bool | None = None) -> Path:
+    """The native FMU of the scenario's pantograph ``k`` (a constant-matrix model in the
+    static start of the scenario, as the Python FMU starts in our master)."""
+    from pantocosim.core.hht import HHTSettings
+    from pantocosim.master import native_export
+    from pantocosim.master.run import scenario_pantograph
+
+    sc = prep.scenario
+    spec = sc.pantographs[k]
+    if spec.start != "static":
+        raise ParameterError(f"pantographs[{k}].start", spec.start, "the native pantograph "
+                             "FMU starts static in contact (start = \"static\")", sc.source)
+    model = scenario_pantograph(sc, k)
+    if model.linear_form() is None:
+        raise ParameterError("pantograph", spec.model, "has no constant-matrix form (collector "
+                             "friction, a one-way damper or a nonlinear mechanism)")
+    height = float(prep.pantographs[k].contact_height(prep.q_pan0[k]))
+    sections = native_export.lumped_pantograph(
+        model, HHTSettings(alpha=sc.alpha), sc.dt, height, float(prep.static_forces[k]),
+        spec.model)
+    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
+
+    return build_fmu(out, LUMPED, "pantocosim_pantograph_native",
+                     PANTOGRAPH_FMUS.get(spec.model, "Pantograph"),
+                     f"pantocosim pantograph '{spec.model}' (native C, constant matrices, "
+                     f"internal step {sc.dt:g} s)", pantograph_variables(sections), "lumped",
+                     sections, sc.dt, fmi=fmi, win64=win64)
+
+
+def export_scenario(prep, out: Path, fmi: int = 2, win64: bool | None = None):
+    """The native FMUs of a prepared scenario into the folder ``out``: ``catenary.fmu`` and
+    ``<pantograph model>.fmu`` of each constant-matrix pantograph. Returns (written files,
+    [(pantograph index, why it has no native FMU)])."""
+    out = Path(out)
+    written = [export_catenary(prep, out / "catenary.fmu", prep.scenario.catenary_model,
+                               fmi=fmi, win64=win64)]
+    kept = []
+    for k, spec in enumerate(prep.scenario.pantographs):
+        try:
+            written.append(export_pantograph(prep, k, out / f"{spec.model}.fmu", fmi=fmi,
+                                             win64=win64))
+        except ParameterError as exc:
+            if exc.field not in ("pantograph",) and not str(exc.field).startswith("pantographs["):
+                raise
+            kept.append((k, str(exc)))
+    return written, kept
