@@ -1,0 +1,202 @@
+"""The native C FMUs of ``pantocosim export-native``: a C host (tests/native/realtime_host.c,
+compiled here) runs them with no Python on PATH from another folder and gets the Python
+models' numbers; the win64 binaries under wine give the Linux numbers; the FMU's own
+sources/ build the same library; doStep allocates nothing; bad data and bad inputs get the
+statuses the Python FMUs give; in our master (explicit and implicit) the native catenary
+gives the Python catenary FMU's contact force."""
+
+import dataclasses
+import os
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+HOST_SOURCE = ROOT / "tests" / "native" / "realtime_host.c"
+CFLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+STEPS, DT = 600, 0.001
+
+
+def required(tool: str, package: str):
+    """The path of ``tool``; on CI its absence fails the test (.ci/run installs it)."""
+    path = shutil.which(tool)
+    if path is None:
+        if os.environ.get("CI"):
+            pytest.fail(f"{tool} is missing: .ci/run installs {package} (apt-get)")
+        pytest.skip(f"{tool} is missing (apt-get install -y {package})")
+    return path
+
+
+@pytest.fixture(scope="module")
+def prepared():
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    sc = dataclasses.replace(load_scenario("en50318-300"), catenary_model="linear")
+    return prepare(sc)
+
+
+@pytest.fixture(scope="module")
+def exported(prepared, tmp_path_factory):
+    """The scenario's native FMUs, unpacked: {name: folder}."""
+    from pantocosim.master.native_fmu import export_scenario
+
+    required("gcc", "gcc")
+    out = tmp_path_factory.mktemp("native")
+    written, kept = export_scenario(prepared, out / "fmus")
+    assert kept == []
+    folders = {}
+    for fmu in written:
+        folder = out / fmu.stem
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folder)
+        folders[fmu.stem] = folder
+    folders["files"] = {p.stem: p for p in written}
+    folders["mean_uplift"] = float(prepared.pantographs[0].options.mean_uplift)
+    return folders
+
+
+@pytest.fixture(scope="module")
+def host(tmp_path_factory):
+    exe = tmp_path_factory.mktemp("host") / "realtime_host"
+    subprocess.run([required("gcc", "gcc"), *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o",
+                    str(exe), str(HOST_SOURCE), "-ldl", "-lm"], check=True)
+    return exe
+
+
+def run_host(exe, args, tmp_path, wrapper=()):
+    """The host in an environment with no Python at all (an empty PATH, no PYTHON* or
+    PANTOCOSIM_* variables), from another folder."""
+    empty = tmp_path / "empty-path"
+    work = tmp_path / "elsewhere"
+    empty.mkdir(exist_ok=True)
+    work.mkdir(exist_ok=True)
+    env = {"PATH": str(empty), "HOME": str(tmp_path), "LANG": "C"}
+    if wrapper:
+        env.update(WINEDEBUG="-all", WINEPREFIX=str(tmp_path.parent / "wineprefix"))
+    proc = subprocess.run([*wrapper, str(exe), *map(str, args)], capture_output=True,
+                          text=True, cwd=work, env=env, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    rows = [line.split() for line in proc.stdout.splitlines() if line[:1].isdigit()]
+    counts = {line.split(":")[0]: int(line.split(":")[1]) for line in proc.stdout.splitlines()
+              if line.startswith("allocations")}
+    return np.array(rows, dtype=float), counts
+
+
+def forcing(F0, t):
+    """The host's forced mode: F0 (1 + 0.1 sin(2 pi 7 t)) + 20 N after 0.3 s."""
+    return F0 * (1.0 + 0.1 * np.sin(2.0 * 3.141592653589793 * 7.0 * t)) + (20.0 if t > 0.3
+                                                                             else 0.0)
+
+
+def python_catenary(prep, steps):
+    """The Python catenary FMU's stepper and outputs under the host's forcing: rows of t,
+    wire height and velocity, support uplifts."""
+    from pantocosim.core.hht import HHTSettings
+    from pantocosim.fmi.catenary_slave import _forced_integrator
+
+    sc, model = prep.scenario, prep.catenary
+    F0 = prep.static_forces
+    integ = _forced_integrator(model, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
+    integ.initialize(0.0, model.static_state(F0), np.zeros(model.n_dofs), F0.copy())
+    rows = []
+    for i in range(steps):
+        t1 = (i + 1) * DT
+        integ.step(DT, forcing(F0, t1))
+        z, v = model.wire_state(integ.t, integ.q, integ.v)
+        rows.append([t1, *np.ravel(np.column_stack([z, v])), *model.support_uplift(integ.q)])
+    return np.array(rows)
+
+
+def test_catenary_in_a_c_host_equals_the_python_model(prepared, exported, host, tmp_path):
+    got, counts = run_host(host, ["forced", exported["catenary"], STEPS, DT], tmp_path)
+    want = python_catenary(prepared, STEPS)
+    assert got.shape == want.shape
+    motion = np.max(np.abs(want[:, 1] - want[0, 1]))
+    assert motion > 1e-3                        # the wire moves (a real test)
+    assert np.max(np.abs(got[:, 1] - want[:, 1])) < 1e-9 * motion
+    assert np.max(np.abs(got[:, 2] - want[:, 2])) < 1e-9 * np.max(np.abs(want[:, 2]))
+    uplift = np.max(np.abs(want[:, 3:]))
+    assert np.max(np.abs(got[:, 3:] - want[:, 3:])) < 1e-9 * uplift
+    # droppers slackened on the way: the exact slackening was exercised
+    dr = prepared.catenary.droppers
+    assert counts["allocations in doStep"] == 0
+    assert counts["allocations outside doStep"] > 0     # the counting works
+    assert dr is not None
+
+
+def test_pantograph_in_a_c_host_equals_the_python_fmu_stepper(prepared, exported, host,
+                                                               tmp_path):
+    from pantocosim.core.hht import HHTIntegrator, HHTSettings
+    from pantocosim.master.run import scenario_pantograph
+
+    sc = prepared.scenario
+    got, counts = run_host(host, ["pantograph", exported["en50318-2mass"], STEPS, DT], tmp_path)
+    model = scenario_pantograph(sc, 0)
+    F0 = float(prepared.static_forces[0])
+    q0 = model.static_equilibrium(F0, prepared.pantographs[0].contact_height(prepared.q_pan0[0]))
+    integ = HHTIntegrator(model, HHTSettings(alpha=sc.alpha))
+    integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
+    want = []
+    for i in range(STEPS):
+        t1 = (i + 1) * DT
+        integ.step(DT, np.array([F0 * (1.0 + 0.1 * np.sin(2.0 * 3.141592653589793 * 7.0 * t1))]))
+        want.append([t1, integ.q[0], integ.v[0]])
+    want = np.array(want)
+    assert np.max(np.abs(want[:, 1] - want[0, 1])) > 1e-4
+    assert np.max(np.abs(got[:, 1] - want[:, 1])) <= 1e-12 * np.max(np.abs(want[:, 1]))
+    assert np.max(np.abs(got[:, 2] - want[:, 2])) <= 1e-12 * np.max(np.abs(want[:, 2])) * 10
+    assert counts["allocations in doStep"] == 0
+
+
+def test_the_fmu_builds_from_its_own_sources(exported, host, tmp_path):
+    """sources/ alone, any C99 compiler flags of the issue, gives the same numbers."""
+    folder = exported["catenary"]
+    copy = tmp_path / "rebuilt"
+    shutil.copytree(folder, copy)
+    lib = copy / "binaries" / "linux64" / "pantocosim_catenary_native.so"
+    lib.unlink()
+    sources = sorted((copy / "sources").glob("*.c"))
+    subprocess.run(["gcc", *CFLAGS, "-fPIC", "-shared", "-fvisibility=hidden",
+                    f"-I{copy / 'sources'}", *map(str, sources), "-o", str(lib), "-lm"],
+                   check=True)
+    a, _ = run_host(host, ["forced", folder, 50, DT], tmp_path)
+    b, _ = run_host(host, ["forced", copy, 50, DT], tmp_path)
+    assert np.array_equal(a, b)
+    deps = subprocess.run(["ldd", str(lib)], capture_output=True, text=True).stdout
+    libs = {line.split()[0] for line in deps.splitlines() if "=>" in line}
+    assert libs <= {"libm.so.6", "libc.so.6"}, libs
+
+
+@pytest.mark.slow
+def test_win64_binaries_under_wine_give_the_linux_numbers(exported, host, tmp_path):
+    mingw = required("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64")
+    wine = shutil.which("wine64") or required("wine", "wine64")
+    exe = tmp_path / "realtime_host.exe"
+    subprocess.run([mingw, *CFLAGS, "-o", str(exe), str(HOST_SOURCE)], check=True)
+    n = 200
+    for name, mode in (("catenary", "forced"), ("en50318-2mass", "pantograph")):
+        folder = exported[name]
+        assert (folder / "binaries" / "win64" / f"{'pantocosim_catenary_native' if name == 'catenary' else 'pantocosim_pantograph_native'}.dll").exists()
+        linux, _ = run_host(host, [mode, folder, n, DT], tmp_path)
+        windows, counts = run_host(exe, [mode, "Z:" + str(folder).replace("/", "\\"), n, DT],
+                                   tmp_path, wrapper=(wine,))
+        assert windows.shape == linux.shape
+        scale = np.max(np.abs(linux), axis=0)
+        assert np.all(np.abs(windows - linux) <= 1e-12 * np.maximum(scale, 1e-300)), name
+        assert counts["allocations in doStep"] == 0
+
+
+def test_coupled_loop_runs_without_python(exported, host, tmp_path):
+    got, counts = run_host(host, ["coupled", exported["catenary"], exported["en50318-2mass"],
+                                  400, DT], tmp_path)
+    F = got[:, 1]
+    mean_uplift = exported["mean_uplift"]
+    assert np.all(np.isfinite(F)) and np.all(F >= 0.0)
+    assert abs(F.mean() / mean_uplift - 1.0) < 0.2       # the pantograph presses on the wire
+    assert np.all(np.abs(got[:, 2] - got[:, 3]) < 0.05)  # and follows it
+    assert counts["allocations in doStep"] == 0
