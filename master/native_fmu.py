@@ -42,7 +42,7 @@ DATA_FILE = "model.pcsdata"
 #: the C sources of the native models (installed with the package)
 SOURCE_DIR = Path(__file__).resolve().parent.parent / "fmus" / "realtime"
 #: warnings are errors: the sources compile clean with any C99 compiler
-CFLAGS = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 MINGW = "x86_64-w64-mingw32-gcc"
 
 
@@ -383,7 +383,7 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
     settings = HHTSettings.for_runs(sc.alpha, sc.newton_rtol)
     sections = native_export.linear_catenary(
         prep.catenary, settings, sc.dt, prep.static_forces, prep.contact, sc.catenary,
-        int(sc.spans or 0), settings.rtol)
+        int(sc.spans or 0), settings.rtol, cutoff=sc.modal_cutoff_hz)
     from pantocosim.master.fmu_build import CATENARY_CLASS
 
     return build_fmu(out, CATENARY, "pantocosim_catenary_native", CATENARY_CLASS,

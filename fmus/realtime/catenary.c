@@ -22,6 +22,8 @@
 #include "catenary_vars.h"
 
 #define MAX_SLACK_PASSES 20
+/* steps after which the kept products are formed again from the state (affine_hht.py) */
+#define RESYNC_STEPS 4096
 #define DROPPER_WIDTH 6
 
 typedef struct {
@@ -45,11 +47,15 @@ struct PcsModel {
     const double *s_z;
     const char *definition;
     /* kept factor (column j: L[j..j+bw, j]) and columns A^-1 b_d */
-    double *L, *Z;
-    /* state (contiguous: t, n_steps, iterations, inputs at t, q, v, a, f, committed) */
+    double *L, *LR, *Z, *inv_diag;
+    /* the band diagonals of M and K that hold a nonzero */
+    unsigned char *used_m, *used_k;
+    /* state (contiguous: t, n_steps, failed, steps at the last forming of the products,
+       inputs at t, q, v, a, f, the kept products P, committed slack set) */
     double *state;
     size_t state_len;
-    double *t, *n_steps, *prev, *q, *v, *a, *f, *committed, *failed;
+    double *t, *n_steps, *prev, *q, *v, *a, *f, *committed, *failed, *synced;
+    double *Kd, *Kv, *Ka, *Mv, *Ma;
     /* work */
     double *qp, *vp, *dp, *rhs, *R, *x, *tmp, *tmp2, *W, *Np, *bx, *bW, *sl, *sl_new, *s, *y,
         *small, *zs;
@@ -69,18 +75,24 @@ unsigned pcs_model_kind(void) { return PCS_KIND_LINEAR_CATENARY; }
 
 /* ------------------------------------------------------------------ linear algebra */
 
-/* y = A x, A symmetric in lower band storage B[k n + j] = A[j + k, j] */
-static void band_product(const double *B, int bw, int n, const double *x, double *y)
+/* y = A x, A symmetric in lower band storage B[k n + j] = A[j + k, j]; ``below`` is work
+   (the two triangles apart, so that each loop vectorizes, as affine_kernels.sym_product) */
+static void band_product(const double *B, int bw, int n, const double *x, double *y,
+                         double *below, const unsigned char *used)
 {
     int j, k;
-    for (j = 0; j < n; j++) y[j] = B[j] * x[j];
-    for (k = 1; k <= bw; k++) {
-        const double *d = B + (size_t)k * n;
-        for (j = 0; j + k < n; j++) {
-            y[j] += d[j] * x[j + k];
-            y[j + k] += d[j] * x[j];
-        }
+    for (j = 0; j < n; j++) {
+        y[j] = B[j] * x[j];
+        below[j] = 0.0;
     }
+    for (k = 1; k <= bw; k++) {
+        if (!used[k]) continue;        /* an empty diagonal */
+        const double *d = B + (size_t)k * n, *xk = x + k;
+        double *bk = below + k;
+        for (j = 0; j + k < n; j++) y[j] += d[j] * xk[j];
+        for (j = 0; j + k < n; j++) bk[j] += d[j] * x[j];
+    }
+    for (j = 0; j < n; j++) y[j] += below[j];
 }
 
 static double band_at(const double *B, int bw, int n, int i, int j)
@@ -88,6 +100,8 @@ static double band_at(const double *B, int bw, int n, int i, int j)
     int k = i - j;
     return (k < 0 || k > bw) ? 0.0 : B[(size_t)k * n + j];
 }
+
+static void factor_rows(PcsModel *m);
 
 /* L = chol(c_a M + c_f (c_v (ar M + br K) + K)); -1 if not positive definite */
 static int factor(PcsModel *m, double c_a, double c_v, double c_f)
@@ -115,26 +129,44 @@ static int factor(PcsModel *m, double c_a, double c_v, double c_f)
             for (i = k; i <= last; i++) ck[i - k] -= cj[i - j] * lkj;
         }
     }
+    factor_rows(m);
     return 0;
 }
 
+/* the rows of L (row i: L[i, i - bw .. i]) for the backward substitution */
+static void factor_rows(PcsModel *m)
+{
+    int n = m->n, bw = m->bw, i, k;
+    for (i = 0; i < n; i++)
+        for (k = 0; k <= bw; k++) {
+            int j = i - bw + k;
+            m->LR[(size_t)i * (bw + 1) + k] = j < 0 ? 0.0 : m->L[(size_t)j * (bw + 1) + (i - j)];
+        }
+    for (i = 0; i < n; i++) m->inv_diag[i] = 1.0 / m->L[(size_t)i * (bw + 1)];
+}
+
+/* x <- A^-1 x with the kept factor: forward by columns, backward by rows (both axpy, which
+   vectorize; the diagonal kept inverted) */
 static void solve(const PcsModel *m, double *x)
 {
     int n = m->n, bw = m->bw, i, j;
-    const double *L = m->L;
+    const double *L = m->L, *LR = m->LR, *inv = m->inv_diag;
     for (j = 0; j < n; j++) {
-        const double *cj = L + (size_t)j * (bw + 1);
-        int last = j + bw < n - 1 ? j + bw : n - 1;
-        double xj = x[j] / cj[0];
+        const double *ls = L + (size_t)j * (bw + 1) + 1;
+        int len = j + bw < n - 1 ? bw : n - 1 - j;
+        double xj = x[j] * inv[j], *xs = x + j + 1;
         x[j] = xj;
-        for (i = j + 1; i <= last; i++) x[i] -= cj[i - j] * xj;
+        for (i = 0; i < len; i++) xs[i] -= ls[i] * xj;
     }
     for (j = n - 1; j >= 0; j--) {
-        const double *cj = L + (size_t)j * (bw + 1);
-        int last = j + bw < n - 1 ? j + bw : n - 1;
-        double s = x[j];
-        for (i = j + 1; i <= last; i++) s -= cj[i - j] * x[i];
-        x[j] = s / cj[0];
+        const double *rj = LR + (size_t)j * (bw + 1);
+        int first = j - bw > 0 ? j - bw : 0;
+        double xj = x[j] * inv[j];
+        const double *ls = rj + (first - (j - bw));
+        double *xs = x + first;
+        int len = j - first;
+        x[j] = xj;
+        for (i = 0; i < len; i++) xs[i] -= ls[i] * xj;
     }
 }
 
@@ -321,7 +353,7 @@ static void rest_forces(PcsModel *m, const double *F)
 {
     int i, d, k;
     for (i = 0; i < m->n; i++) m->tmp[i] = m->q[i] - m->q_ref[i];
-    band_product(m->K, m->bw_k, m->n, m->tmp, m->f);
+    band_product(m->K, m->bw_k, m->n, m->tmp, m->f, m->tmp2, m->used_k);
     for (i = 0; i < m->n; i++) m->f[i] += m->r0[i];
     for (d = 0; d < m->nd; d++) {
         double N = m->d_N0[d] + m->d_ka[d] * dropper_dot(m, d, m->tmp);
@@ -389,6 +421,17 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
     m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12];
     m->rtol = sc[13];
+    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
+        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
+                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
+                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
+        goto fail;
+    }
+    if (!(m->h > 0.0) || !(m->x_max > m->x_min)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
+                 "[%g, %g] m", d->path, m->h, m->x_min, m->x_max);
+        goto fail;
+    }
     SECTION(m->M, "M_band", PCS_TYPE_F64, (m->bw_m + 1) * n);
     SECTION(m->K, "K_band", PCS_TYPE_F64, (m->bw_k + 1) * n);
     SECTION(m->q_ref, "q_ref", PCS_TYPE_F64, n);
@@ -438,20 +481,37 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
             }
     }
     m->L = (double *)mem->alloc((size_t)(m->bw + 1) * n, sizeof(double));
+    m->LR = (double *)mem->alloc((size_t)(m->bw + 1) * n, sizeof(double));
+    m->inv_diag = (double *)mem->alloc(n, sizeof(double));
     m->Z = (double *)mem->alloc(nd * n + 1, sizeof(double));
-    m->state_len = 3 + CAT_MAX_PANTOGRAPHS * 2 + 4 * n + 2 * nd + 1;
+    m->state_len = 4 + CAT_MAX_PANTOGRAPHS * 2 + 9 * n + nd + 1;
     m->state = (double *)mem->alloc(m->state_len, sizeof(double));
     m->qp = (double *)mem->alloc(10 * n + (size_t)m->np * n, sizeof(double));
     m->Np = (double *)mem->alloc(7 * nd + nd * nd + (size_t)m->np * nd + 8, sizeof(double));
     m->rows = (int *)mem->alloc(nd + 1, sizeof(int));
-    if (!m->L || !m->Z || !m->state || !m->qp || !m->Np || !m->rows) {
+    m->used_m = (unsigned char *)mem->alloc((size_t)(m->bw_m + m->bw_k + 2), 1);
+    if (m->used_m) {
+        int k2;
+        size_t j2;
+        m->used_k = m->used_m + m->bw_m + 1;
+        for (k2 = 0; k2 <= m->bw_m; k2++)
+            for (j2 = 0; j2 < n; j2++)
+                if (m->M[(size_t)k2 * n + j2] != 0.0) { m->used_m[k2] = 1; break; }
+        for (k2 = 0; k2 <= m->bw_k; k2++)
+            for (j2 = 0; j2 < n; j2++)
+                if (m->K[(size_t)k2 * n + j2] != 0.0) { m->used_k[k2] = 1; break; }
+    }
+    if (!m->inv_diag || !m->used_m || !m->L || !m->LR || !m->Z || !m->state || !m->qp || !m->Np || !m->rows) {
         snprintf(err, PCS_MSG, "no memory for a model of %d degrees of freedom", m->n);
         goto fail;
     }
     m->t = m->state; m->n_steps = m->state + 1; m->failed = m->state + 2;
-    m->prev = m->state + 3;                      /* inputs at t: 2 per pantograph */
+    m->synced = m->state + 3;
+    m->prev = m->state + 4;                      /* inputs at t: 2 per pantograph */
     m->q = m->prev + 2 * CAT_MAX_PANTOGRAPHS;
-    m->v = m->q + n; m->a = m->v + n; m->f = m->a + n; m->committed = m->f + n;
+    m->v = m->q + n; m->a = m->v + n; m->f = m->a + n;
+    m->Kd = m->f + n; m->Kv = m->Kd + n; m->Ka = m->Kv + n; m->Mv = m->Ka + n;
+    m->Ma = m->Mv + n; m->committed = m->Ma + n;
     m->vp = m->qp + n; m->dp = m->vp + n; m->rhs = m->dp + n; m->R = m->rhs + n;
     m->x = m->R + n; m->tmp = m->x + n; m->tmp2 = m->tmp + n; m->W = m->tmp2 + n;
     m->bx = m->Np + nd; m->sl = m->bx + nd; m->sl_new = m->sl + nd; m->s = m->sl_new + nd;
@@ -468,12 +528,29 @@ void pcs_model_free(PcsModel *m, const PcsMemory *mem)
 {
     if (!m) return;
     if (m->L) mem->release(m->L);
+    if (m->LR) mem->release(m->LR);
+    if (m->inv_diag) mem->release(m->inv_diag);
     if (m->Z) mem->release(m->Z);
     if (m->state) mem->release(m->state);
     if (m->qp) mem->release(m->qp);
     if (m->Np) mem->release(m->Np);
     if (m->rows) mem->release(m->rows);
+    if (m->used_m) mem->release(m->used_m);
     mem->release(m);
+}
+
+/* the kept products P = [K (q - q_ref), K v, K a, M v, M a] from the state itself
+   (affine_kernels.state_products) */
+static void form_products(PcsModel *m)
+{
+    int i, n = m->n;
+    for (i = 0; i < n; i++) m->tmp[i] = m->q[i] - m->q_ref[i];
+    band_product(m->K, m->bw_k, n, m->tmp, m->Kd, m->tmp2, m->used_k);
+    band_product(m->K, m->bw_k, n, m->v, m->Kv, m->tmp2, m->used_k);
+    band_product(m->K, m->bw_k, n, m->a, m->Ka, m->tmp2, m->used_k);
+    band_product(m->M, m->bw_m, n, m->v, m->Mv, m->tmp2, m->used_m);
+    band_product(m->M, m->bw_m, n, m->a, m->Ma, m->tmp2, m->used_m);
+    *m->synced = *m->n_steps;
 }
 
 int pcs_initialize(PcsModel *m, char *err)
@@ -514,6 +591,7 @@ int pcs_initialize(PcsModel *m, char *err)
         dropper_add(m, d, 1.0, z);
         solve(m, z);
     }
+    form_products(m);
     update_outputs(m);
     for (k = 0; k < m->np; k++) {
         double zw = m->out_z[k];
@@ -599,16 +677,17 @@ static int step(PcsModel *m, double *F, const double *zp, const double *vpan, ch
     int n = m->n, nd = m->nd, np = m->np, i, d, k, j, r, passes = 0;
     double h = m->h, cq = (0.5 - m->beta) * h * h, cv = (1.0 - m->gamma) * h;
     double c_f = m->c_f;
+    if (*m->n_steps - *m->synced >= RESYNC_STEPS) form_products(m);
     for (i = 0; i < n; i++) {
         m->qp[i] = m->q[i] + h * m->v[i] + cq * m->a[i];
         m->vp[i] = m->v[i] + cv * m->a[i];
         m->dp[i] = m->qp[i] - m->q_ref[i];
-        m->tmp2[i] = m->br * m->vp[i] + m->dp[i];
     }
-    band_product(m->K, m->bw_k, n, m->tmp2, m->tmp);
-    band_product(m->M, m->bw_m, n, m->vp, m->rhs);
-    for (i = 0; i < n; i++)
-        m->rhs[i] = m->alpha * m->f[i] - c_f * (m->ar * m->rhs[i] + m->tmp[i] + m->r0[i]);
+    for (i = 0; i < n; i++) {        /* C v_p + K d_p from the kept products */
+        double y = m->ar * (m->Mv[i] + cv * m->Ma[i]) + m->br * (m->Kv[i] + cv * m->Ka[i])
+                   + m->Kd[i] + h * m->Kv[i] + cq * m->Ka[i];
+        m->rhs[i] = m->alpha * m->f[i] - c_f * (y + m->r0[i]);
+    }
     if (m->mode == 0)
         for (k = 0; k < np; k++) point_add(&m->pts[k], c_f * F[k], m->rhs);
     for (d = 0; d < nd; d++) {
@@ -692,13 +771,31 @@ static int step(PcsModel *m, double *F, const double *zp, const double *vpan, ch
             const double *w = m->W + (size_t)k * n;
             for (i = 0; i < n; i++) m->x[i] += F[k] * w[i];
         }
-    band_product(m->M, m->bw_m, n, m->x, m->tmp);
-    for (i = 0; i < n; i++) {
-        double dl = m->x[i];
-        m->f[i] = (m->alpha * m->f[i] - m->c_a * m->tmp[i]) / c_f;
-        m->q[i] = m->qp[i] + dl;
-        m->v[i] = m->vp[i] + m->c_v * dl;
-        m->a[i] = m->c_a * dl;
+    /* A Delta = R (+ the loads of mode 1) + the removed rank-one terms at Delta; K Delta
+       from the step's own equation, M Delta by one product (affine_kernels.advance) */
+    memcpy(m->tmp2, m->R, (size_t)n * sizeof(double));
+    if (m->mode == 1)
+        for (k = 0; k < np; k++) point_add(&m->pts[k], c_f * F[k], m->tmp2);
+    for (j = 0; j < r; j++) dropper_add(m, m->rows[j], m->s[j] * m->bx[m->rows[j]], m->tmp2);
+    band_product(m->M, m->bw_m, n, m->x, m->tmp, m->W, m->used_m);
+    {
+        double c_M = m->c_a + c_f * m->c_v * m->ar, inv_K = 1.0 / (c_f * (1.0 + m->c_v * m->br));
+        double c_a = m->c_a, c_v = m->c_v;
+        for (i = 0; i < n; i++) {
+            double KD = (m->tmp2[i] - c_M * m->tmp[i]) * inv_K, MD = m->tmp[i];
+            m->Kd[i] = m->Kd[i] + h * m->Kv[i] + cq * m->Ka[i] + KD;
+            m->Kv[i] = m->Kv[i] + cv * m->Ka[i] + c_v * KD;
+            m->Ka[i] = c_a * KD;
+            m->Mv[i] = m->Mv[i] + cv * m->Ma[i] + c_v * MD;
+            m->Ma[i] = c_a * MD;
+        }
+        for (i = 0; i < n; i++) {
+            double dl = m->x[i];
+            m->f[i] = (m->alpha * m->f[i] - m->Ma[i]) / c_f;
+            m->q[i] = m->qp[i] + dl;
+            m->v[i] = m->vp[i] + c_v * dl;
+            m->a[i] = c_a * dl;
+        }
     }
     memcpy(m->committed, m->sl, (size_t)nd * sizeof(double));
     *m->t += h;
