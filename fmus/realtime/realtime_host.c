@@ -12,6 +12,10 @@
  *       into the pantograph (zero-order hold); prints "t F z_pantograph z_wire" per step,
  *       then the p50 / p99 / max of each FMU's doStep in microseconds; "paced" waits for
  *       the wall clock at every step and counts the steps that missed their deadline
+ *   realtime_host coupled-forces CATENARY_DIR PANTOGRAPH_DIR STEPS DT [paced]
+ *       the same loop with the catenary in contact_mode 0: the host applies the penalty
+ *       law F = max(0, k_H (z_pantograph - z_wire)) (k_H: the catenary's contact_stiffness)
+ *       and gives F to both FMUs, as an explicit co-simulation master does
  *   realtime_host pantograph PANTOGRAPH_DIR STEPS DT
  *       the pantograph alone under F(t) = F0 (1 + 0.1 sin(2 pi 7 t)); prints "t z v"
  *
@@ -275,12 +279,15 @@ int main(int argc, char **argv)
             printf("%.17g %.17g %.17g\n", t1, out[0], out[1]);
         }
         pan.free_(pan.c);
-    } else if (strcmp(argv[1], "coupled") == 0 && argc >= 6) {
+    } else if ((strcmp(argv[1], "coupled") == 0 || strcmp(argv[1], "coupled-forces") == 0)
+               && argc >= 6) {
         Fmu cat, pan;
         fmi2ValueReference vr_mode = 4, vr_zin[2] = {130, 140}, vr_Fout = 170, vr_zw = 150;
         fmi2ValueReference vr_pF = 1, vr_pz[2] = {2, 3};
         int one = 1, paced = argc > 6 && strcmp(argv[6], "paced") == 0, misses = 0;
-        double zv[2], F, zw, *tc, *tp, t_next = 0.0;
+        int inside = strcmp(argv[1], "coupled") == 0;
+        fmi2ValueReference vr_kh = 3, vr_Fin = 120;
+        double zv[2], F, zw, *tc, *tp, t_next = 0.0, k_h = 0.0;
         steps = atoi(argv[4]);
         h = atof(argv[5]);
         tc = (double *)calloc((size_t)steps, sizeof(double));
@@ -288,18 +295,26 @@ int main(int argc, char **argv)
         load(&cat, argv[2], "pantocosim_catenary_native", "catenary");
         load(&pan, argv[3], "pantocosim_pantograph_native", "pantograph");
         start(&cat);
-        check(cat.seti(cat.c, &vr_mode, 1, &one), "fmi2SetInteger", 0.0);
+        if (inside) check(cat.seti(cat.c, &vr_mode, 1, &one), "fmi2SetInteger", 0.0);
         check(cat.exit_(cat.c), "fmi2ExitInitializationMode", 0.0);
+        check(cat.get(cat.c, &vr_kh, 1, &k_h), "fmi2GetReal", 0.0);
         start(&pan);
         check(pan.exit_(pan.c), "fmi2ExitInitializationMode", 0.0);
         if (paced) t_next = now_us();
         for (i = 0; i < steps; i++) {
             double t = i * h;
             check(pan.get(pan.c, vr_pz, 2, zv), "fmi2GetReal", t);
-            check(cat.set(cat.c, vr_zin, 2, zv), "fmi2SetReal", t);
-            tc[i] = timed_step(&cat, t, h);
-            check(cat.get(cat.c, &vr_Fout, 1, &F), "fmi2GetReal", t);
-            check(cat.get(cat.c, &vr_zw, 1, &zw), "fmi2GetReal", t);
+            if (inside) {
+                check(cat.set(cat.c, vr_zin, 2, zv), "fmi2SetReal", t);
+                tc[i] = timed_step(&cat, t, h);
+                check(cat.get(cat.c, &vr_Fout, 1, &F), "fmi2GetReal", t);
+                check(cat.get(cat.c, &vr_zw, 1, &zw), "fmi2GetReal", t);
+            } else {
+                check(cat.get(cat.c, &vr_zw, 1, &zw), "fmi2GetReal", t);
+                F = zv[0] > zw ? k_h * (zv[0] - zw) : 0.0;
+                check(cat.set(cat.c, &vr_Fin, 1, &F), "fmi2SetReal", t);
+                tc[i] = timed_step(&cat, t, h);
+            }
             check(pan.set(pan.c, &vr_pF, 1, &F), "fmi2SetReal", t);
             tp[i] = timed_step(&pan, t, h);
             if (!paced) printf("%.17g %.17g %.17g %.17g\n", t + h, F, zv[0], zw);
