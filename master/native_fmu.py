@@ -380,6 +380,9 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
     from pantocosim.master import native_export
 
     sc = prep.scenario
+    if model_name != "linear":
+        raise ParameterError("--catenary-model", model_name, "native FMUs are written for the "
+                             "linear catenary (the modal and nonlinear models stay Python FMUs)")
     settings = HHTSettings.for_runs(sc.alpha, sc.newton_rtol)
     sections = native_export.linear_catenary(
         prep.catenary, settings, sc.dt, prep.static_forces, prep.contact, sc.catenary,

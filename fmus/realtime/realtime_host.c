@@ -11,7 +11,8 @@
  *       step the pantograph's height and velocity go into the catenary, its contact force
  *       into the pantograph (zero-order hold); prints "t F z_pantograph z_wire" per step,
  *       then the p50 / p99 / max of each FMU's doStep in microseconds; "paced" waits for
- *       the wall clock at every step and counts the steps that missed their deadline
+ *       the wall clock at every step (busy-waiting) and counts the steps that end after
+ *       their deadline t0 + (k + 1) DT
  *   realtime_host coupled-forces CATENARY_DIR PANTOGRAPH_DIR STEPS DT [paced]
  *       the same loop with the catenary in contact_mode 0: the host applies the penalty
  *       law F = max(0, k_H (z_pantograph - z_wire)) (k_H: the catenary's contact_stiffness)
@@ -24,7 +25,11 @@
  * while a doStep runs (and, to show the count works, those outside it); elsewhere it
  * counts the FMI allocateMemory / freeMemory callbacks.
  */
+#if !defined(_WIN32) && !defined(_XOPEN_SOURCE)
+#define _XOPEN_SOURCE 700   /* realpath, clock_gettime */
+#endif
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,9 +78,14 @@ static void cb_free(void *p) { if (p) COUNT(); free(p); }
 static void logger(void *env, const char *name, int status, const char *category,
                    const char *message, ...)
 {
+    char text[4096];
+    va_list args;
     (void)env;
     (void)category;
-    fprintf(stderr, "LOG %s %d %s\n", name, status, message ? message : "");
+    va_start(args, message);
+    vsnprintf(text, sizeof text, message ? message : "", args);
+    va_end(args);
+    fprintf(stderr, "LOG %s %d %s\n", name, status, text);
 }
 
 typedef struct {
@@ -113,10 +123,18 @@ static void *symbol(void *lib, const char *name)
 }
 
 /* the FMU unpacked in dir: its only binary of this platform, its resources */
-static void load(Fmu *f, const char *dir, const char *identifier, const char *name)
+static void load(Fmu *f, const char *given, const char *identifier, const char *name)
 {
-    char path[4096], uri[4200];
+    char path[8192], uri[8192], dir[4096];
     size_t i;
+#ifdef _WIN32
+    if (!_fullpath(dir, given, sizeof dir)) {
+#else
+    if (!realpath(given, dir)) {
+#endif
+        fprintf(stderr, "no folder %s\n", given);
+        exit(3);
+    }
 #ifdef _WIN32
     snprintf(path, sizeof path, "%s\\binaries\\win64\\%s.dll", dir, identifier);
     f->lib = (void *)LoadLibraryA(path);
@@ -169,16 +187,12 @@ static double now_us(void)
 #endif
 }
 
+/* busy-wait until the deadline (a thread that sleeps gives its core and caches away and
+   wakes when the scheduler lets it) */
 static void wait_until_us(double deadline)
 {
-#ifdef _WIN32
-    while (now_us() < deadline) Sleep(0);
-#else
-    struct timespec ts;
-    ts.tv_sec = (time_t)(deadline / 1e6);
-    ts.tv_nsec = (long)((deadline - 1e6 * (double)ts.tv_sec) * 1e3);
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
-#endif
+    while (now_us() < deadline) {
+    }
 }
 
 static int compare(const void *a, const void *b)
