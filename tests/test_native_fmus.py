@@ -200,3 +200,170 @@ def test_coupled_loop_runs_without_python(exported, host, tmp_path):
     assert abs(F.mean() / mean_uplift - 1.0) < 0.2       # the pantograph presses on the wire
     assert np.all(np.abs(got[:, 2] - got[:, 3]) < 0.05)  # and follows it
     assert counts["allocations in doStep"] == 0
+
+
+# ---------------------------------------------------------------------- FMI behaviour
+OK, DISCARD, ERROR = 0, 2, 3
+
+
+def slave(folder, identifier):
+    """The native FMU of ``folder`` in fmpy, initialised."""
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(folder / "modelDescription.xml"))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=identifier,
+                    instanceName="native")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    return fmu, {v.name: v.valueReference for v in md.modelVariables}
+
+
+def status_of(call, *args) -> int:
+    from fmpy.fmi1 import FMICallException
+
+    try:
+        call(*args)
+    except FMICallException as exc:
+        return exc.status
+    return OK
+
+
+def test_bad_inputs_get_the_python_fmus_statuses(exported):
+    cat = exported["catenary"]
+    fmu, vr = slave(cat, "pantocosim_catenary_native")
+    ref, _ = slave(cat, "pantocosim_catenary_native")
+    F = [vr["contact_force_1"]]
+    out = [vr["wire_height_1"], vr["wire_velocity_1"]]
+    for bad in (float("nan"), -1.0, float("inf")):
+        fmu.setReal(F, [bad])
+        assert status_of(fmu.doStep, 0.0, DT) == DISCARD        # refused, state kept
+    fmu.setReal(F, [150.0])
+    ref.setReal(F, [150.0])
+    fmu.doStep(0.0, DT)
+    ref.doStep(0.0, DT)
+    assert fmu.getReal(out) == ref.getReal(out)
+    # a communication step that is not a whole number of internal steps: fmi2Error, and the
+    # instance takes no step after it
+    assert status_of(fmu.doStep, DT, 1.5 * DT) == ERROR
+    assert status_of(fmu.doStep, DT, DT) == ERROR
+    # a step that would take the pantograph off the contact wire is refused before it is taken
+    far, vr2 = slave(cat, "pantocosim_catenary_native")
+    assert status_of(far.doStep, 0.0, 10.0) == DISCARD
+    far.setReal([vr2["contact_force_1"]], [150.0])
+    assert status_of(far.doStep, 0.0, 2 * DT) == OK
+    # fixed parameters: the export's value is accepted, another one is refused naming it
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(cat / "modelDescription.xml"))
+    fresh = FMU2Slave(guid=md.guid, unzipDirectory=str(cat),
+                      modelIdentifier="pantocosim_catenary_native", instanceName="fresh")
+    fresh.instantiate()
+    speed = next(v for v in md.modelVariables if v.name == "speed_kmh")
+    assert status_of(fresh.setReal, [speed.valueReference], [float(speed.start)]) == OK
+    assert status_of(fresh.setReal, [speed.valueReference], [250.0]) == ERROR
+    pan, pvr = slave(exported["en50318-2mass"], "pantocosim_pantograph_native")
+    pan.setReal([pvr["contact_force"]], [float("nan")])
+    assert status_of(pan.doStep, 0.0, DT) == DISCARD
+    pan.setReal([pvr["contact_force"]], [1e9])                 # throws the head off its range
+    assert status_of(pan.doStep, 0.0, DT) == DISCARD
+    assert status_of(pan.doStep, 0.0, DT) == DISCARD           # only a rollback recovers
+
+
+def test_fmu_states_roll_back_and_serialize(exported):
+    fmu, vr = slave(exported["catenary"], "pantocosim_catenary_native")
+    F, out = [vr["contact_force_1"]], [vr["wire_height_1"], vr["support_uplift_1"]]
+    fmu.setReal(F, [130.0])
+    fmu.doStep(0.0, DT)
+    state = fmu.getFMUstate()
+    blob = fmu.serializeFMUstate(state)
+    runs = []
+    for _ in range(2):
+        for i in range(1, 30):
+            fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
+            fmu.doStep(i * DT, DT)
+        runs.append(fmu.getReal(out))
+        fmu.setFMUstate(state)
+    restored = fmu.deSerializeFMUstate(blob)
+    fmu.setFMUstate(restored)
+    for i in range(1, 30):
+        fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
+        fmu.doStep(i * DT, DT)
+    assert runs[0] == runs[1] == fmu.getReal(out)
+    fmu.freeFMUstate(state)
+    damaged = bytearray(blob)
+    damaged[-1] ^= 0xFF
+    assert status_of(fmu.deSerializeFMUstate, bytes(damaged)) == ERROR
+
+
+def test_validate_fmu_finds_no_problem(exported):
+    from fmpy.validation import validate_fmu
+
+    for path in exported["files"].values():
+        assert validate_fmu(str(path)) == [], path
+
+
+def rewritten(folder: Path, tmp_path: Path, data: bytes) -> Path:
+    copy = tmp_path / f"fmu-{len(list(tmp_path.glob('fmu-*')))}"
+    shutil.copytree(folder, copy)
+    (copy / "resources" / "model.pcsdata").write_bytes(data)
+    return copy
+
+
+def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tmp_path):
+    from pantocosim.master.native_fmu import pack_data, read_data
+
+    cat = exported["catenary"]
+    path = cat / "resources" / "model.pcsdata"
+    good = path.read_bytes()
+    kind, sections = read_data(path)
+    damaged = bytearray(good)
+    damaged[len(good) // 2] ^= 0x10
+    sizes = dict(sections, sizes=sections["sizes"].copy())
+    sizes["sizes"][5] = 9                                      # pantographs
+    fast = dict(sections, scalars=sections["scalars"].copy())
+    fast["scalars"][6] = fast["scalars"][7]                    # speed = the wave speed
+    pantograph = (exported["en50318-2mass"] / "resources" / "model.pcsdata").read_bytes()
+    cases = {"checksum mismatch": bytes(damaged), "not a pantocosim data file": b"\x7fELF" * 40,
+             "shorter than its": good[:20], "payload bytes": good[:-8],
+             "model kind 3": pantograph, "section sizes": pack_data(kind, sizes),
+             "wave speed": pack_data(kind, fast)}
+    for reason, data in cases.items():
+        folder = rewritten(cat, tmp_path, data)
+        proc = subprocess.run([str(host), "forced", str(folder), "1", str(DT)],
+                              capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 4, (reason, proc.stdout, proc.stderr)   # no crash
+        assert reason in proc.stderr and "model.pcsdata" in proc.stderr, (reason, proc.stderr)
+
+
+# ---------------------------------------------------------------------- in our master
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario", ["en50318-300", "dsa380-ave-300"])
+def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
+        scenario, fmus, tmp_path):
+    """Explicit (Jacobi) and implicit co-simulation with the Python pantograph FMU: the native
+    catenary FMU and the Python linear catenary FMU give the same contact force to 1e-9."""
+    from pantocosim.master.cosim import run_cosim
+    from pantocosim.master.fmu_check import FmuPlan
+    from pantocosim.master.native_fmu import export_catenary
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    required("gcc", "gcc")
+    sc = dataclasses.replace(load_scenario(scenario), catenary_model="linear")
+    prep = prepare(sc)
+    native = export_catenary(prep, tmp_path / "catenary.fmu", win64=False)
+    pantographs = [fmus[p.model] for p in sc.pantographs]
+    for scheme in ("jacobi", "implicit"):
+        forces = {}
+        for label, catenary in (("python", fmus["catenary"]), ("native", native)):
+            res = run_cosim(prep, None, scheme, plan=FmuPlan(catenary, pantographs, [None]),
+                            progress=False)
+            assert res.error is None, res.error
+            forces[label] = res.columns["contact_force_1"]
+        py, nat = forces["python"], forces["native"]
+        assert len(py) == len(nat) == prep.n_steps + 1
+        assert np.max(np.abs(nat - py)) <= 1e-9 * np.max(np.abs(py)), scheme
