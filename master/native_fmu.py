@@ -112,6 +112,16 @@ def read_data(path: Path) -> tuple[str, dict]:
     return kinds[int(kind)], out
 
 
+#: FMI 3.0 value references are unique across types: the offsets of the model's Integer,
+#: Boolean and String references (pcs_model.h)
+def fmi3_bases() -> dict[str, int]:
+    text = (SOURCE_DIR / "pcs_model.h").read_text()
+    bases = {m.group(1): int(m.group(2))
+             for m in re.finditer(r"#define PCS_FMI3_(\w+)_BASE (\d+)u", text)}
+    return {"Integer": bases["INT32"], "Boolean": bases["BOOLEAN"], "String": bases["STRING"],
+            "Real": 0}
+
+
 def value_references(header: str) -> dict[str, int]:
     """The ``#define PREFIX_VR_NAME number`` lines of a model's header in
     :data:`SOURCE_DIR`: {NAME: number} (the one place the value references are numbered)."""
@@ -196,6 +206,76 @@ def model_description_fmi2(name: str, identifier: str, guid: str, description: s
 """
 
 
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
+
+
+def model_description_fmi3(name: str, identifier: str, guid: str, description: str,
+                           variables: list[Variable], step: float) -> str:
+    """The FMI 3.0 modelDescription.xml of a native co-simulation FMU (value references
+    offset per type, :func:`fmi3_bases`)."""
+    bases = fmi3_bases()
+    rows = ['    <Float64 name="time" valueReference="0" causality="independent" '
+            'variability="continuous" unit="s" description="simulation time"/>']
+    outputs = []
+    for v in variables:
+        vr = v.vr + bases[v.type]
+        attrs = (f'name="{v.name}" valueReference="{vr}" causality="{v.causality}" '
+                 f'variability="{v.variability}"')
+        if v.description:
+            attrs += f' description="{escape(v.description, {chr(34): "&quot;"})}"'
+        if v.causality == "parameter":
+            attrs += ' initial="exact"'
+        has_start = v.causality in ("parameter", "input") or v.variability == "constant"
+        if v.unit and v.type == "Real":
+            attrs += f' unit="{v.unit}"'
+        tag = FMI3_TYPES[v.type]
+        if v.type == "String":
+            inner = f'<Start value="{_start_text(v)}"/>' if has_start else ""
+            rows.append(f"    <{tag} {attrs}>{inner}</{tag}>")
+        else:
+            start = f' start="{_start_text(v)}"' if has_start else ""
+            rows.append(f"    <{tag} {attrs}{start}/>")
+        if v.causality == "output":
+            outputs.append(vr)
+    units = sorted({v.unit for v in variables if v.unit and v.type == "Real"} | {"s"})
+    unit_defs = "\n".join(f'    <Unit name="{u}"/>' for u in units)
+    structure = "\n".join([f'    <Output valueReference="{vr}"/>' for vr in outputs]
+                          + [f'    <InitialUnknown valueReference="{vr}"/>' for vr in outputs])
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="{name}" instantiationToken="{guid}"
+  description="{escape(description, {chr(34): '&quot;'})}" generationTool="pantocosim export-native"
+  variableNamingConvention="flat">
+  <CoSimulation modelIdentifier="{identifier}" canHandleVariableCommunicationStepSize="true"
+    canGetAndSetFMUState="true" canSerializeFMUState="true" fixedInternalStepSize="{step!r}"
+    hasEventMode="false"/>
+  <UnitDefinitions>
+{unit_defs}
+  </UnitDefinitions>
+  <DefaultExperiment startTime="0" stepSize="{step!r}"/>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+{structure}
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def build_description_fmi3(identifier: str, c_files: list[str]) -> str:
+    """sources/buildDescription.xml of an FMI 3.0 source FMU."""
+    files = "\n".join(f'      <SourceFile name="{c}"/>' for c in c_files)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiBuildDescription fmiVersion="3.0">
+  <BuildConfiguration modelIdentifier="{identifier}" description="C99 and libm only">
+    <SourceFileSet language="C99">
+{files}
+    </SourceFileSet>
+  </BuildConfiguration>
+</fmiBuildDescription>
+"""
+
+
 @dataclass(frozen=True)
 class NativeModel:
     """What goes into a native FMU besides its variables: the model's C file and header."""
@@ -206,16 +286,31 @@ class NativeModel:
 
 COMMON_SOURCES = ("pcs_data.c",)
 COMMON_HEADERS = ("pcs_data.h", "pcs_model.h")
-FRONTS = {2: ("fmi2_front.c", "fmi2", ("fmi2Functions.h", "fmi2FunctionTypes.h",
-                                       "fmi2TypesPlatform.h"))}
+@dataclass(frozen=True)
+class Front:
+    """An FMI version's interface files and binary folders."""
+
+    sources: tuple           # C files of the front
+    headers: tuple           # its headers in the package (folder/name)
+    linux: str               # binaries/<linux>/
+    windows: str             # binaries/<windows>/
+
+
+FRONTS = {
+    2: Front(("fmi2_front.c",), ("fmi2/fmi2Functions.h", "fmi2/fmi2FunctionTypes.h",
+                                 "fmi2/fmi2TypesPlatform.h"), "linux64", "win64"),
+    3: Front(("fmi3_front.c", "fmi3_unsupported.c"),
+             ("fmi3_front.h", "fmi3/fmi3Functions.h", "fmi3/fmi3FunctionTypes.h",
+              "fmi3/fmi3PlatformTypes.h"), "x86_64-linux", "x86_64-windows"),
+}
 
 
 def source_files(model: NativeModel, fmi: int) -> dict[str, Path]:
     """{name in the FMU's sources/: file in the package} of a native FMU."""
-    front, folder, headers = FRONTS[fmi]
-    out = {name: SOURCE_DIR / name for name in (front, model.source, *COMMON_SOURCES,
+    front = FRONTS[fmi]
+    out = {name: SOURCE_DIR / name for name in (*front.sources, model.source, *COMMON_SOURCES,
                                                  *COMMON_HEADERS, model.header)}
-    out.update({h: SOURCE_DIR / folder / h for h in headers})
+    out.update({Path(h).name: SOURCE_DIR / h for h in front.headers})
     return out
 
 
@@ -265,12 +360,19 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
         guid = "{" + str(hashlib.sha256(data).hexdigest()[:32]) + "}"
         guid = guid[:9] + "-" + guid[9:13] + "-" + guid[13:17] + "-" + guid[17:21] + "-" \
             + guid[21:]
-        (root / "modelDescription.xml").write_text(model_description_fmi2(
-            name, identifier, guid, description, variables, c_files, step))
-        compile_library(src, c_files, root / "binaries" / "linux64" / f"{identifier}.so", cc)
+        if fmi == 2:
+            text = model_description_fmi2(name, identifier, guid, description, variables,
+                                          c_files, step)
+        else:
+            text = model_description_fmi3(name, identifier, guid, description, variables, step)
+            (src / "buildDescription.xml").write_text(build_description_fmi3(identifier,
+                                                                            c_files))
+        (root / "modelDescription.xml").write_text(text)
+        front = FRONTS[fmi]
+        compile_library(src, c_files, root / "binaries" / front.linux / f"{identifier}.so", cc)
         if win64:
-            compile_library(src, c_files, root / "binaries" / "win64" / f"{identifier}.dll",
-                            mingw)
+            compile_library(src, c_files, root / "binaries" / front.windows /
+                            f"{identifier}.dll", mingw)
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_suffix(".fmu.partial")

@@ -367,3 +367,45 @@ def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
         py, nat = forces["python"], forces["native"]
         assert len(py) == len(nat) == prep.n_steps + 1
         assert np.max(np.abs(nat - py)) <= 1e-9 * np.max(np.abs(py)), scheme
+
+
+# ---------------------------------------------------------------------- FMI 3.0
+def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+    from fmpy.validation import validate_fmu
+
+    from pantocosim.master.native_fmu import export_scenario
+
+    written, _ = export_scenario(prepared, tmp_path / "fmi3", fmi=3, win64=False)
+    for path in written:
+        assert validate_fmu(str(path)) == [], path
+        with zipfile.ZipFile(path) as z:
+            names = z.namelist()
+        assert "sources/buildDescription.xml" in names
+        assert any(n.startswith("binaries/x86_64-linux/") for n in names)
+    fmi3 = next(p for p in written if p.stem == "catenary")
+    md = read_model_description(str(fmi3))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmi3)),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c3")
+    fmu.instantiate()
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.exitInitializationMode()
+    assert fmu.getInt32([vr["n_pantographs"]]) == [1]
+    fmu2, vr2 = slave(exported["catenary"], "pantocosim_catenary_native")
+    F0 = float(prepared.static_forces[0])
+    for i in range(100):
+        F = F0 + 50.0 * np.sin(i / 7.0)
+        fmu.setFloat64([vr["contact_force_1"]], [F])
+        fmu.doStep(i * DT, DT)
+        fmu2.setReal([vr2["contact_force_1"]], [F])
+        fmu2.doStep(i * DT, DT)
+    names = ["wire_height_1", "wire_velocity_1", "support_uplift_1"]
+    assert fmu.getFloat64([vr[n] for n in names]) == fmu2.getReal([vr2[n] for n in names])
+    state = fmu.getFMUState()
+    fmu.doStep(100 * DT, DT)
+    after = fmu.getFloat64([vr["wire_height_1"]])
+    fmu.setFMUState(state)
+    fmu.doStep(100 * DT, DT)
+    assert fmu.getFloat64([vr["wire_height_1"]]) == after

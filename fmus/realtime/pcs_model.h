@@ -16,6 +16,12 @@
 
 #define PCS_MSG 2048
 
+/* FMI 3.0 value references are unique across types: the model's Integer, Boolean and String
+   references are offset by these in the FMI 3.0 model description (fmi3_front.c) */
+#define PCS_FMI3_INT32_BASE 10000u
+#define PCS_FMI3_BOOLEAN_BASE 20000u
+#define PCS_FMI3_STRING_BASE 30000u
+
 typedef struct PcsModel PcsModel;
 
 /* the data kind this model reads (PCS_KIND_...) */
