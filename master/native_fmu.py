@@ -31,6 +31,8 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numba import njit
 
+import pantocosim
+
 from pantocosim.core.errors import ParameterError
 
 MAGIC = b"PCSDATA\0"
@@ -39,8 +41,8 @@ BYTE_ORDER_MARK = 0x01020304
 KINDS = {"linear": 1, "modal": 2, "lumped": 3}
 TYPES = {np.dtype(np.float64): 1, np.dtype(np.int32): 2}
 DATA_FILE = "model.pcsdata"
-#: the C sources of the native models (installed with the package)
-SOURCE_DIR = Path(__file__).resolve().parent.parent / "fmus" / "realtime"
+#: the C sources of the native models (installed with the package as pantocosim/realtime)
+SOURCE_DIR = Path(pantocosim.__file__).resolve().parent / "realtime"
 #: warnings are errors: the sources compile clean with any C99 compiler
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 MINGW = "x86_64-w64-mingw32-gcc"
