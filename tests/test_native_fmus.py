@@ -409,3 +409,61 @@ def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_pa
     fmu.setFMUState(state)
     fmu.doStep(100 * DT, DT)
     assert fmu.getFloat64([vr["wire_height_1"]]) == after
+
+
+@pytest.mark.slow
+def test_penalty_contact_inside_equals_the_python_catenary_fmu(prepared, exported, fmus):
+    """contact_mode 1 (pantograph heights in, the penalty law inside, solved implicitly with
+    the wire): the native catenary gives the Python linear catenary FMU's contact force,
+    through a loss of contact."""
+    sc = prepared.scenario
+    F0 = float(prepared.static_forces[0])
+    params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh,
+              "n_pantographs": 1, "position_1": sc.pantographs[0].position_m,
+              "static_force_1": F0, "hht_alpha": sc.alpha, "contact_mode": 1,
+              "catenary_model": 1, "newton_rtol": sc.newton_rtol}
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmus["catenary"]))
+    pvr = {v.name: v.valueReference for v in md.modelVariables}
+    py = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmus["catenary"])),
+                   modelIdentifier=md.coSimulation.modelIdentifier, instanceName="python")
+    py.instantiate()
+    py.setupExperiment(startTime=0.0)
+    for name, value in params.items():
+        if isinstance(value, str):
+            py.setString([pvr[name]], [value])
+        elif isinstance(value, int):
+            py.setInteger([pvr[name]], [value])
+        else:
+            py.setReal([pvr[name]], [float(value)])
+    py.enterInitializationMode()
+    py.exitInitializationMode()
+    from fmpy.fmi2 import FMU2Slave as Slave
+
+    cat = exported["catenary"]
+    md2 = read_model_description(str(cat / "modelDescription.xml"))
+    nvr = {v.name: v.valueReference for v in md2.modelVariables}
+    na = Slave(guid=md2.guid, unzipDirectory=str(cat),
+               modelIdentifier="pantocosim_catenary_native", instanceName="native")
+    na.instantiate()
+    na.setupExperiment(startTime=0.0)
+    na.setInteger([nvr["contact_mode"]], [1])
+    na.enterInitializationMode()
+    na.exitInitializationMode()
+    z0 = na.getReal([nvr["wire_height_1"]])[0] + F0 / prepared.contact.stiffness
+    forces = []
+    for i in range(800):
+        t = i * DT
+        z = z0 + 0.004 * np.sin(2 * np.pi * 3 * t)
+        v = 0.004 * 2 * np.pi * 3 * np.cos(2 * np.pi * 3 * t)
+        row = []
+        for fmu, vr in ((py, pvr), (na, nvr)):
+            fmu.setReal([vr["pantograph_height_1"], vr["pantograph_velocity_1"]], [z, v])
+            fmu.doStep(t, DT)
+            row.append(fmu.getReal([vr["contact_force_out_1"]])[0])
+        forces.append(row)
+    forces = np.array(forces)
+    assert forces[:, 0].min() == 0.0 and forces[:, 0].max() > 150.0     # loses contact
+    assert np.max(np.abs(forces[:, 1] - forces[:, 0])) <= 1e-9 * forces[:, 0].max()
