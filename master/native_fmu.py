@@ -280,10 +280,10 @@ def build_description_fmi3(identifier: str, c_files: list[str]) -> str:
 
 @dataclass(frozen=True)
 class NativeModel:
-    """What goes into a native FMU besides its variables: the model's C file and header."""
+    """What goes into a native FMU besides its variables: the model's C files and headers."""
 
-    source: str            # e.g. catenary.c
-    header: str            # e.g. catenary_vars.h (the value references)
+    sources: tuple         # its C files, e.g. catenary.c
+    headers: tuple         # its headers, the first one numbering the value references
 
 
 COMMON_SOURCES = ("pcs_data.c",)
@@ -310,8 +310,9 @@ FRONTS = {
 def source_files(model: NativeModel, fmi: int) -> dict[str, Path]:
     """{name in the FMU's sources/: file in the package} of a native FMU."""
     front = FRONTS[fmi]
-    out = {name: SOURCE_DIR / name for name in (*front.sources, model.source, *COMMON_SOURCES,
-                                                 *COMMON_HEADERS, model.header)}
+    out = {name: SOURCE_DIR / name for name in (*front.sources, *model.sources,
+                                                 *COMMON_SOURCES, *COMMON_HEADERS,
+                                                 *model.headers)}
     out.update({Path(h).name: SOURCE_DIR / h for h in front.headers})
     return out
 
@@ -387,16 +388,17 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
 
 
 # ---------------------------------------------------------------------- the catenary FMU
-CATENARY = NativeModel("catenary.c", "catenary_vars.h")
+CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "catenary.h"))
 MAX_SUPPORTS = 64
 
 
 def catenary_variables(sections: dict) -> list[Variable]:
     """The native catenary's variables: the Python catenary FMU's names
     (fmus/fmi/catenary_slave.py), the export's values as fixed parameters."""
-    vr = value_references(CATENARY.header)
+    vr = value_references(CATENARY.headers[0])
     sizes, sc = sections["sizes"], sections["scalars"]
     n_p = int(sizes[5])
+    spans = int(sizes[-2])
     name = bytes(sections["definition"].tobytes()).split(b"\0")[0].decode()
     fixed = "fixed at export (pantocosim export-native)"
     out = [
@@ -404,10 +406,10 @@ def catenary_variables(sections: dict) -> list[Variable]:
                  "fixed", name, description=f"catenary definition; {fixed}"),
         Variable("n_pantographs", "Integer", vr["N_PANTOGRAPHS"], "parameter", "fixed", n_p,
                  description=f"number of pantographs; {fixed}"),
-        Variable("spans", "Integer", vr["SPANS"], "parameter", "fixed", int(sizes[8]),
+        Variable("spans", "Integer", vr["SPANS"], "parameter", "fixed", spans,
                  description=f"number of spans (0 = as defined); {fixed}"),
         Variable("catenary_model", "Integer", vr["CATENARY_MODEL"], "parameter", "fixed",
-                 int(sizes[9]), description=f"1 = linear, 2 = modal; {fixed}"),
+                 int(sizes[-1]), description=f"1 = linear, 2 = modal; {fixed}"),
         Variable("contact_mode", "Integer", vr["CONTACT_MODE"], "parameter", "fixed", 0,
                  description="0 = contact forces are inputs (contact_force_k); 1 = built-in "
                  "penalty contact from pantograph_height_k and pantograph_velocity_k"),
@@ -484,13 +486,15 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
     from pantocosim.master import native_export
 
     sc = prep.scenario
-    if model_name != "linear":
+    if model_name not in ("linear", "modal"):
         raise ParameterError("--catenary-model", model_name, "native FMUs are written for the "
-                             "linear catenary (the modal and nonlinear models stay Python FMUs)")
+                             "linear and the modal catenary (the nonlinear model stays a "
+                             "Python FMU)")
     settings = HHTSettings.for_runs(sc.alpha, sc.newton_rtol)
-    sections = native_export.linear_catenary(
-        prep.catenary, settings, sc.dt, prep.static_forces, prep.contact, sc.catenary,
-        int(sc.spans or 0), settings.rtol, cutoff=sc.modal_cutoff_hz)
+    export = (native_export.linear_catenary if model_name == "linear"
+              else native_export.modal_catenary)
+    sections = export(prep.catenary, settings, sc.dt, prep.static_forces, prep.contact,
+                      sc.catenary, int(sc.spans or 0), settings.rtol, cutoff=sc.modal_cutoff_hz)
     from pantocosim.master.fmu_build import CATENARY_CLASS
 
     return build_fmu(out, CATENARY, "pantocosim_catenary_native", CATENARY_CLASS,
@@ -500,13 +504,13 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
 
 
 # ---------------------------------------------------------------------- the pantograph FMU
-LUMPED = NativeModel("lumped.c", "lumped_vars.h")
+LUMPED = NativeModel(("lumped.c",), ("lumped_vars.h",))
 
 
 def pantograph_variables(sections: dict) -> list[Variable]:
     """The native pantograph's variables: the Python pantograph FMU's names
     (fmus/fmi/pantograph_slave.py), the export's values as fixed parameters."""
-    vr = value_references(LUMPED.header)
+    vr = value_references(LUMPED.headers[0])
     sc = sections["scalars"]
     fixed = "fixed at export (pantocosim export-native)"
     timing = ("the value set before doStep(t, h) is the force at t + h; the force at t is the "

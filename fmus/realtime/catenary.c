@@ -19,57 +19,12 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "catenary_vars.h"
+#include "catenary.h"
 
 #define MAX_SLACK_PASSES 20
 /* steps after which the kept products are formed again from the state (affine_hht.py) */
 #define RESYNC_STEPS 4096
 #define DROPPER_WIDTH 6
-
-typedef struct {
-    int dof[4];          /* free DOF, -1 fixed */
-    double w[4], dw[4];  /* Hermite weights (3.13) and d/dx */
-    double zfix[4];      /* fixed z (reference) of the fixed DOFs */
-} Point;
-
-struct PcsModel {
-    /* sizes */
-    int n, bw_m, bw_k, bw, nd, np, ne, ns;
-    /* constants */
-    double h, alpha, beta, gamma, ar, br, speed, wave, k_h, c_h, x_min, x_max;
-    double c_a, c_v, c_f, cutoff;
-    int spans, model_code;
-    const double *M, *K, *q_ref, *r0, *q0, *F0, *x0;
-    const int *d_idx, *d_tension;
-    const double *d_val, *d_ka, *d_N0;
-    const double *w_xs, *w_xe, *w_Ex, *w_Le, *w_zfix;
-    const int *w_dof, *s_dof;
-    const double *s_z;
-    const char *definition;
-    /* kept factor (column j: L[j..j+bw, j]) and columns A^-1 b_d */
-    double *L, *LR, *Z, *inv_diag;
-    /* the band diagonals of M and K that hold a nonzero */
-    unsigned char *used_m, *used_k;
-    /* state (contiguous: t, n_steps, failed, steps at the last forming of the products,
-       inputs at t, q, v, a, f, the kept products P, committed slack set) */
-    double *state;
-    size_t state_len;
-    double *t, *n_steps, *prev, *q, *v, *a, *f, *committed, *failed, *synced;
-    double *Kd, *Kv, *Ka, *Mv, *Ma;
-    /* work */
-    double *qp, *vp, *dp, *rhs, *R, *x, *tmp, *tmp2, *W, *Np, *bx, *bW, *sl, *sl_new, *s, *y,
-        *small, *zs;
-    int *rows;
-    Point pts[CAT_MAX_PANTOGRAPHS];
-    /* variables */
-    int mode, extrapolate, initialised;
-    double rtol, iterations;
-    double u_force[CAT_MAX_PANTOGRAPHS], u_z[CAT_MAX_PANTOGRAPHS], u_v[CAT_MAX_PANTOGRAPHS];
-    double out_z[CAT_MAX_PANTOGRAPHS], out_v[CAT_MAX_PANTOGRAPHS], out_F[CAT_MAX_PANTOGRAPHS];
-    double uplift[CAT_MAX_SUPPORTS];
-    /* the start's pantograph heights (contact_mode 1) */
-    double z_start[CAT_MAX_PANTOGRAPHS];
-};
 
 unsigned pcs_model_kind(void) { return PCS_KIND_LINEAR_CATENARY; }
 
@@ -193,7 +148,7 @@ static void dropper_add(const PcsModel *m, int d, double c, double *x)
 
 /* solve the small dense system A z = y (Gauss with partial pivoting, A overwritten);
    -1 if singular */
-static int dense_solve(double *A, double *y, int n)
+int pcs_dense_solve(double *A, double *y, int n)
 {
     int i, j, k;
     for (k = 0; k < n; k++) {
@@ -236,7 +191,7 @@ static int woodbury(PcsModel *m, int r, double *x)
                 - m->s[i] * dropper_dot(m, m->rows[i], m->Z + (size_t)m->rows[j] * m->n);
         m->zs[i] = m->s[i] * dropper_dot(m, m->rows[i], x);
     }
-    if (dense_solve(m->small, m->zs, r) != 0) return -1;
+    if (pcs_dense_solve(m->small, m->zs, r) != 0) return -1;
     for (j = 0; j < r; j++) {
         const double *zj = m->Z + (size_t)m->rows[j] * m->n;
         double c = m->zs[j];
@@ -271,7 +226,7 @@ static double dot4(const double *a, const double *b)
 }
 
 /* the contact-wire point at track position x (contact_point.py); -1 outside the wire */
-static int locate(const PcsModel *m, double x, Point *p, char *err)
+int pcs_locate(const PcsModel *m, double x, Point *p, char *err)
 {
     int lo = 0, hi = m->ne, k, it, i;
     double xi, L, S[4], D[4], slope;
@@ -366,6 +321,10 @@ static void rest_forces(PcsModel *m, const double *F)
 static void update_outputs(PcsModel *m)
 {
     int k, j;
+    if (m->modal) {
+        modal_outputs(m);
+        return;
+    }
     for (k = 0; k < m->np; k++)
         wire_point(m, &m->pts[k], m->q, m->v, &m->out_z[k], &m->out_v[k]);
     for (j = 0; j < m->ns && j < CAT_MAX_SUPPORTS; j++)
@@ -395,6 +354,7 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
     long n_def = 0;
     size_t n, nd;
     int k;
+    if (d->kind == PCS_KIND_MODAL_CATENARY) return modal_new(d, mem, err);
     if (d->kind != PCS_KIND_LINEAR_CATENARY) {
         snprintf(err, PCS_MSG, "data file %s: model kind %u, this FMU steps the linear "
                  "catenary (kind %u)", d->path, d->kind, PCS_KIND_LINEAR_CATENARY);
@@ -527,6 +487,10 @@ fail:
 void pcs_model_free(PcsModel *m, const PcsMemory *mem)
 {
     if (!m) return;
+    if (m->modal) {
+        modal_free(m, mem);
+        return;
+    }
     if (m->L) mem->release(m->L);
     if (m->LR) mem->release(m->LR);
     if (m->inv_diag) mem->release(m->inv_diag);
@@ -557,6 +521,7 @@ int pcs_initialize(PcsModel *m, char *err)
 {
     int k, d, i;
     size_t n = (size_t)m->n;
+    if (m->modal) return modal_initialize(m, err);
     if (m->mode == 1) {
         for (k = 0; k < m->np; k++)
             if (!(m->F0[k] > 0.0)) {
@@ -569,7 +534,7 @@ int pcs_initialize(PcsModel *m, char *err)
     memcpy(m->q, m->q0, n * sizeof(double));
     memset(m->v, 0, n * sizeof(double));
     for (k = 0; k < m->np; k++)
-        if (locate(m, m->x0[k], &m->pts[k], err) != 0) return PCS_ERROR;
+        if (pcs_locate(m, m->x0[k], &m->pts[k], err) != 0) return PCS_ERROR;
     rest_forces(m, m->F0);
     /* a0 = -M^-1 f0 (the mass matrix factored like the Newton matrix of c_a = 1) */
     if (factor(m, 1.0, 0.0, 0.0) != 0) {
@@ -651,7 +616,7 @@ static void penalty_forces(const PcsModel *m, const double *dz, const double *dv
             A[i * np + i] += 1.0;
             y[i] = active[i] ? m->k_h * dz[i] + m->c_h * dv[i] : 0.0;
         }
-        if (dense_solve(A, y, np) != 0) {
+        if (pcs_dense_solve(A, y, np) != 0) {
             for (i = 0; i < np; i++) F[i] = NAN;
             return;
         }
@@ -856,7 +821,7 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
         Point p;
         for (i = 0; i < n_sub; i++) t_end += m->h;
         for (k = 0; k < m->np; k++)
-            if (locate(m, m->x0[k] + m->speed * t_end, &p, err) != 0) return PCS_DISCARD;
+            if (pcs_locate(m, m->x0[k] + m->speed * t_end, &p, err) != 0) return PCS_DISCARD;
     }
     if (m->mode == 1 && m->extrapolate && *m->n_steps == 0.0)
         for (k = 0; k < m->np; k++) {       /* the start's heights stand at the first step */
@@ -867,7 +832,7 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
     for (i = 1; i <= n_sub; i++) {
         double tt = *m->t + m->h;
         for (k = 0; k < m->np; k++) {
-            locate(m, m->x0[k] + m->speed * tt, &m->pts[k], NULL);
+            pcs_locate(m, m->x0[k] + m->speed * tt, &m->pts[k], NULL);
             if (m->mode == 0) {
                 u[k] = i == n_sub ? nw[2 * k]
                                   : m->prev[2 * k] + (nw[2 * k] - m->prev[2 * k]) * ((double)i / n_sub);
@@ -881,7 +846,7 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
                                    : m->prev[2 * k + 1] + (nw[2 * k + 1] - m->prev[2 * k + 1]) * s;
             }
         }
-        status = step(m, u, zp, vp, err);
+        status = m->modal ? modal_step(m, u, err) : step(m, u, zp, vp, err);
         if (status != PCS_OK) {
             if (i > 1) *m->failed = 1.0;    /* part of the step was taken */
             return status;
@@ -907,7 +872,7 @@ void pcs_state_restore(PcsModel *m, const void *buffer)
     int k;
     memcpy(m->state, buffer, pcs_state_bytes(m));
     for (k = 0; k < m->np; k++)
-        locate(m, m->x0[k] + m->speed * *m->t, &m->pts[k], NULL);
+        pcs_locate(m, m->x0[k] + m->speed * *m->t, &m->pts[k], NULL);
     update_outputs(m);
     for (k = 0; k < m->np; k++)
         m->out_F[k] = m->mode == 0 ? m->prev[2 * k]
