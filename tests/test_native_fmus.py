@@ -93,6 +93,30 @@ def forcing(F0, t):
                                                                              else 0.0)
 
 
+@pytest.mark.slow
+def test_modal_catenary_in_a_c_host_equals_the_python_model(host, tmp_path):
+    """The native modal catenary (modes below the scenario's cutoff, static corrections at the
+    droppers and the moving contact points) against the Python modal model's closed-form
+    steps under the host's forcing."""
+    from pantocosim.master.native_fmu import export_catenary
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    prep = prepare(dataclasses.replace(load_scenario("en50318-300"), catenary_model="modal"))
+    fmu = export_catenary(prep, tmp_path / "modal.fmu", "modal", win64=False)
+    folder = tmp_path / "modal"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    got, counts = run_host(host, ["forced", folder, STEPS, DT], tmp_path)
+    want = python_catenary(prep, STEPS)
+    motion = np.max(np.abs(want[:, 1] - want[0, 1]))
+    assert motion > 1e-3
+    assert np.max(np.abs(got[:, 1] - want[:, 1])) < 1e-9 * motion
+    assert np.max(np.abs(got[:, 2] - want[:, 2])) < 1e-9 * np.max(np.abs(want[:, 2]))
+    assert np.max(np.abs(got[:, 3:] - want[:, 3:])) < 1e-9 * np.max(np.abs(want[:, 3:]))
+    assert counts["allocations in doStep"] == 0
+
+
 def python_catenary(prep, steps):
     """The Python catenary FMU's stepper and outputs under the host's forcing: rows of t,
     wire height and velocity, support uplifts."""
@@ -341,11 +365,13 @@ def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tm
 
 # ---------------------------------------------------------------------- in our master
 @pytest.mark.slow
+@pytest.mark.parametrize("model", ["linear", "modal"])
 @pytest.mark.parametrize("scenario", ["en50318-300", "dsa380-ave-300"])
 def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
-        scenario, fmus, tmp_path):
+        scenario, model, fmus, tmp_path):
     """Explicit (Jacobi) and implicit co-simulation with the Python pantograph FMU: the native
-    catenary FMU and the Python linear catenary FMU give the same contact force to 1e-9."""
+    catenary FMU and the Python catenary FMU of the same model (linear, modal) give the same
+    contact force to 1e-9."""
     from pantocosim.master.cosim import run_cosim
     from pantocosim.master.fmu_check import FmuPlan
     from pantocosim.master.native_fmu import export_catenary
@@ -353,9 +379,9 @@ def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
     from pantocosim.master.scenario import load_scenario
 
     required("gcc", "gcc")
-    sc = dataclasses.replace(load_scenario(scenario), catenary_model="linear")
+    sc = dataclasses.replace(load_scenario(scenario), catenary_model=model)
     prep = prepare(sc)
-    native = export_catenary(prep, tmp_path / "catenary.fmu", win64=False)
+    native = export_catenary(prep, tmp_path / "catenary.fmu", model, win64=False)
     pantographs = [fmus[p.model] for p in sc.pantographs]
     for scheme in ("jacobi", "implicit"):
         forces = {}
