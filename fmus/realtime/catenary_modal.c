@@ -19,6 +19,8 @@
 #include "catenary.h"
 
 #define MAX_SLACK_PASSES 20
+/* coordinates per block of the slack check's bounds (modal_kernels.SCREEN_BLOCK) */
+#define SCREEN_BLOCK 32
 #define NP CAT_MAX_PANTOGRAPHS
 
 struct Modal {
@@ -33,7 +35,45 @@ struct Modal {
     double *q_p, *v_p, *rhs, *r, *sf, *delta_free, *delta, *Wl, *ys, *small, *zs, *s, *slack,
         *slack_new, *yt;
     int *rows, n_rows;
+    /* the slack check's screen (modal_step._screen_tables, modal_kernels.screen_slack): T_K
+       in single precision, per block |k_a| times the 2-norms and the largest entries of
+       each row, the rounding factors; the reference forces, their error bounds, the marks,
+       the reference y, the block norms, y in single precision */
+    float *T32, *y32;
+    double *Tb, *Tm, tol[2], *ref, *y_ref, *xb;
+    int nb, most;
+    /* the time of the geometry in Wc, G (NAN: none) */
+    double geometry_t;
 };
+
+/* the screen's tables (modal_step._screen_tables) and an empty reference */
+static void screen_tables(PcsModel *m)
+{
+    struct Modal *md = m->modal;
+    int K = md->K, nd = m->nd, d, b, j, n;
+    for (d = 0; d < nd; d++) {
+        const double *t = md->T_K + (size_t)d * K;
+        double ka = fabs(m->d_ka[d]);
+        for (j = 0; j < K; j++) md->T32[(size_t)d * K + j] = (float)t[j];
+        for (b = 0; b < md->nb; b++) {
+            double ss = 0.0, mx = 0.0;
+            int j1 = (b + 1) * SCREEN_BLOCK < K ? (b + 1) * SCREEN_BLOCK : K;
+            for (j = b * SCREEN_BLOCK; j < j1; j++) {
+                ss += t[j] * t[j];
+                if (fabs(t[j]) > mx) mx = fabs(t[j]);
+            }
+            md->Tb[(size_t)d * md->nb + b] = sqrt(ss) * ka * (1.0 + 1e-9);
+            md->Tm[(size_t)d * md->nb + b] = mx * ka;
+        }
+        md->ref[d] = NAN;              /* no reference yet: the first check takes every row */
+        md->ref[nd + d] = 0.0;
+        md->ref[2 * nd + d] = 0.0;
+    }
+    n = K + 2;
+    md->tol[0] = 2.0 * n * ldexp(1.0, -24) / (1.0 - n * ldexp(1.0, -24));
+    md->tol[1] = 2.0 * n * ldexp(1.0, -53) / (1.0 - n * ldexp(1.0, -53));
+    md->most = nd / 8 > 1 ? nd / 8 : 1;
+}
 
 #define TABLE(dst, name, count)                                                           \
     do {                                                                                  \
@@ -139,7 +179,11 @@ PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
                                   sizeof(double));
     md->ys = (double *)mem->alloc(6 * nd + nd * nd + 8, sizeof(double));
     md->rows = (int *)mem->alloc(nd + 1, sizeof(int));
-    if (!m->state || !md->inv_diag || !md->Wc || !md->ys || !md->rows) {
+    md->nb = (md->K + SCREEN_BLOCK - 1) / SCREEN_BLOCK;
+    md->T32 = (float *)mem->alloc(nd * K + K + 1, sizeof(float));
+    md->Tb = (double *)mem->alloc(2 * nd * (size_t)md->nb + 3 * nd + K + 2 * (size_t)md->nb + 1,
+                                  sizeof(double));
+    if (!m->state || !md->inv_diag || !md->Wc || !md->ys || !md->rows || !md->T32 || !md->Tb) {
         snprintf(err, PCS_MSG, "no memory for a modal model of %d coordinates", md->N);
         goto fail;
     }
@@ -150,6 +194,12 @@ PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     md->v_p = md->q_p + N; md->rhs = md->v_p + N; md->r = md->rhs + N; md->sf = md->r + N;
     md->delta_free = md->sf + N; md->delta = md->delta_free + N; md->Wl = md->delta + N;
     md->yt = md->Wl + (size_t)m->np * N;
+    md->y32 = md->T32 + nd * K;
+    md->Tm = md->Tb + nd * (size_t)md->nb;
+    md->ref = md->Tm + nd * (size_t)md->nb;
+    md->y_ref = md->ref + 3 * nd;
+    md->xb = md->y_ref + K;
+    screen_tables(m);
     md->zs = md->ys + nd; md->s = md->zs + nd; md->slack = md->s + nd;
     md->slack_new = md->slack + nd; md->small = md->slack_new + nd;
     m->t = m->state; m->n_steps = m->state + 1; m->failed = m->state + 2;
@@ -171,6 +221,8 @@ void modal_free(PcsModel *m, const PcsMemory *mem)
     if (md->Wc) mem->release(md->Wc);
     if (md->ys) mem->release(md->ys);
     if (md->rows) mem->release(md->rows);
+    if (md->T32) mem->release(md->T32);
+    if (md->Tb) mem->release(md->Tb);
     if (m->state) mem->release(m->state);
     mem->release(md);
     mem->release(m);
@@ -395,7 +447,10 @@ void modal_outputs(PcsModel *m)
 {
     struct Modal *md = m->modal;
     int N = md->N, K = md->K, mm = md->m, nz = md->nz, np = m->np, k, j, i, r;
-    geometry(m);                        /* at the points of the current time */
+    if (md->geometry_t != *m->t) {      /* at the points of the current time */
+        geometry(m);
+        md->geometry_t = *m->t;
+    }
     for (k = 0; k < np; k++) {
         const double *w = md->Wc + (size_t)k * N, *dw = md->Wcx + (size_t)k * N;
         double z = 0.0, vz = 0.0, slope = 0.0;
@@ -445,6 +500,7 @@ int modal_initialize(PcsModel *m, char *err)
     memcpy(m->q, m->q0, (size_t)N * sizeof(double));
     memset(m->v, 0, (size_t)N * sizeof(double));
     if (locate_all(m, 0.0, err) != 0) return PCS_ERROR;
+    md->geometry_t = 0.0;
     for (d = 0; d < m->nd; d++) m->committed[d] = slack_at(m, d, m->q) ? 1.0 : 0.0;
     rest_forces(m, m->q, m->v, m->F0, m->f);
     for (i = 0; i < N; i++) m->a[i] = -m->f[i];
@@ -463,13 +519,90 @@ int modal_initialize(PcsModel *m, char *err)
     return PCS_OK;
 }
 
+/* sum_j a_j b_j in single precision, in eight running sums (the screen's error bound holds
+   for a sum in any order) */
+static float dot32(const float *a, const float *b, int n)
+{
+    float s[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    int j = 0, k;
+    for (; j + 8 <= n; j += 8)
+        for (k = 0; k < 8; k++) s[k] += a[j + k] * b[j + k];
+    for (; j < n; j++) s[0] += a[j] * b[j];
+    return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
+}
+
+/* the droppers slack at y = q_p + delta into slack_new, without the whole product T_K y each
+   step (modal_kernels.screen_slack): a kept reference and a bound of the drift from it
+   settle most droppers; the others take their row in single precision with a bound of its
+   error, in double precision when that is too close; when more than an eighth are open,
+   every row and a new reference. The set is the double-precision one, to round-off. */
+static void screen_slack(PcsModel *m)
+{
+    struct Modal *md = m->modal;
+    int K = md->K, nd = m->nd, nb = md->nb, d, b, j, open = 0, refresh;
+    double ss = 0.0, ny, *x2 = md->xb, *x1 = md->xb + nb;
+    for (b = 0; b < nb; b++) {                 /* _drift_pass */
+        double s = 0.0, s1 = 0.0, s2 = 0.0;
+        int j1 = (b + 1) * SCREEN_BLOCK < K ? (b + 1) * SCREEN_BLOCK : K;
+        for (j = b * SCREEN_BLOCK; j < j1; j++) {
+            double yj = md->q_p[j] + md->delta[j], dj = yj - md->y_ref[j];
+            md->y32[j] = (float)yj;
+            s += yj * yj;
+            s1 += fabs(yj);
+            s2 += dj * dj;
+        }
+        ss += s;
+        x2[b] = sqrt(s2);
+        x1[b] = s1;
+    }
+    ny = sqrt(ss);
+    for (d = 0; d < nd; d++) {
+        md->slack_new[d] = 0.0;
+        if (!m->d_tension[d]) continue;
+        if (fabs(md->ref[d]) > md->ref[nd + d] + row_dot(md->Tb + (size_t)d * nb, x2, nb)) {
+            md->slack_new[d] = md->ref[d] < 0.0 ? 1.0 : 0.0;
+        } else {
+            open++;
+            md->ref[2 * nd + d] = 1.0;
+        }
+    }
+    refresh = open > md->most;
+    for (d = 0; d < nd; d++) {
+        double r, bound, sy;
+        int decided = 0;
+        if (!m->d_tension[d] || !(refresh || md->ref[2 * nd + d] != 0.0)) continue;
+        sy = row_dot(md->Tm + (size_t)d * nb, x1, nb);           /* _row_force */
+        if (ny < 1e30) {
+            r = m->d_N0[d] + m->d_ka[d] * (double)dot32(md->T32 + (size_t)d * K, md->y32, K);
+            bound = md->tol[0] * sy + 1e-25;
+            decided = fabs(r) > bound;
+        }
+        if (!decided) {
+            const double *t = md->T_K + (size_t)d * K;
+            double acc = 0.0;
+            for (j = 0; j < K; j++) acc += t[j] * (md->q_p[j] + md->delta[j]);
+            r = m->d_N0[d] + m->d_ka[d] * acc;
+            bound = md->tol[1] * sy + 1e-25;
+        }
+        md->slack_new[d] = r < 0.0 ? 1.0 : 0.0;
+        md->ref[2 * nd + d] = 0.0;
+        if (refresh) {
+            md->ref[d] = r;
+            md->ref[nd + d] = bound;
+        }
+    }
+    if (refresh)
+        for (j = 0; j < K; j++) md->y_ref[j] = md->q_p[j] + md->delta[j];
+}
+
 int modal_step(PcsModel *m, const double *F, char *err)
 {
     struct Modal *md = m->modal;
     int N = md->N, mm = md->m, K = md->K, np = m->np, i, j, k, d, passes = 0;
     double h = m->h, cq = (0.5 - m->beta) * h * h, cv = (1.0 - m->gamma) * h;
     double c_f = m->c_f;
-    if (geometry(m) != 0) {             /* m->pts are at t + h */
+    md->geometry_t = NAN;               /* m->pts are at t + h */
+    if (geometry(m) != 0) {
         snprintf(err, PCS_MSG, "modal catenary: pantographs farther apart than the residual "
                  "tables cover");
         return PCS_DISCARD;
@@ -508,11 +641,8 @@ int modal_step(PcsModel *m, const double *F, char *err)
             for (k = 0; k < np; k++) dl += F[k] * md->Wl[(size_t)k * N + i];
             md->delta[i] = dl;
         }
-        for (i = 0; i < K; i++) md->yt[i] = md->q_p[i] + md->delta[i];
-        for (d = 0; d < m->nd; d++) {
-            md->slack_new[d] = slack_at(m, d, md->yt) ? 1.0 : 0.0;
-            changed = changed || md->slack_new[d] != md->slack[d];
-        }
+        screen_slack(m);
+        for (d = 0; d < m->nd; d++) changed = changed || md->slack_new[d] != md->slack[d];
         if (!changed) break;
         memcpy(md->slack, md->slack_new, (size_t)m->nd * sizeof(double));
     }
@@ -526,6 +656,7 @@ int modal_step(PcsModel *m, const double *F, char *err)
     memcpy(m->committed, md->slack, (size_t)m->nd * sizeof(double));
     *m->t += h;
     *m->n_steps += 1.0;
+    md->geometry_t = *m->t;
     m->iterations += passes;
     return PCS_OK;
 }
