@@ -7,7 +7,7 @@
  *   S = M + (1 + alpha) (gamma h C + beta h^2 K),
  *
  * then q, v from the Newmark predictors q_p, v_p (3.16)-(3.17) and f_{n+1} = C v + K q + B w.
- * The start (q0, w) is the export's static start.
+ * The start (q0, a0, f0, w) and S^-1 are the Python integrator's, written at export.
  */
 #include "pcs_model.h"
 
@@ -21,7 +21,7 @@ struct PcsModel {
     int n;
     double h, alpha, beta, gamma, lo, hi, static_force, aero_c1, aero_c2, speed_kmh,
         height0, F0, friction, smoothing;
-    const double *M, *C, *K, *B, *w0, *q0;
+    const double *M, *C, *K, *B, *w0, *q0, *a0, *f0, *S_inv_data;
     const char *preset;
     double S_inv[PAN_MAX_DOFS * PAN_MAX_DOFS];
     /* state: t, failed, F at t, input at t, q, v, a, f */
@@ -72,6 +72,9 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
     SECTION(m->B, "B", PCS_TYPE_F64, n * 3);
     SECTION(m->w0, "w0", PCS_TYPE_F64, 3);
     SECTION(m->q0, "q0", PCS_TYPE_F64, n);
+    SECTION(m->a0, "a0", PCS_TYPE_F64, n);
+    SECTION(m->f0, "f0", PCS_TYPE_F64, n);
+    SECTION(m->S_inv_data, "S_inv", PCS_TYPE_F64, n * n);
     m->preset = (const char *)pcs_data_section(d, "preset", PCS_TYPE_I32, -1, &n_text, err,
                                                PCS_MSG);
     if (!m->preset) goto fail;
@@ -95,39 +98,6 @@ void pcs_model_free(PcsModel *m, const PcsMemory *mem)
     if (m) mem->release(m);
 }
 
-/* out = inverse of the n x n matrix A (Gauss-Jordan with partial pivoting); -1 if singular */
-static int invert(const double *A, double *out, int n)
-{
-    double W[PAN_MAX_DOFS * 2 * PAN_MAX_DOFS];
-    int i, j, k, w = 2 * n;
-    for (i = 0; i < n; i++)
-        for (j = 0; j < w; j++)
-            W[i * w + j] = j < n ? A[i * n + j] : (j - n == i ? 1.0 : 0.0);
-    for (k = 0; k < n; k++) {
-        int p = k;
-        double piv;
-        for (i = k + 1; i < n; i++)
-            if (fabs(W[i * w + k]) > fabs(W[p * w + k])) p = i;
-        if (!(fabs(W[p * w + k]) > 0.0)) return -1;
-        if (p != k)
-            for (j = 0; j < w; j++) {
-                double t = W[k * w + j];
-                W[k * w + j] = W[p * w + j];
-                W[p * w + j] = t;
-            }
-        piv = W[k * w + k];
-        for (j = 0; j < w; j++) W[k * w + j] /= piv;
-        for (i = 0; i < n; i++) {
-            double l = W[i * w + k];
-            if (i == k || l == 0.0) continue;
-            for (j = 0; j < w; j++) W[i * w + j] -= l * W[k * w + j];
-        }
-    }
-    for (i = 0; i < n; i++)
-        for (j = 0; j < n; j++) out[i * n + j] = W[i * w + n + j];
-    return 0;
-}
-
 /* f = C v + K q + B w */
 static void rest(PcsModel *m, const double *q, const double *v, double *f)
 {
@@ -142,39 +112,20 @@ static void rest(PcsModel *m, const double *q, const double *v, double *f)
 
 int pcs_initialize(PcsModel *m, char *err)
 {
-    int n = m->n, i, j;
-    double S[PAN_MAX_DOFS * PAN_MAX_DOFS], c1 = 1.0 + m->alpha, h = m->h;
+    size_t n = (size_t)m->n;
+    (void)err;
     m->state[0] = 0.0;
     m->state[1] = 0.0;
     m->state[2] = m->F0;
     m->state[3] = m->F0;
-    memcpy(m->q, m->q0, (size_t)n * sizeof(double));
-    memset(m->v, 0, (size_t)n * sizeof(double));
+    memcpy(m->q, m->q0, n * sizeof(double));
+    memset(m->v, 0, n * sizeof(double));
+    memcpy(m->a, m->a0, n * sizeof(double));
+    memcpy(m->f, m->f0, n * sizeof(double));
+    memcpy(m->S_inv, m->S_inv_data, n * n * sizeof(double));
     m->w[0] = m->w0[0];
     m->w[1] = m->w0[1];
     m->w[2] = m->F0;
-    rest(m, m->q, m->v, m->f);
-    for (i = 0; i < n; i++) {        /* a0 = -M^-1 f0 */
-        if (!(m->M[i * n + i] > 0.0)) {
-            snprintf(err, PCS_MSG, "mass %d is not positive", i + 1);
-            return PCS_ERROR;
-        }
-    }
-    if (invert(m->M, S, n) != 0) {
-        snprintf(err, PCS_MSG, "the mass matrix is singular");
-        return PCS_ERROR;
-    }
-    for (i = 0; i < n; i++) {
-        double r = 0.0;
-        for (j = 0; j < n; j++) r += S[i * n + j] * m->f[j];
-        m->a[i] = -r;
-    }
-    for (i = 0; i < n * n; i++)
-        S[i] = m->M[i] + c1 * (m->gamma * h * m->C[i] + m->beta * h * h * m->K[i]);
-    if (invert(S, m->S_inv, n) != 0) {
-        snprintf(err, PCS_MSG, "the step matrix of h = %g s is singular", h);
-        return PCS_ERROR;
-    }
     m->force_in = m->F0;
     m->iterations = 0.0;
     m->initialised = 1;
