@@ -516,3 +516,28 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(prepared, exporte
     forces = np.array(forces)
     assert forces[:, 0].min() == 0.0 and forces[:, 0].max() > 150.0     # loses contact
     assert np.max(np.abs(forces[:, 1] - forces[:, 0])) <= 1e-9 * forces[:, 0].max()
+
+
+def syscall_counts(strace_output: Path) -> dict:
+    """{system call: calls} of ``strace -c``'s table."""
+    out = {}
+    for line in strace_output.read_text().splitlines():
+        words = line.split()
+        if len(words) >= 5 and words[0][0].isdigit() and words[-1] != "total":
+            out[words[-1]] = int(words[3])
+    return out
+
+
+def test_do_step_makes_no_system_call(exported, host, tmp_path):
+    """The host's system calls over 30 and over 300 steps of the catenary are the same but
+    for the writes of its printed rows: a step makes none (no file, no memory from the
+    system, no clock call outside the vDSO)."""
+    strace = required("strace", "strace")
+    counts = []
+    for steps in (30, 300):
+        table = tmp_path / f"strace-{steps}.txt"
+        subprocess.run([strace, "-f", "-c", "-o", str(table), str(host), "forced",
+                        str(exported["catenary"]), str(steps), str(DT)], check=True,
+                       capture_output=True, timeout=600)
+        counts.append({k: v for k, v in syscall_counts(table).items() if k != "write"})
+    assert counts[0] and counts[0] == counts[1]
