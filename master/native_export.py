@@ -116,3 +116,38 @@ def lumped_pantograph(model, settings, h: float, height: float, force: float,
             "B": _f64(np.atleast_2d(form.B).reshape(n, 3)).ravel(), "w0": _f64(w0),
             "q0": _f64(q0), "a0": _f64(a0), "f0": _f64(f0), "S_inv": _f64(S_inv).ravel(),
             "preset": _text(name)}
+
+
+def modal_catenary(model, settings, h: float, static_forces, contact, definition: str,
+                   spans: int, rtol: float, cutoff: float) -> dict:
+    """The sections of a modal catenary (:class:`~pantocosim.catenary.modal.ModalCatenary`)
+    stepped with HHT ``settings`` at internal step ``h`` from the static start under
+    ``static_forces``: the modal and residual tables of its interfaces (modal_residual.py),
+    the droppers' rows T_K, the contact wire's geometry with the wire DOFs numbered as the
+    tables' rows, the supports' rows."""
+    lin, flex, dr = model.linear, model.flex, model.droppers
+    F0 = np.asarray(static_forces, dtype=float)
+    y0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
+    wire = wire_geometry(lin)
+    x_min, x_max = wire.pop("x_range")
+    loc = lin.locator
+    wire["wire_dof"] = _i32(flex.elem_s).ravel()                 # rows of the S tables
+    wire["wire_zfix"] = _f64(loc.x_full_ref[loc.z_full_dofs]).ravel()
+    m, nz, nx = model.m, model.nz, model.nx
+    nS = flex.S.size
+    sizes = [model.n_dofs, m, nz, nx, len(dr.ka), len(model.x0), len(loc.Le), flex.sup.size,
+             nS, flex.band if nx else 0, spans, 2]
+    scalars = [h, settings.alpha, settings.beta, settings.gamma, lin.alpha_r, lin.beta_r,
+               model.speed, model.definition.contact.wave_speed, contact.stiffness,
+               contact.damping, x_min, x_max, cutoff, rtol, 0.0, 0.0, float(model.kbar),
+               lin.beta_r]
+    C_band = flex.C_band if nx else np.zeros((nS, 1))
+    return {"sizes": _i32(sizes), "scalars": _f64(scalars),
+            "Phi_S": _f64(flex.Phi_S).ravel(), "Q_S": _f64(flex.Q_S[:, :nz]).ravel(),
+            "C_band": _f64(C_band).ravel(), "omega2": _f64(model.omega2),
+            "zeta_c": _f64(model.zeta_c), "r0": _f64(model.r0), "T_K": _f64(model.T_K).ravel(),
+            "Phi_sup": _f64(flex.Phi_sup).ravel(), "Q_sup": _f64(flex.Q_sup[:, :nz]).ravel(),
+            "C_sup": _f64(flex.C_sup if nx else np.zeros((flex.sup.size, nS))).ravel(),
+            "q0": _f64(y0), "F0": _f64(F0), "x0": _f64(model.x0), "drop_ka": _f64(dr.ka),
+            "drop_N0": _f64(dr.N0), "drop_tension": _i32(dr.tension_only), **wire,
+            "definition": _text(definition)}
