@@ -216,7 +216,8 @@ def native_loop(tmp: Path, printer=print) -> dict:
     import shutil
     import zipfile
 
-    from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR, export_scenario
+    from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
+    from pantocosim.master.native_models import export_scenario
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 

@@ -43,7 +43,7 @@ def prepared():
 @pytest.fixture(scope="module")
 def exported(prepared, tmp_path_factory):
     """The scenario's native FMUs, unpacked: {name: folder}."""
-    from pantocosim.master.native_fmu import export_scenario
+    from pantocosim.master.native_models import export_scenario
 
     required("gcc", "gcc")
     out = tmp_path_factory.mktemp("native")
@@ -98,7 +98,7 @@ def test_modal_catenary_in_a_c_host_equals_the_python_model(host, tmp_path):
     """The native modal catenary (modes below the scenario's cutoff, static corrections at the
     droppers and the moving contact points) against the Python modal model's closed-form
     steps under the host's forcing."""
-    from pantocosim.master.native_fmu import export_catenary
+    from pantocosim.master.native_models import export_catenary
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -185,7 +185,7 @@ def test_pantograph_in_a_c_host_equals_the_python_fmu_stepper(prepared, exported
 
 
 def test_three_mass_pantograph_in_a_c_host_equals_the_python_fmu_stepper(host, tmp_path):
-    from pantocosim.master.native_fmu import export_pantograph
+    from pantocosim.master.native_models import export_pantograph
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -361,7 +361,7 @@ def rewritten(folder: Path, tmp_path: Path, data: bytes) -> Path:
 
 
 def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tmp_path):
-    from pantocosim.master.native_fmu import pack_data, read_data
+    from pantocosim.master.native_data import pack_data, read_data
 
     cat = exported["catenary"]
     path = cat / "resources" / "model.pcsdata"
@@ -397,7 +397,7 @@ def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
     contact force to 1e-9."""
     from pantocosim.master.cosim import run_cosim
     from pantocosim.master.fmu_check import FmuPlan
-    from pantocosim.master.native_fmu import export_catenary
+    from pantocosim.master.native_models import export_catenary
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -424,7 +424,7 @@ def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_pa
     from fmpy.fmi3 import FMU3Slave
     from fmpy.validation import validate_fmu
 
-    from pantocosim.master.native_fmu import export_scenario
+    from pantocosim.master.native_models import export_scenario
 
     written, _ = export_scenario(prepared, tmp_path / "fmi3", fmi=3, win64=False)
     for path in written:

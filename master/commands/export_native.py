@@ -34,7 +34,7 @@ def run(args) -> int:
 
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
-    from pantocosim.master.native_fmu import export_scenario
+    from pantocosim.master.native_models import export_scenario
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
