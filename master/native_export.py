@@ -54,10 +54,20 @@ def support_rows(model) -> tuple[np.ndarray, np.ndarray]:
     return _i32(np.where(moving, free, -1)), _f64(np.where(moving, z_static, 0.0))
 
 
+def check_speed(model) -> None:
+    """The train speed below the contact wire's wave speed (the FMU refuses another)."""
+    wave = model.definition.contact.wave_speed
+    if not model.speed < wave:
+        raise ParameterError("speed_kmh", model.speed * 3.6, f"must be below the contact "
+                             f"wire's wave speed c = {wave * 3.6:.0f} km/h: at or above it the "
+                             "wire cannot carry the moving load")
+
+
 def linear_catenary(model, settings, h: float, static_forces, contact, definition: str,
                     spans: int, rtol: float, model_code: int = 1, cutoff: float = 0.0) -> dict:
     """The sections of a linear catenary stepped with HHT ``settings`` at internal step
     ``h`` from the static start under ``static_forces``."""
+    check_speed(model)
     form = model.affine_form()
     dr = form.unilateral
     F0 = np.asarray(static_forces, dtype=float)
@@ -125,6 +135,7 @@ def modal_catenary(model, settings, h: float, static_forces, contact, definition
     ``static_forces``: the modal and residual tables of its interfaces (modal_residual.py),
     the droppers' rows T_K, the contact wire's geometry with the wire DOFs numbered as the
     tables' rows, the supports' rows."""
+    check_speed(model)
     lin, flex, dr = model.linear, model.flex, model.droppers
     F0 = np.asarray(static_forces, dtype=float)
     y0 = model.static_state(F0 if np.any(F0 != 0.0) else None)

@@ -541,3 +541,18 @@ def test_do_step_makes_no_system_call(exported, host, tmp_path):
                        capture_output=True, timeout=600)
         counts.append({k: v for k, v in syscall_counts(table).items() if k != "write"})
     assert counts[0] and counts[0] == counts[1]
+
+
+def test_export_refuses_a_speed_at_or_above_the_wave_speed(tmp_path, capsys):
+    from pantocosim.master.cli import main
+
+    text = (ROOT / "master" / "scenarios" / "en50318-300.toml").read_text()
+    path = tmp_path / "fast.toml"
+    path.write_text(text.replace("speed_kmh = 300.0", "speed_kmh = 600.0"))
+    out = tmp_path / "out"
+    for extra in ([], ["--force"]):
+        assert main(["export-native", str(path), "--out", str(out), *extra]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "speed_kmh = 600.0" in err, err
+        assert "wave speed" in err
+    assert not list(out.glob("*.fmu"))

@@ -22,6 +22,8 @@ def add_parser(sub):
                    help="modal model: modes below this frequency (default: the scenario's)")
     p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.add_argument("--out", default=None, help="output folder (default dist/native/SCENARIO)")
+    p.add_argument("--force", action="store_true", help="export a speed above the EN 50119 "
+                   "limit (0.7 of the contact wire's wave speed; never at or above it)")
     p.add_argument("--win64", choices=("auto", "yes", "no"), default="auto",
                    help="also build the win64 DLLs with x86_64-w64-mingw32-gcc (auto: when "
                    "installed)")
@@ -48,7 +50,7 @@ def run(args) -> int:
     if out.exists() and not out.is_dir():
         raise ParameterError("--out", str(out), "is a file, not a folder")
     win64 = {"auto": None, "yes": True, "no": False}[args.win64]
-    prep = prepare(sc)
+    prep = prepare(sc, force=args.force)
     written, kept = export_scenario(prep, out, fmi=args.fmi, win64=win64)
     for path in written:
         print(f"wrote {path}")
