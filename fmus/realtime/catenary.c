@@ -100,28 +100,72 @@ static void factor_rows(PcsModel *m)
     for (i = 0; i < n; i++) m->inv_diag[i] = 1.0 / m->L[(size_t)i * (bw + 1)];
 }
 
-/* x <- A^-1 x with the kept factor: forward by columns, backward by rows (both axpy, which
-   vectorize; the diagonal kept inverted) */
+/* x <- A^-1 x with the kept factor, forward by the columns of L and backward by its rows,
+   four at a time: a block's own triangle first, then one pass over the rows the block
+   touches (each entry of x read and written once per block, not once per column) */
 static void solve(const PcsModel *m, double *x)
 {
-    int n = m->n, bw = m->bw, i, j;
+    int n = m->n, bw = m->bw, w = bw + 1, i, j, j0;
     const double *L = m->L, *LR = m->LR, *inv = m->inv_diag;
-    for (j = 0; j < n; j++) {
-        const double *ls = L + (size_t)j * (bw + 1) + 1;
-        int len = j + bw < n - 1 ? bw : n - 1 - j;
-        double xj = x[j] * inv[j], *xs = x + j + 1;
-        x[j] = xj;
-        for (i = 0; i < len; i++) xs[i] -= ls[i] * xj;
+    for (j0 = 0; j0 < n; j0 += 4) {
+        int jb = n - j0 < 4 ? n - j0 : 4, end = j0 + jb - 1 + bw < n - 1 ? j0 + jb - 1 + bw : n - 1;
+        for (j = j0; j < j0 + jb; j++) {           /* the block's triangle */
+            const double *cj = L + (size_t)j * w;
+            double xj = x[j] * inv[j];
+            x[j] = xj;
+            for (i = j + 1; i < j0 + jb && i - j <= bw; i++) x[i] -= cj[i - j] * xj;
+        }
+        if (jb == 4 && bw >= 4) {
+            const double *c0 = L + (size_t)j0 * w - j0, *c1 = c0 + w - 1, *c2 = c1 + w - 1,
+                         *c3 = c2 + w - 1;         /* c_k[i] = L[i, j0 + k] */
+            double x0 = x[j0], x1 = x[j0 + 1], x2 = x[j0 + 2], x3 = x[j0 + 3];
+            int full = j0 + bw < end ? j0 + bw : end;
+            for (i = j0 + 4; i <= full; i++)
+                x[i] -= c0[i] * x0 + c1[i] * x1 + c2[i] * x2 + c3[i] * x3;
+            for (i = full + 1; i <= end; i++) {    /* rows some columns do not reach */
+                double s = 0.0;
+                if (i - (j0 + 1) <= bw) s += c1[i] * x1;
+                if (i - (j0 + 2) <= bw) s += c2[i] * x2;
+                if (i - (j0 + 3) <= bw) s += c3[i] * x3;
+                x[i] -= s;
+            }
+        } else {
+            for (j = j0; j < j0 + jb; j++) {
+                const double *cj = L + (size_t)j * w - j;
+                double xj = x[j];
+                for (i = j0 + jb; i <= end && i - j <= bw; i++) x[i] -= cj[i] * xj;
+            }
+        }
     }
-    for (j = n - 1; j >= 0; j--) {
-        const double *rj = LR + (size_t)j * (bw + 1);
-        int first = j - bw > 0 ? j - bw : 0;
-        double xj = x[j] * inv[j];
-        const double *ls = rj + (first - (j - bw));
-        double *xs = x + first;
-        int len = j - first;
-        x[j] = xj;
-        for (i = 0; i < len; i++) xs[i] -= ls[i] * xj;
+    for (j0 = n - 1; j0 >= 0; j0 -= 4) {           /* rows j0, j0 - 1, .., j0 - jb + 1 */
+        int jb = j0 + 1 < 4 ? j0 + 1 : 4, lo = j0 - jb + 1, first = lo - bw > 0 ? lo - bw : 0;
+        for (j = j0; j >= lo; j--) {               /* the block's triangle */
+            const double *rj = LR + (size_t)j * w + bw - j;    /* rj[k] = L[j, k] */
+            double xj = x[j] * inv[j];
+            x[j] = xj;
+            for (i = j - 1; i >= lo && j - i <= bw; i--) x[i] -= rj[i] * xj;
+        }
+        if (jb == 4 && bw >= 4) {
+            const double *r0 = LR + (size_t)j0 * w + bw - j0, *r1 = r0 - w + 1, *r2 = r1 - w + 1,
+                         *r3 = r2 - w + 1;         /* r_k[i] = L[j0 - k, i] */
+            double x0 = x[j0], x1 = x[j0 - 1], x2 = x[j0 - 2], x3 = x[j0 - 3];
+            int full = j0 - bw > first ? j0 - bw : first;
+            for (i = full; i < lo; i++)
+                x[i] -= r0[i] * x0 + r1[i] * x1 + r2[i] * x2 + r3[i] * x3;
+            for (i = first; i < full; i++) {       /* columns some rows do not reach */
+                double s = 0.0;
+                if (j0 - 1 - i <= bw) s += r1[i] * x1;
+                if (j0 - 2 - i <= bw) s += r2[i] * x2;
+                if (j0 - 3 - i <= bw) s += r3[i] * x3;
+                x[i] -= s;
+            }
+        } else {
+            for (j = j0; j >= lo; j--) {
+                const double *rj = LR + (size_t)j * w + bw - j;
+                double xj = x[j];
+                for (i = lo - 1; i >= first && j - i <= bw; i--) x[i] -= rj[i] * xj;
+            }
+        }
     }
 }
 
