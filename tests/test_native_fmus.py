@@ -461,16 +461,32 @@ def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_pa
 
 
 @pytest.mark.slow
-def test_penalty_contact_inside_equals_the_python_catenary_fmu(prepared, exported, fmus):
+@pytest.mark.parametrize("model", ["linear", "modal"])
+def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, exported, fmus,
+                                                               tmp_path):
     """contact_mode 1 (pantograph heights in, the penalty law inside, solved implicitly with
-    the wire): the native catenary gives the Python linear catenary FMU's contact force,
-    through a loss of contact."""
+    the wire): the native catenary gives the Python catenary FMU's contact force (the same
+    model), through a loss of contact."""
+    from pantocosim.catenary.models import MODEL_NAMES
+
+    if model == "linear":
+        cat = exported["catenary"]
+    else:
+        from pantocosim.master.native_models import export_catenary
+        from pantocosim.master.run import prepare
+
+        prepared = prepare(dataclasses.replace(prepared.scenario, catenary_model=model))
+        fmu = export_catenary(prepared, tmp_path / "modal.fmu", model, win64=False)
+        cat = tmp_path / "modal"
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(cat)
     sc = prepared.scenario
     F0 = float(prepared.static_forces[0])
     params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh,
               "n_pantographs": 1, "position_1": sc.pantographs[0].position_m,
               "static_force_1": F0, "hht_alpha": sc.alpha, "contact_mode": 1,
-              "catenary_model": 1, "newton_rtol": sc.newton_rtol}
+              "catenary_model": MODEL_NAMES.index(model),
+              "modal_cutoff_hz": sc.modal_cutoff_hz, "newton_rtol": sc.newton_rtol}
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -491,7 +507,6 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(prepared, exporte
     py.exitInitializationMode()
     from fmpy.fmi2 import FMU2Slave as Slave
 
-    cat = exported["catenary"]
     md2 = read_model_description(str(cat / "modelDescription.xml"))
     nvr = {v.name: v.valueReference for v in md2.modelVariables}
     na = Slave(guid=md2.guid, unzipDirectory=str(cat),

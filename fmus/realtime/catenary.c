@@ -645,8 +645,8 @@ static int slack_terms(PcsModel *m)
 
 /* the penalty forces F of the prescribed pantographs (z_p, v_p) with the wire affine in F:
    z_w = z0 + G F, v_w = v0 + H F (condensed_forces of penalty_contact.py with P = 0) */
-static void penalty_forces(const PcsModel *m, const double *dz, const double *dv,
-                           const double *G, const double *H, double *F)
+void pcs_penalty_forces(const PcsModel *m, const double *dz, const double *dv,
+                        const double *G, const double *H, double *F)
 {
     int np = m->np, it, i, j, active[CAT_MAX_PANTOGRAPHS], trial[CAT_MAX_PANTOGRAPHS];
     double A[CAT_MAX_PANTOGRAPHS * CAT_MAX_PANTOGRAPHS], y[CAT_MAX_PANTOGRAPHS];
@@ -753,7 +753,7 @@ static int step(PcsModel *m, double *F, const double *zp, const double *vpan, ch
                 dz[k] = zp[k] - z0[k];
                 dv[k] = vpan[k] - v0[k];
             }
-            penalty_forces(m, dz, dv, G, H, F);
+            pcs_penalty_forces(m, dz, dv, G, H, F);
             for (k = 0; k < np; k++)
                 if (!isfinite(F[k])) {
                     snprintf(err, PCS_MSG, "the penalty contact is singular at t = %.6g s",
@@ -890,7 +890,7 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
                                    : m->prev[2 * k + 1] + (nw[2 * k + 1] - m->prev[2 * k + 1]) * s;
             }
         }
-        status = m->modal ? modal_step(m, u, err) : step(m, u, zp, vp, err);
+        status = m->modal ? modal_step(m, u, zp, vp, err) : step(m, u, zp, vp, err);
         if (status != PCS_OK) {
             if (i > 1) *m->failed = 1.0;    /* part of the step was taken */
             return status;

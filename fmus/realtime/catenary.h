@@ -59,12 +59,16 @@ struct PcsModel {
 /* shared by both models (catenary.c) */
 int pcs_locate(const PcsModel *m, double x, Point *p, char *err);
 int pcs_dense_solve(double *A, double *y, int n);
+/* the penalty forces F with the wire affine in them: z_w = z0 + G F, v_w = v0 + H F (the
+   pantographs at z0 + dz, v0 + dv; penalty_contact.condensed_forces) */
+void pcs_penalty_forces(const PcsModel *m, const double *dz, const double *dv,
+                        const double *G, const double *H, double *F);
 
 /* the modal model (catenary_modal.c) */
 PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err);
 void modal_free(PcsModel *m, const PcsMemory *mem);
 int modal_initialize(PcsModel *m, char *err);
-int modal_step(PcsModel *m, const double *F, char *err);
+int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char *err);
 void modal_outputs(PcsModel *m);
 
 #endif

@@ -491,11 +491,12 @@ int modal_initialize(PcsModel *m, char *err)
 {
     struct Modal *md = m->modal;
     int N = md->N, k, d, i;
-    if (m->mode != 0) {
-        snprintf(err, PCS_MSG, "contact_mode = %d: the native modal catenary takes the contact "
-                 "forces as inputs (contact_mode 0)", m->mode);
-        return PCS_ERROR;
-    }
+    for (k = 0; k < m->np; k++)
+        if (m->mode == 1 && !(m->F0[k] > 0.0)) {
+            snprintf(err, PCS_MSG, "contact_mode = 1 needs the static start of an exported "
+                     "static_force_%d > 0 (exported: %g N)", k + 1, m->F0[k]);
+            return PCS_ERROR;
+        }
     *m->t = 0.0; *m->n_steps = 0.0; *m->failed = 0.0; *m->synced = 0.0;
     memcpy(m->q, m->q0, (size_t)N * sizeof(double));
     memset(m->v, 0, (size_t)N * sizeof(double));
@@ -511,8 +512,16 @@ int modal_initialize(PcsModel *m, char *err)
     modal_outputs(m);
     for (k = 0; k < m->np; k++) {
         m->out_F[k] = m->F0[k];
-        m->prev[2 * k] = m->F0[k];
-        m->u_force[k] = m->F0[k];
+        m->z_start[k] = m->out_z[k] + m->F0[k] / m->k_h;
+        if (m->mode == 0) {
+            m->prev[2 * k] = m->F0[k];
+            m->u_force[k] = m->F0[k];
+        } else {
+            m->prev[2 * k] = m->z_start[k];
+            m->prev[2 * k + 1] = 0.0;
+            m->u_z[k] = m->z_start[k];
+            m->u_v[k] = 0.0;
+        }
     }
     m->iterations = 0.0;
     m->initialised = 1;
@@ -595,7 +604,37 @@ static void screen_slack(PcsModel *m)
         for (j = 0; j < K; j++) md->y_ref[j] = md->q_p[j] + md->delta[j];
 }
 
-int modal_step(PcsModel *m, const double *F, char *err)
+/* contact_mode 1: the penalty forces F of the pantographs at zp, vp with the wire at t + h
+   affine in F, z_w = z_free + G F, v_w = v_free + H F (core/condensed.py) */
+static int contact_forces(PcsModel *m, const double *zp, const double *vp, double *F)
+{
+    struct Modal *md = m->modal;
+    int N = md->N, np = m->np, k, j, i;
+    double G[NP * NP] = {0.0}, H[NP * NP] = {0.0}, dz[NP] = {0.0}, dv[NP] = {0.0};
+    for (k = 0; k < np; k++) {
+        const double *w = md->Wc + (size_t)k * N, *dw = md->Wcx + (size_t)k * N;
+        double z = 0.0, v = 0.0, slope = 0.0;
+        for (i = 0; i < N; i++) {
+            double q = md->q_p[i] + md->delta_free[i];
+            z += w[i] * q;
+            v += w[i] * (md->v_p[i] + m->c_v * md->delta_free[i]);
+            slope += dw[i] * q;
+        }
+        dz[k] = zp[k] - (z + md->offset[k]);
+        dv[k] = vp[k] - (v + m->speed * (slope + md->doffset[k]));
+        for (j = 0; j < np; j++) {
+            const double *wl = md->Wl + (size_t)j * N;
+            G[k * np + j] = row_dot(w, wl, N);
+            H[k * np + j] = m->c_v * G[k * np + j] + m->speed * row_dot(dw, wl, N);
+        }
+    }
+    pcs_penalty_forces(m, dz, dv, G, H, F);
+    for (k = 0; k < np; k++)
+        if (!isfinite(F[k])) return -1;
+    return 0;
+}
+
+int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char *err)
 {
     struct Modal *md = m->modal;
     int N = md->N, mm = md->m, K = md->K, np = m->np, i, j, k, d, passes = 0;
@@ -634,6 +673,11 @@ int modal_step(PcsModel *m, const double *F, char *err)
         if (solve_step(m) != 0) {
             snprintf(err, PCS_MSG, "modal catenary: singular slack-set correction at t = %.6g s",
                      *m->t + h);
+            return PCS_DISCARD;
+        }
+        if (m->mode == 1 && contact_forces(m, zp, vp, F) != 0) {
+            snprintf(err, PCS_MSG, "modal catenary: the penalty contact is singular at t = "
+                     "%.6g s", *m->t + h);
             return PCS_DISCARD;
         }
         for (i = 0; i < N; i++) {       /* add_loads */
