@@ -15,89 +15,60 @@ CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "
 MAX_SUPPORTS = 64
 
 
+FIXED = "fixed at export (pantocosim export-native)"
+
+
+def declared(table, name: str, vr: int, start=None, fixed: bool = False,
+             note: str = "") -> Variable:
+    """The native FMU's variable ``name`` as the Python FMU declares it (type, causality,
+    unit, meaning: ``table``, fmus/fmi/*_ports.py), at value reference ``vr``; a parameter
+    is fixed (the export's value ``start``), an input starts at ``start``."""
+    row = table[name]
+    variability = ("fixed" if row.causality == "parameter" else
+                   "continuous" if row.type == "Real" else "discrete")
+    meaning = row.meaning + (f"; {FIXED}" if fixed else "") + (f"; {note}" if note else "")
+    return Variable(name, row.type, vr, row.causality, variability,
+                    start if row.causality in ("parameter", "input") else None, row.unit,
+                    meaning)
+
+
 def catenary_variables(sections: dict) -> list[Variable]:
-    """The native catenary's variables: the Python catenary FMU's names
-    (fmus/fmi/catenary_slave.py), the export's values as fixed parameters."""
+    """The native catenary's variables: the Python catenary FMU's (fmus/fmi/catenary_ports.py),
+    the export's values as fixed parameters."""
+    from pantocosim.fmi.catenary_ports import VARIABLES as table
+
     vr = value_references(CATENARY.headers[0])
     sizes, sc = sections["sizes"], sections["scalars"]
     n_p = int(sizes[5])
-    spans = int(sizes[-2])
     name = bytes(sections["definition"].tobytes()).split(b"\0")[0].decode()
-    fixed = "fixed at export (pantocosim export-native)"
-    out = [
-        Variable("catenary_definition", "String", vr["CATENARY_DEFINITION"], "parameter",
-                 "fixed", name, description=f"catenary definition; {fixed}"),
-        Variable("n_pantographs", "Integer", vr["N_PANTOGRAPHS"], "parameter", "fixed", n_p,
-                 description=f"number of pantographs; {fixed}"),
-        Variable("spans", "Integer", vr["SPANS"], "parameter", "fixed", spans,
-                 description=f"number of spans (0 = as defined); {fixed}"),
-        Variable("catenary_model", "Integer", vr["CATENARY_MODEL"], "parameter", "fixed",
-                 int(sizes[-1]), description=f"1 = linear, 2 = modal; {fixed}"),
-        Variable("contact_mode", "Integer", vr["CONTACT_MODE"], "parameter", "fixed", 0,
-                 description="0 = contact forces are inputs (contact_force_k); 1 = built-in "
-                 "penalty contact from pantograph_height_k and pantograph_velocity_k"),
-        Variable("extrapolate_heights", "Boolean", vr["EXTRAPOLATE_HEIGHTS"], "parameter",
-                 "fixed", True, description="contact_mode 1: pantograph_height_k is the height "
-                 "at the start of the communication step, extrapolated with "
-                 "pantograph_velocity_k; false: the height at t + h"),
-        Variable("speed_kmh", "Real", vr["SPEED_KMH"], "parameter", "fixed", sc[6] * 3.6,
-                 "km/h", f"train speed; {fixed}"),
-        Variable("hht_alpha", "Real", vr["HHT_ALPHA"], "parameter", "fixed", sc[1], "1",
-                 f"HHT-alpha parameter; {fixed}"),
-        Variable("contact_stiffness", "Real", vr["CONTACT_STIFFNESS"], "parameter", "fixed",
-                 sc[8], "N/m", f"penalty stiffness k_H (contact_mode 1); {fixed}"),
-        Variable("contact_damping", "Real", vr["CONTACT_DAMPING"], "parameter", "fixed",
-                 sc[9], "N.s/m", f"penalty damping c_H (contact_mode 1); {fixed}"),
-        Variable("newton_rtol", "Real", vr["NEWTON_RTOL"], "parameter", "fixed", sc[13], "1",
-                 "accepted for the Python FMU's parameter set; the closed-form step has no "
-                 "Newton iteration"),
-        Variable("modal_cutoff_hz", "Real", vr["MODAL_CUTOFF_HZ"], "parameter", "fixed",
-                 sc[12], "Hz", f"modal model: modes below it; {fixed}"),
-    ]
-    for base, unit, text in (("position", "m", "track position x of pantograph {k} at t0"),
-                             ("static_force", "N", "static contact force of pantograph {k} "
-                              "at t0 (static start)")):
-        key = "x0" if base == "position" else "F0"
-        for k in range(1, n_p + 1):
-            out.append(Variable(f"{base}_{k}", "Real", vr[base.upper()] + k - 1, "parameter",
-                                "fixed", sections[key][k - 1], unit,
-                                text.format(k=k) + f"; {fixed}"))
-    timing = ("the value set before doStep(t, h) is the value at t + h; the value at t is the "
-              "previous accepted step's (kept in the FMU state)")
+    out = [declared(table, key, vr[key.upper()], value, fixed=True) for key, value in (
+        ("catenary_definition", name), ("n_pantographs", n_p), ("spans", int(sizes[-2])),
+        ("catenary_model", int(sizes[-1])), ("speed_kmh", sc[6] * 3.6), ("hht_alpha", sc[1]),
+        ("contact_stiffness", sc[8]), ("contact_damping", sc[9]),
+        ("modal_cutoff_hz", sc[12]))]
+    out += [declared(table, "contact_mode", vr["CONTACT_MODE"], 0),
+            declared(table, "extrapolate_heights", vr["EXTRAPOLATE_HEIGHTS"], True),
+            declared(table, "newton_rtol", vr["NEWTON_RTOL"], sc[13],
+                     note="accepted; the closed-form step has no Newton iteration")]
     for k in range(1, n_p + 1):
-        out += [
-            Variable(f"contact_force_{k}", "Real", vr["CONTACT_FORCE"] + k - 1, "input",
-                     "continuous", sections["F0"][k - 1], "N", f"contact_mode 0: upward contact "
-                     f"force of pantograph {k} on the wire, >= 0; {timing}"),
-            Variable(f"pantograph_height_{k}", "Real", vr["PANTOGRAPH_HEIGHT"] + k - 1, "input",
-                     "continuous", 0.0, "m", f"contact_mode 1: contact height of pantograph {k}"),
-            Variable(f"pantograph_velocity_{k}", "Real", vr["PANTOGRAPH_VELOCITY"] + k - 1,
-                     "input", "continuous", 0.0, "m/s",
-                     f"contact_mode 1: vertical velocity of pantograph {k}'s contact point"),
-            Variable(f"wire_height_{k}", "Real", vr["WIRE_HEIGHT"] + k - 1, "output",
-                     "continuous", None, "m", f"contact-wire height under pantograph {k}"),
-            Variable(f"wire_velocity_{k}", "Real", vr["WIRE_VELOCITY"] + k - 1, "output",
-                     "continuous", None, "m/s", f"vertical velocity of the contact wire seen by "
-                     f"pantograph {k} (including the convective term V dz/dx)"),
-            Variable(f"contact_force_out_{k}", "Real", vr["CONTACT_FORCE_OUT"] + k - 1,
-                     "output", "continuous", None, "N", f"contact force of pantograph {k}"),
-        ]
-    for j in range(MAX_SUPPORTS):
-        out.append(Variable(f"support_uplift_{j}", "Real", vr["SUPPORT_UPLIFT"] + j, "output",
-                            "continuous", None, "m", f"uplift of the contact wire at support "
-                            f"{j} relative to the unloaded static configuration (0 beyond the "
-                            "last support)"))
-    out += [
-        Variable("n_supports", "Real", vr["N_SUPPORTS"], "output", "continuous", None, "1",
-                 "number of supports of the line"),
-        Variable("train_speed_kmh", "Real", vr["TRAIN_SPEED_KMH"], "output", "continuous",
-                 None, "km/h", "the train speed"),
-        Variable("newton_iterations", "Real", vr["NEWTON_ITERATIONS"], "local", "continuous",
-                 None, None, "solves of the last communication step (slack-set passes)"),
-        Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
-                 float(sc[0]), "s", "the fixed internal step: a communication step is a whole "
-                 "number of it"),
-    ]
+        out += [declared(table, f"position_{k}", vr["POSITION"] + k - 1, sections["x0"][k - 1],
+                         fixed=True),
+                declared(table, f"static_force_{k}", vr["STATIC_FORCE"] + k - 1,
+                         sections["F0"][k - 1], fixed=True),
+                declared(table, f"contact_force_{k}", vr["CONTACT_FORCE"] + k - 1,
+                         sections["F0"][k - 1]),
+                declared(table, f"pantograph_height_{k}", vr["PANTOGRAPH_HEIGHT"] + k - 1, 0.0),
+                declared(table, f"pantograph_velocity_{k}", vr["PANTOGRAPH_VELOCITY"] + k - 1,
+                         0.0)]
+        out += [declared(table, f"{base}_{k}", vr[base.upper()] + k - 1)
+                for base in ("wire_height", "wire_velocity", "contact_force_out")]
+    out += [declared(table, f"support_uplift_{j}", vr["SUPPORT_UPLIFT"] + j)
+            for j in range(MAX_SUPPORTS)]
+    out += [declared(table, key, vr[key.upper()])
+            for key in ("n_supports", "train_speed_kmh", "newton_iterations")]
+    out.append(Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
+                        float(sc[0]), "s", "the fixed internal step: a communication step is "
+                        "a whole number of it"))
     return out
 
 
@@ -131,44 +102,23 @@ LUMPED = NativeModel(("lumped.c",), ("lumped_vars.h",))
 
 
 def pantograph_variables(sections: dict) -> list[Variable]:
-    """The native pantograph's variables: the Python pantograph FMU's names
-    (fmus/fmi/pantograph_slave.py), the export's values as fixed parameters."""
+    """The native pantograph's variables: the Python pantograph FMU's
+    (fmus/fmi/pantograph_ports.py), the export's values as fixed parameters."""
+    from pantocosim.fmi.pantograph_ports import VARIABLES as table
+
     vr = value_references(LUMPED.headers[0])
     sc = sections["scalars"]
-    fixed = "fixed at export (pantocosim export-native)"
-    timing = ("the value set before doStep(t, h) is the force at t + h; the force at t is the "
-              "previous accepted step's (kept in the FMU state)")
-    out = [Variable("contact_force", "Real", vr["CONTACT_FORCE"], "input", "continuous",
-                    sc[11], "N", f"contact force [N] >= 0 pushing the collector down; {timing}"),
-           Variable("contact_height", "Real", vr["CONTACT_HEIGHT"], "output", "continuous",
-                    None, "m", "height of the contact point above the rail"),
-           Variable("contact_velocity", "Real", vr["CONTACT_VELOCITY"], "output",
-                    "continuous", None, "m/s", "vertical velocity of the contact point")]
-    for key, i, unit, text in (
-            ("static_force", 6, "N", "static uplift force"),
-            ("aero_c1", 7, "N.h/km", "aerodynamic uplift, linear coefficient"),
-            ("aero_c2", 8, "N.h2/km2", "aerodynamic uplift, quadratic coefficient"),
-            ("speed_kmh", 9, "km/h", "train speed (aerodynamic law)"),
-            ("friction_force", 12, "N", "collector friction amplitude (0: constant matrices)"),
-            ("friction_smoothing", 13, "m/s", "friction smoothing"),
-            ("hht_alpha", 1, "1", "HHT-alpha parameter"),
-            ("initial_height", 10, "m", "contact height at t0 (static start)"),
-            ("initial_contact_force", 11, "N", "contact force at t0 (static start); < 0 means "
-             "the mean uplift")):
-        out.append(Variable(key, "Real", vr[key.upper()], "parameter", "fixed", sc[i], unit,
-                            f"{text}; {fixed}"))
-    out += [Variable("start_mode", "Integer", vr["START_MODE"], "parameter", "fixed", 0,
-                     description="0 = static start in contact (the only start of the native "
-                     "FMU)"),
-            Variable("one_way_damper", "Boolean", vr["ONE_WAY_DAMPER"], "parameter", "fixed",
-                     False, description="false: the native FMU has constant matrices"),
-            Variable("force_extrapolation", "Boolean", vr["FORCE_EXTRAPOLATION"], "parameter",
-                     "fixed", False, description="take contact_force as the force at the start "
-                     "of the communication step and extrapolate it: F(t+h) = max(0, 2 F(t) - "
-                     "F(t-h))"),
-            Variable("newton_iterations", "Real", vr["NEWTON_ITERATIONS"], "local",
-                     "continuous", None, None, "closed-form steps of the last communication "
-                     "step"),
+    out = [declared(table, "contact_force", vr["CONTACT_FORCE"], sc[11])]
+    out += [declared(table, key, vr[key.upper()]) for key in ("contact_height",
+                                                              "contact_velocity")]
+    out += [declared(table, key, vr[key.upper()], sc[i], fixed=True) for key, i in (
+        ("static_force", 6), ("aero_c1", 7), ("aero_c2", 8), ("speed_kmh", 9),
+        ("friction_force", 12), ("friction_smoothing", 13), ("hht_alpha", 1),
+        ("initial_height", 10), ("initial_contact_force", 11))]
+    out += [declared(table, "start_mode", vr["START_MODE"], 0, fixed=True),
+            declared(table, "one_way_damper", vr["ONE_WAY_DAMPER"], False, fixed=True),
+            declared(table, "force_extrapolation", vr["FORCE_EXTRAPOLATION"], False),
+            declared(table, "newton_iterations", vr["NEWTON_ITERATIONS"]),
             Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
                      float(sc[0]), "s", "the fixed internal step: a communication step is a "
                      "whole number of it")]
