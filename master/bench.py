@@ -159,8 +159,108 @@ def fmu_start(tmp: Path, printer=print) -> dict:
     return out
 
 
+#: the native-loop figure: scenario, simulated seconds, catenary models
+NATIVE_LOOP = ("en50318-300", 2.0, ("linear", "modal"))
+
+
+def _percentiles(times_s) -> dict:
+    t = np.sort(np.asarray(times_s)) * 1e3
+    return {"p50_ms": float(t[len(t) // 2]), "p99_ms": float(t[int(0.99 * (len(t) - 1))]),
+            "max_ms": float(t[-1])}
+
+
+def _host_percentiles(text: str, what: str) -> dict:
+    """The host's line "<what> doStep us: p50 A p99 B max C" in ms."""
+    for line in text.splitlines():
+        if line.startswith(f"{what} doStep us:"):
+            w = line.split()
+            return {"p50_ms": float(w[4]) / 1e3, "p99_ms": float(w[6]) / 1e3,
+                    "max_ms": float(w[8]) / 1e3}
+    raise ValueError(f"no {what} timing in the host's output")
+
+
+def python_fmu_loop(prep, steps: int, h: float) -> dict:
+    """The doStep times of the Python catenary FMU (catenary_model of the scenario) with the
+    Python pantograph FMU in fmpy, in the native loop's scheme: the master applies the
+    penalty law to the heights and gives the force to both (explicit, zero-order hold)."""
+    from pantocosim.master.cosim import fmu_paths, fmu_subsystems
+
+    instances: list = []
+    csub, psubs = fmu_subsystems(prep, instances, fmu_paths(prep))
+    k_h = prep.contact.stiffness
+    times = []
+    try:
+        for i in range(steps):
+            t = i * h
+            zp = psubs[0].outputs()[0][0]
+            zw = csub.outputs()[0][0]
+            F = np.array([max(0.0, k_h * (zp - zw))])
+            csub.set_forces(F)
+            t0 = time.perf_counter()
+            csub.step(t, h)
+            times.append(time.perf_counter() - t0)
+            psubs[0].set_forces(F)
+            psubs[0].step(t, h)
+    finally:
+        for fmu in instances:
+            fmu.terminate()
+    return _percentiles(times)
+
+
+def native_loop(tmp: Path, printer=print) -> dict:
+    """The native FMUs (``pantocosim export-native``) of en50318-300 stepped 2 s at 1 ms from
+    a C loop (fmus/realtime/realtime_host.c, the master applies the penalty law): p50 / p99 /
+    max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
+    beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
+    import dataclasses
+    import shutil
+    import zipfile
+
+    from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
+    from pantocosim.master.native_models import export_scenario
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    scenario, seconds, models = NATIVE_LOOP
+    cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        from pantocosim.core.errors import PantocosimError
+
+        raise PantocosimError("native-loop: no C compiler on PATH (set CC)")
+    host = tmp / "realtime_host"
+    subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
+                    str(SOURCE_DIR / "realtime_host.c"), "-ldl", "-lm"], check=True)
+    out = {"floor_solve_ms": 1e3 * floor_per_step("en50318", 10)}
+    for model in models:
+        sc = dataclasses.replace(load_scenario(scenario), catenary_model=model)
+        prep = prepare(sc)
+        steps = int(round(seconds / sc.dt))
+        written, _ = export_scenario(prep, tmp / f"native-{model}", win64=False)
+        folders = []
+        for fmu in written:
+            folders.append(tmp / f"native-{model}" / fmu.stem)
+            with zipfile.ZipFile(fmu) as z:
+                z.extractall(folders[-1])
+        run = subprocess.run([str(host), "coupled-forces", str(folders[0]), str(folders[1]),
+                              str(steps), repr(sc.dt)], capture_output=True, text=True,
+                             check=True)
+        entry = {"native_catenary": _host_percentiles(run.stdout, "catenary"),
+                 "native_pantograph": _host_percentiles(run.stdout, "pantograph"),
+                 "python_catenary_fmu": python_fmu_loop(prep, steps, sc.dt)}
+        entry["native_p99_over_floor"] = entry["native_catenary"]["p99_ms"] / out["floor_solve_ms"]
+        entry["python_p99_over_native_p99"] = (entry["python_catenary_fmu"]["p99_ms"]
+                                              / entry["native_catenary"]["p99_ms"])
+        out[model] = entry
+        for label in ("native_catenary", "python_catenary_fmu", "native_pantograph"):
+            e = entry[label]
+            printer(f"native loop {scenario} {model}: {label} doStep p50 {e['p50_ms']:.3f} ms, "
+                    f"p99 {e['p99_ms']:.3f} ms, max {e['max_ms']:.3f} ms")
+    printer(f"native loop: floor solve {out['floor_solve_ms']:.3f} ms")
+    return out
+
+
 #: figures other than the step-time cases, by name (``--case NAME``)
-FIGURES = {"time-to-result": time_to_result, "fmu-start": fmu_start}
+FIGURES = {"time-to-result": time_to_result, "fmu-start": fmu_start, "native-loop": native_loop}
 
 
 def step_time_entry(summary: dict) -> dict:

@@ -31,7 +31,7 @@ class Parser(argparse.ArgumentParser):
 
 #: subcommand modules, in the order ``pantocosim --help`` lists them
 COMMANDS = ["run", "sweep", "report", "modal", "pantograph", "static", "modes", "pendulum",
-            "build-fmus", "ssp", "regress", "bench", "validate"]
+            "build-fmus", "ssp", "regress", "bench", "validate", "export-native"]
 
 
 def build_parser() -> argparse.ArgumentParser:

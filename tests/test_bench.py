@@ -29,7 +29,8 @@ def test_case_filter_and_scenario_options(tmp_path):
 
     from pantocosim.core.errors import ParameterError
 
-    assert bench.select_cases(None) == list(bench.CASES) + ["time-to-result", "fmu-start"]
+    assert bench.select_cases(None) == list(bench.CASES) + ["time-to-result", "fmu-start",
+                                                            "native-loop"]
     assert bench.select_cases(["en50318-300", "en50318-300"]) == ["en50318-300"]
     assert bench.select_cases(["time-to-result"]) == ["time-to-result"]
     with pytest.raises(ParameterError, match="--case"):
@@ -39,6 +40,16 @@ def test_case_filter_and_scenario_options(tmp_path):
                                simulation={"newton_rtol": 1e-6, "label": "a"})
     sim = tomllib.loads(text)["simulation"]
     assert sim["newton_rtol"] == 1e-6 and sim["label"] == "a" and sim["duration_s"] == 0.5
+
+
+def test_native_loop_reads_the_c_hosts_percentiles():
+    text = ("2 177.5 5.34 5.34\ncatenary doStep us: p50 212.00 p99 283.00 max 1658.00\n"
+            "pantograph doStep us: p50 0.20 p99 0.86 max 19.00\n")
+    assert bench._host_percentiles(text, "catenary") == {"p50_ms": 0.212, "p99_ms": 0.283,
+                                                         "max_ms": 1.658}
+    assert bench._host_percentiles(text, "pantograph")["max_ms"] == 0.019
+    p = bench._percentiles([3e-3, 1e-3, 2e-3])
+    assert p["p50_ms"] == 2.0 and p["max_ms"] == 3.0
 
 
 def test_step_time_percentiles_reach_the_table():

@@ -144,6 +144,20 @@ def test_realtime(tmp_path):
     assert loop["timing"]["steps"] == 1000
 
 
+@pytest.mark.slow
+def test_hil(tmp_path):
+    s = tutorial("hil", tmp_path, "--steps", 500)
+    for label in ("unpaced", "paced"):
+        r = s[label]
+        assert r["allocations_in_do_step"] == 0            # doStep allocates nothing
+        assert r["catenary"]["p50_ms"] < 1.0               # the step fits the 1 ms period
+        assert r["steps"] == 500
+    u = s["unpaced"]
+    assert 80.0 < u["mean_force_n"] < 200.0 and u["min_force_n"] >= 0.0
+    assert u["max_gap_m"] < 0.05                           # the pantograph follows the wire
+    assert 0 <= s["paced"]["deadline_misses"] <= 500
+
+
 # ------------------------------------------------------------------------- reference pages
 @pytest.fixture(scope="module")
 def reference():

@@ -9,10 +9,11 @@ from pathlib import Path
 
 #: files that make up the model (a change of any of them changes the stamp)
 STAMPED_SUFFIXES = (".py", ".toml", ".c", ".h")
-#: subpackages that are not part of the FMUs' model: the master (the FMUs are driven by one)
-#: and the multibody core (the double pendulum, which no FMU runs). FMUs do not bundle them
+#: subpackages that are not part of the FMUs' model: the master (the FMUs are driven by one),
+#: the multibody core (the double pendulum, which no FMU runs) and the native FMUs' C sources
+#: (``realtime``, compiled into the native FMUs by ``export-native``). FMUs do not bundle them
 #: and the stamp does not cover them.
-UNBUNDLED = ("master", "multibody")
+UNBUNDLED = ("master", "multibody", "realtime")
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:

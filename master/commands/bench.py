@@ -18,8 +18,10 @@ def add_parser(sub):
                    help="run only this case (repeatable; en50318-300, dsa380-ave-300-40span, "
                    "the fast-model cases, time-to-result: end to end against time stepping "
                    "with a cold and a warm set-up cache, fmu-start: the catenary FMU's "
-                   "instantiate-to-first-step time in fmpy, cold and warm); skips the cold "
-                   "first run and the span scaling")
+                   "instantiate-to-first-step time in fmpy, cold and warm, native-loop: the "
+                   "native C FMUs of export-native stepped from a C loop beside the Python "
+                   "catenary FMU and the floor solve); skips the cold first run and the span "
+                   "scaling")
     return p
 
 

@@ -1,0 +1,352 @@
+/*
+ * A constant-matrix pantograph (the lumped chains of pantocosim.pantograph.lumped, their
+ * linear_form: M a + C v + K q + B w = 0 with w = (h_ref, F_up, F)) as a native model
+ * (pcs_model.h), stepped with the closed-form HHT-alpha step of core/hht.py (_linear_step):
+ *
+ *   S a_{n+1} = alpha f_n - (1 + alpha) (C v_p + K q_p + B w_{n+1}),
+ *   S = M + (1 + alpha) (gamma h C + beta h^2 K),
+ *
+ * then q, v from the Newmark predictors q_p, v_p (3.16)-(3.17) and f_{n+1} = C v + K q + B w.
+ * The start (q0, a0, f0, w) and S^-1 are the Python integrator's, written at export.
+ */
+#include "pcs_model.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "lumped_vars.h"
+
+struct PcsModel {
+    int n;
+    double h, alpha, beta, gamma, lo, hi, static_force, aero_c1, aero_c2, speed_kmh,
+        height0, F0, friction, smoothing;
+    const double *M, *C, *K, *B, *w0, *q0, *a0, *f0, *S_inv_data;
+    const char *preset;
+    double S_inv[PAN_MAX_DOFS * PAN_MAX_DOFS];
+    /* state: t, failed, F at t, input at t, q, v, a, f */
+    double state[4 + 4 * PAN_MAX_DOFS];
+    double *q, *v, *a, *f;
+    double w[3], force_in, iterations;
+    int initialised, extrapolate;
+};
+
+unsigned pcs_model_kind(void) { return PCS_KIND_LUMPED_PANTOGRAPH; }
+
+#define SECTION(dst, name, type, count)                                                   \
+    do {                                                                                  \
+        dst = pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG);          \
+        if (!dst) goto fail;                                                              \
+    } while (0)
+
+PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    PcsModel *m;
+    const int *sizes;
+    const double *sc;
+    long n_text = 0;
+    size_t n;
+    if (d->kind != PCS_KIND_LUMPED_PANTOGRAPH) {
+        snprintf(err, PCS_MSG, "data file %.400s: model kind %u, this FMU steps a lumped "
+                 "pantograph (kind %u)", d->path, d->kind, PCS_KIND_LUMPED_PANTOGRAPH);
+        return NULL;
+    }
+    m = (PcsModel *)mem->alloc(1, sizeof *m);
+    if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
+    SECTION(sizes, "sizes", PCS_TYPE_I32, 2);
+    m->n = sizes[0];
+    if (m->n < 1 || m->n > PAN_MAX_DOFS) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d masses, this FMU takes "
+                 "1..%d", d->path, m->n, PAN_MAX_DOFS);
+        goto fail;
+    }
+    n = (size_t)m->n;
+    SECTION(sc, "scalars", PCS_TYPE_F64, 16);
+    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->lo = sc[4];
+    m->hi = sc[5]; m->static_force = sc[6]; m->aero_c1 = sc[7]; m->aero_c2 = sc[8];
+    m->speed_kmh = sc[9]; m->height0 = sc[10]; m->F0 = sc[11]; m->friction = sc[12];
+    m->smoothing = sc[13];
+    SECTION(m->M, "M", PCS_TYPE_F64, n * n);
+    SECTION(m->C, "C", PCS_TYPE_F64, n * n);
+    SECTION(m->K, "K", PCS_TYPE_F64, n * n);
+    SECTION(m->B, "B", PCS_TYPE_F64, n * 3);
+    SECTION(m->w0, "w0", PCS_TYPE_F64, 3);
+    SECTION(m->q0, "q0", PCS_TYPE_F64, n);
+    SECTION(m->a0, "a0", PCS_TYPE_F64, n);
+    SECTION(m->f0, "f0", PCS_TYPE_F64, n);
+    SECTION(m->S_inv_data, "S_inv", PCS_TYPE_F64, n * n);
+    m->preset = (const char *)pcs_data_section(d, "preset", PCS_TYPE_I32, -1, &n_text, err,
+                                               PCS_MSG);
+    if (!m->preset) goto fail;
+    if (n_text < 1 || m->preset[4 * n_text - 1] != '\0') {
+        snprintf(err, PCS_MSG, "data file %.400s: section preset is not a string", d->path);
+        goto fail;
+    }
+    m->q = m->state + 4;
+    m->v = m->q + n;
+    m->a = m->v + n;
+    m->f = m->a + n;
+    m->force_in = m->F0;
+    return m;
+fail:
+    mem->release(m);
+    return NULL;
+}
+
+void pcs_model_free(PcsModel *m, const PcsMemory *mem)
+{
+    if (m) mem->release(m);
+}
+
+/* f = C v + K q + B w */
+static void rest(PcsModel *m, const double *q, const double *v, double *f)
+{
+    int n = m->n, i, j;
+    for (i = 0; i < n; i++) {
+        double r = 0.0;
+        for (j = 0; j < n; j++) r += m->C[i * n + j] * v[j] + m->K[i * n + j] * q[j];
+        for (j = 0; j < 3; j++) r += m->B[i * 3 + j] * m->w[j];
+        f[i] = r;
+    }
+}
+
+int pcs_initialize(PcsModel *m, char *err)
+{
+    size_t n = (size_t)m->n;
+    (void)err;
+    m->state[0] = 0.0;
+    m->state[1] = 0.0;
+    m->state[2] = m->F0;
+    m->state[3] = m->F0;
+    memcpy(m->q, m->q0, n * sizeof(double));
+    memset(m->v, 0, n * sizeof(double));
+    memcpy(m->a, m->a0, n * sizeof(double));
+    memcpy(m->f, m->f0, n * sizeof(double));
+    memcpy(m->S_inv, m->S_inv_data, n * n * sizeof(double));
+    m->w[0] = m->w0[0];
+    m->w[1] = m->w0[1];
+    m->w[2] = m->F0;
+    m->force_in = m->F0;
+    m->iterations = 0.0;
+    m->initialised = 1;
+    return PCS_OK;
+}
+
+static void step(PcsModel *m, double F)
+{
+    int n = m->n, i, j;
+    double h = m->h, cq = (0.5 - m->beta) * h * h, cv = (1.0 - m->gamma) * h;
+    double c1 = 1.0 + m->alpha, cg = m->beta * h * h, cs = m->gamma * h;
+    double *q = m->q, *v = m->v, *a = m->a, *f = m->f;
+    m->w[2] = F;
+    for (i = 0; i < n; i++) {
+        q[i] = q[i] + h * v[i] + cq * a[i];
+        v[i] = v[i] + cv * a[i];
+    }
+    for (i = 0; i < n; i++) {
+        double r = 0.0;
+        for (j = 0; j < n; j++) r += m->C[i * n + j] * v[j] + m->K[i * n + j] * q[j];
+        for (j = 0; j < 3; j++) r += m->B[i * 3 + j] * m->w[j];
+        f[i] = m->alpha * f[i] - c1 * r;
+    }
+    for (i = 0; i < n; i++) {
+        double r = 0.0;
+        for (j = 0; j < n; j++) r += m->S_inv[i * n + j] * f[j];
+        a[i] = r;
+    }
+    for (i = 0; i < n; i++) {
+        q[i] += cg * a[i];
+        v[i] += cs * a[i];
+    }
+    rest(m, q, v, f);
+}
+
+double pcs_time(const PcsModel *m) { return m->state[0]; }
+
+int pcs_do_step(PcsModel *m, double t, double H, char *err)
+{
+    int n_sub, i;
+    double ratio, F = m->force_in, F_prev = m->state[2], u = F, z;
+    double saved[4 + 4 * PAN_MAX_DOFS];
+    if (!m->initialised) {
+        snprintf(err, PCS_MSG, "doStep before the FMU was initialised");
+        return PCS_ERROR;
+    }
+    if (m->state[1] != 0.0) {
+        snprintf(err, PCS_MSG, "doStep after a refused step: roll back with a saved FMU state");
+        return PCS_DISCARD;
+    }
+    ratio = H / m->h;
+    n_sub = (int)floor(ratio + 0.5);
+    if (!(H > 0.0) || n_sub < 1 || fabs(ratio - n_sub) > 1e-9 * (ratio > 1.0 ? ratio : 1.0)) {
+        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
+                 "steps of %.17g s (the step this FMU was exported for)", H, m->h);
+        return PCS_ERROR;
+    }
+    if (!(isfinite(F) && F >= 0.0)) {
+        snprintf(err, PCS_MSG, "contact_force = %.17g: must be finite and >= 0", F);
+        return PCS_DISCARD;
+    }
+    if (m->extrapolate) {
+        if (m->state[0] == 0.0) u = m->state[3];
+        F = 2.0 * u - m->state[3];
+        if (F < 0.0) F = 0.0;
+    }
+    memcpy(saved, m->state, sizeof saved);
+    for (i = 1; i <= n_sub; i++) step(m, F_prev + (F - F_prev) * i / n_sub);
+    z = m->q[0];
+    if (!(z >= m->lo && z <= m->hi)) {
+        snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g): the contact point would be at "
+                 "%.4g m, outside the heights pantograph '%s' represents (%.3g .. %.3g m): "
+                 "contact_force = %.6g N is beyond what it can take", t, H, z, m->preset,
+                 m->lo, m->hi, m->force_in);
+        memcpy(m->state, saved, sizeof saved);
+        m->state[1] = 1.0;          /* as the Python FMU: only a rollback recovers */
+        return PCS_DISCARD;
+    }
+    m->state[0] += H;
+    m->state[2] = F;
+    m->state[3] = u;
+    m->iterations = n_sub;
+    return PCS_OK;
+}
+
+size_t pcs_state_bytes(const PcsModel *m) { return (4 + 4 * (size_t)m->n) * sizeof(double); }
+
+void pcs_state_save(const PcsModel *m, void *buffer)
+{
+    memcpy(buffer, m->state, pcs_state_bytes(m));
+}
+
+void pcs_state_restore(PcsModel *m, const void *buffer)
+{
+    memcpy(m->state, buffer, pcs_state_bytes(m));
+    m->w[2] = m->state[2];
+}
+
+/* ------------------------------------------------------------------ variables */
+
+static int fixed_real(const char *name, double exported, double value, char *err)
+{
+    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
+    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
+    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
+             "it again with pantocosim export-native to change it)", name, value, name, exported);
+    return PCS_ERROR;
+}
+
+int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err)
+{
+    switch (vr) {
+    case PAN_VR_CONTACT_FORCE: *value = m->force_in; return PCS_OK;
+    case PAN_VR_CONTACT_HEIGHT: *value = m->initialised ? m->q[0] : m->q0[0]; return PCS_OK;
+    case PAN_VR_CONTACT_VELOCITY: *value = m->initialised ? m->v[0] : 0.0; return PCS_OK;
+    case PAN_VR_STATIC_FORCE: *value = m->static_force; return PCS_OK;
+    case PAN_VR_AERO_C1: *value = m->aero_c1; return PCS_OK;
+    case PAN_VR_AERO_C2: *value = m->aero_c2; return PCS_OK;
+    case PAN_VR_SPEED_KMH: *value = m->speed_kmh; return PCS_OK;
+    case PAN_VR_FRICTION_FORCE: *value = m->friction; return PCS_OK;
+    case PAN_VR_FRICTION_SMOOTHING: *value = m->smoothing; return PCS_OK;
+    case PAN_VR_HHT_ALPHA: *value = m->alpha; return PCS_OK;
+    case PAN_VR_INITIAL_HEIGHT: *value = m->height0; return PCS_OK;
+    case PAN_VR_INITIAL_CONTACT_FORCE: *value = m->F0; return PCS_OK;
+    case PAN_VR_NEWTON_ITERATIONS: *value = m->iterations; return PCS_OK;
+    case PAN_VR_INTERNAL_STEP: *value = m->h; return PCS_OK;
+    default: break;
+    }
+    snprintf(err, PCS_MSG, "no Real variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *err)
+{
+    if (vr == PAN_VR_CONTACT_FORCE) {
+        m->force_in = value;
+        return PCS_OK;
+    }
+    if (initialised) {
+        snprintf(err, PCS_MSG, "value reference %u is a parameter: it is set before "
+                 "initialisation only", vr);
+        return PCS_ERROR;
+    }
+    switch (vr) {
+    case PAN_VR_STATIC_FORCE: return fixed_real("static_force", m->static_force, value, err);
+    case PAN_VR_AERO_C1: return fixed_real("aero_c1", m->aero_c1, value, err);
+    case PAN_VR_AERO_C2: return fixed_real("aero_c2", m->aero_c2, value, err);
+    case PAN_VR_SPEED_KMH: return fixed_real("speed_kmh", m->speed_kmh, value, err);
+    case PAN_VR_FRICTION_FORCE: return fixed_real("friction_force", m->friction, value, err);
+    case PAN_VR_FRICTION_SMOOTHING:
+        return fixed_real("friction_smoothing", m->smoothing, value, err);
+    case PAN_VR_HHT_ALPHA: return fixed_real("hht_alpha", m->alpha, value, err);
+    case PAN_VR_INITIAL_HEIGHT: return fixed_real("initial_height", m->height0, value, err);
+    case PAN_VR_INITIAL_CONTACT_FORCE:
+        if (value < 0.0) return PCS_OK;    /* < 0: the mean uplift, the export's force */
+        return fixed_real("initial_contact_force", m->F0, value, err);
+    default: break;
+    }
+    snprintf(err, PCS_MSG, "value reference %u is not a Real input or parameter", vr);
+    return PCS_ERROR;
+}
+
+int pcs_get_integer(PcsModel *m, unsigned vr, int *value, char *err)
+{
+    (void)m;
+    if (vr == PAN_VR_START_MODE) { *value = 0; return PCS_OK; }
+    snprintf(err, PCS_MSG, "no Integer variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_set_integer(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+{
+    (void)m;
+    if (vr == PAN_VR_START_MODE && !initialised && value == 0) return PCS_OK;
+    if (vr == PAN_VR_START_MODE) {
+        snprintf(err, PCS_MSG, "start_mode = %d: this native FMU starts static in contact "
+                 "(start_mode 0) at the export's start", value);
+        return PCS_ERROR;
+    }
+    snprintf(err, PCS_MSG, "no Integer parameter of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_get_boolean(PcsModel *m, unsigned vr, int *value, char *err)
+{
+    if (vr == PAN_VR_ONE_WAY_DAMPER) { *value = 0; return PCS_OK; }
+    if (vr == PAN_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
+    snprintf(err, PCS_MSG, "no Boolean variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_set_boolean(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+{
+    if (initialised) {
+        snprintf(err, PCS_MSG, "Boolean %u is a parameter: set before initialisation only", vr);
+        return PCS_ERROR;
+    }
+    if (vr == PAN_VR_ONE_WAY_DAMPER && !value) return PCS_OK;
+    if (vr == PAN_VR_ONE_WAY_DAMPER) {
+        snprintf(err, PCS_MSG, "one_way_damper = true: the native pantograph has constant "
+                 "matrices (no one-way damper); use the Python FMU");
+        return PCS_ERROR;
+    }
+    if (vr == PAN_VR_FORCE_EXTRAPOLATION) {
+        m->extrapolate = value != 0;
+        return PCS_OK;
+    }
+    snprintf(err, PCS_MSG, "no Boolean parameter of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_get_string(PcsModel *m, unsigned vr, const char **value, char *err)
+{
+    if (vr == PAN_VR_PRESET) { *value = m->preset; return PCS_OK; }
+    snprintf(err, PCS_MSG, "no String variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+int pcs_set_string(PcsModel *m, unsigned vr, const char *value, int initialised, char *err)
+{
+    (void)m; (void)value; (void)initialised;
+    snprintf(err, PCS_MSG, "String %u cannot be set (the pantograph is fixed at export)", vr);
+    return PCS_ERROR;
+}

@@ -1,0 +1,189 @@
+/* The data file of a native FMU: reading and checking (pcs_data.h). */
+#include "pcs_data.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define HEADER_BYTES 40u
+#define SECTION_HEADER_BYTES 40u
+
+unsigned long long pcs_fnv1a(const unsigned char *p, size_t n)
+{
+    unsigned long long h = 14695981039346656037ULL;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= (unsigned long long)p[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+static unsigned read_u32(const unsigned char *p)
+{
+    unsigned v;
+    memcpy(&v, p, 4);
+    return v;
+}
+
+static unsigned long long read_u64(const unsigned char *p)
+{
+    unsigned long long v;
+    memcpy(&v, p, 8);
+    return v;
+}
+
+int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err, size_t n_err)
+{
+    FILE *f;
+    long size;
+    unsigned long long payload, sum;
+    memset(d, 0, sizeof *d);
+    strncpy(d->path, path, sizeof d->path - 1);
+    f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, n_err, "data file %s: cannot be opened", path);
+        return -1;
+    }
+    if (fseek(f, 0, SEEK_END) != 0 || (size = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        fclose(f);
+        snprintf(err, n_err, "data file %s: cannot be read", path);
+        return -1;
+    }
+    if ((unsigned long)size < HEADER_BYTES) {
+        fclose(f);
+        snprintf(err, n_err, "data file %s: %ld bytes, shorter than its %u-byte header "
+                 "(truncated or not a pantocosim data file)", path, size, HEADER_BYTES);
+        return -1;
+    }
+    d->bytes = (unsigned char *)mem->alloc((size_t)size, 1);
+    if (!d->bytes) {
+        fclose(f);
+        snprintf(err, n_err, "data file %s: no memory for %ld bytes", path, size);
+        return -1;
+    }
+    d->size = (size_t)size;
+    if (fread(d->bytes, 1, d->size, f) != d->size) {
+        fclose(f);
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: cannot be read", path);
+        return -1;
+    }
+    fclose(f);
+    if (memcmp(d->bytes, "PCSDATA", 8) != 0) {
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: not a pantocosim data file (no PCSDATA magic)", path);
+        return -1;
+    }
+    if (read_u32(d->bytes + 12) != 0x01020304u) {
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: written with another byte order than this "
+                 "machine's (re-export it on a little-endian host or convert it)", path);
+        return -1;
+    }
+    if (read_u32(d->bytes + 8) != PCS_DATA_VERSION) {
+        unsigned v = read_u32(d->bytes + 8);
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: format version %u, this FMU reads version %u",
+                 path, v, PCS_DATA_VERSION);
+        return -1;
+    }
+    d->kind = read_u32(d->bytes + 16);
+    d->n_sections = read_u32(d->bytes + 20);
+    payload = read_u64(d->bytes + 24);
+    if (payload != (unsigned long long)(d->size - HEADER_BYTES)) {
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: the header announces %llu payload bytes, the "
+                 "file holds %lu (truncated or damaged)", path, payload,
+                 (unsigned long)(size - (long)HEADER_BYTES));
+        return -1;
+    }
+    sum = pcs_fnv1a(d->bytes + HEADER_BYTES, d->size - HEADER_BYTES);
+    if (sum != read_u64(d->bytes + 32)) {
+        pcs_data_free(d, mem);
+        snprintf(err, n_err, "data file %s: checksum mismatch (damaged)", path);
+        return -1;
+    }
+    return 0;
+}
+
+void pcs_data_free(PcsData *d, const PcsMemory *mem)
+{
+    if (d->bytes)
+        mem->release(d->bytes);
+    d->bytes = NULL;
+    d->size = 0;
+}
+
+const void *pcs_data_section(const PcsData *d, const char *name, unsigned type, long count,
+                             long *found, char *err, size_t n_err)
+{
+    size_t pos = HEADER_BYTES;
+    unsigned s;
+    for (s = 0; s < d->n_sections; s++) {
+        unsigned long long n, bytes;
+        unsigned t;
+        char sname[25];
+        if (d->size - pos < SECTION_HEADER_BYTES) break;
+        memcpy(sname, d->bytes + pos, 24);
+        sname[24] = '\0';
+        t = read_u32(d->bytes + pos + 24);
+        n = read_u64(d->bytes + pos + 32);
+        if (t != PCS_TYPE_F64 && t != PCS_TYPE_I32) break;
+        bytes = n * (t == PCS_TYPE_F64 ? 8u : 4u);
+        bytes = (bytes + 7u) / 8u * 8u;
+        if (bytes > (unsigned long long)(d->size - pos - SECTION_HEADER_BYTES)) break;
+        if (strcmp(sname, name) == 0) {
+            if (t != type) {
+                snprintf(err, n_err, "data file %s: section %s holds %s values, expected %s",
+                         d->path, name, t == PCS_TYPE_F64 ? "float64" : "int32",
+                         type == PCS_TYPE_F64 ? "float64" : "int32");
+                return NULL;
+            }
+            if (count >= 0 && (long)n != count) {
+                snprintf(err, n_err, "data file %s: section %s holds %llu values, expected %ld",
+                         d->path, name, n, count);
+                return NULL;
+            }
+            if (found) *found = (long)n;
+            return d->bytes + pos + SECTION_HEADER_BYTES;
+        }
+        pos += SECTION_HEADER_BYTES + (size_t)bytes;
+    }
+    snprintf(err, n_err, "data file %s: section %s is missing (or the file is damaged)",
+             d->path, name);
+    return NULL;
+}
+
+static int hex(int c)
+{
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+}
+
+int pcs_uri_to_path(const char *uri, char *out, size_t n_out)
+{
+    const char *p = uri;
+    size_t k = 0;
+    if (!uri) return -1;
+    if (strncmp(p, "file://", 7) == 0) {
+        p += 7;
+        if (strncmp(p, "localhost/", 10) == 0) p += 9;
+    } else if (strncmp(p, "file:", 5) == 0) {
+        p += 5;
+    }
+    /* file:///C:/dir -> C:/dir on Windows */
+    if (p[0] == '/' && p[1] && p[2] == ':') p++;
+    for (; *p; p++) {
+        int c = (unsigned char)*p;
+        if (c == '%' && hex(p[1]) >= 0 && hex(p[2]) >= 0) {
+            c = hex(p[1]) * 16 + hex(p[2]);
+            p += 2;
+        }
+        if (k + 1 >= n_out) return -1;
+        out[k++] = (char)c;
+    }
+    out[k] = '\0';
+    return 0;
+}

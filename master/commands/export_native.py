@@ -1,0 +1,59 @@
+"""``pantocosim export-native``: the scenario's catenary and constant-matrix pantographs as
+native C FMUs (no Python inside; docs/tutorials/hil.md)."""
+
+from __future__ import annotations
+
+
+def add_parser(sub):
+    p = sub.add_parser("export-native", help="write native C FMUs of a scenario (HIL rigs, "
+                       "any FMI host)",
+                       description="Write the scenario's catenary (linear or modal model) and "
+                       "its constant-matrix pantographs (lumped chains) as co-simulation FMUs "
+                       "whose binaries hold no Python: the Python models compute the constant "
+                       "matrices, droppers, contact-wire geometry and start state once, into "
+                       "resources/model.pcsdata; C steps them with the same closed-form "
+                       "HHT-alpha step. Each FMU carries its C sources and binaries for linux64 "
+                       "(gcc) and win64 (mingw-w64, when installed). The internal step is the "
+                       "scenario's dt: a communication step is a whole number of it.")
+    p.add_argument("scenario", metavar="SCENARIO", help="scenario name or TOML file")
+    p.add_argument("--catenary-model", choices=("linear", "modal"), default="linear",
+                   help="catenary model of the FMU (default linear)")
+    p.add_argument("--modal-cutoff-hz", type=float, default=None,
+                   help="modal model: modes below this frequency (default: the scenario's)")
+    p.add_argument("--fmi", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
+    p.add_argument("--out", default=None, help="output folder (default dist/native/SCENARIO)")
+    p.add_argument("--force", action="store_true", help="export a speed above the EN 50119 "
+                   "limit (0.7 of the contact wire's wave speed; never at or above it)")
+    p.add_argument("--win64", choices=("auto", "yes", "no"), default="auto",
+                   help="also build the win64 DLLs with x86_64-w64-mingw32-gcc (auto: when "
+                   "installed)")
+    return p
+
+
+def run(args) -> int:
+    import dataclasses
+    from pathlib import Path
+
+    from pantocosim.core.errors import ParameterError
+    from pantocosim.core.params import check_number
+    from pantocosim.master.native_models import export_scenario
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    sc = load_scenario(args.scenario)
+    changes = {"catenary_model": args.catenary_model}
+    if args.modal_cutoff_hz is not None:
+        check_number("--modal-cutoff-hz", args.modal_cutoff_hz, positive=True)
+        changes["modal_cutoff_hz"] = float(args.modal_cutoff_hz)
+    sc = dataclasses.replace(sc, **changes)
+    out = Path(args.out) if args.out else Path("dist") / "native" / sc.name
+    if out.exists() and not out.is_dir():
+        raise ParameterError("--out", str(out), "is a file, not a folder")
+    win64 = {"auto": None, "yes": True, "no": False}[args.win64]
+    prep = prepare(sc, force=args.force)
+    written, kept = export_scenario(prep, out, fmi=args.fmi, win64=win64)
+    for path in written:
+        print(f"wrote {path}")
+    for k, why in kept:
+        print(f"pantograph {k + 1} ({sc.pantographs[k].model}): {why}; it stays a Python FMU")
+    return 0
