@@ -447,9 +447,11 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "time_s": summary["simulated_time_s"],
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
-    summary["warnings"] = list(result.warnings)
+    from pantocosim.master.stability import departures
+
+    summary["warnings"] = list(result.warnings) + departures(prep, stats)
     #: the statistics are doubtful (see the warnings)
-    summary["flagged"] = bool(result.warnings)
+    summary["flagged"] = bool(summary["warnings"])
     if out_dir is not None:
         out = Path(out_dir)
         shown = Path(report_dir) if report_dir is not None else out
