@@ -145,7 +145,7 @@ def run_compliance(prep) -> np.ndarray:
     """The largest instantaneous compliance [m/N] each pantograph meets on the run, from the
     catenary's ``contact_compliance`` every :data:`COMPLIANCE_SPACING_M` of track (a row's
     sum of magnitudes: it bounds the loop through several pantographs)."""
-    duration = prep.n_steps * prep.scenario.dt
+    duration = prep.duration
     n = int(min(math.ceil(abs(prep.scenario.speed) * duration / COMPLIANCE_SPACING_M) + 1,
                 COMPLIANCE_SAMPLES))
     times = np.linspace(0.0, duration, max(n, 1))
@@ -228,6 +228,12 @@ def _culprit(sc, est: Estimate) -> tuple[str, float, str]:
             f"contact.damping < {GAIN_LIMIT * est.impedance:.3g} N s/m")
 
 
+def _down(x: float) -> float:
+    """``x`` rounded down to 3 significant digits (a bound that still holds as printed)."""
+    e = math.floor(math.log10(x)) - 2
+    return math.floor(x / 10.0 ** e) * 10.0 ** e
+
+
 def _feedthrough_culprit(prep, est: Estimate) -> tuple[str, float, str]:
     """What the user set that makes ``G_s``: the contact damping when its share is the
     larger, else a contact stiffness the scenario sets, else the catenary model's setting
@@ -236,11 +242,11 @@ def _feedthrough_culprit(prep, est: Estimate) -> tuple[str, float, str]:
     budget = GAIN_LIMIT / (HOLD_GAIN_NYQUIST * est.compliance)   # k_c + c_c |v/x| that runs
     velocity = nyquist_velocity_gain(sc.dt, sc.alpha)
     damped = sc.contact_damping > 0.0
-    stiffness = f"contact.stiffness < {budget:.3g} N/m" + (" without contact damping"
-                                                            if damped else "")
+    stiffness = f"contact.stiffness < {_down(budget):.3g} N/m" + (" without contact damping"
+                                                                   if damped else "")
     if damped and sc.contact_damping * velocity >= sc.contact_stiffness:
         rest = (budget - sc.contact_stiffness) / velocity
-        runs = f"contact.damping < {rest:.3g} N s/m" if rest > 0.0 else stiffness
+        runs = f"contact.damping < {_down(rest):.3g} N s/m" if rest > 0.0 else stiffness
         return "contact.damping", sc.contact_damping, runs
     setting = prep.catenary.compliance_setting
     if sc.contact_stiffness != DEFAULT_CONTACT_STIFFNESS or setting is None:
