@@ -478,3 +478,26 @@ def test_a_start_the_contact_damping_breaks_names_the_damping(tmp_path):
     assert text.startswith(f"{tmp_path / 's.toml'}: contact.damping = 1e+07: ") or \
         ": contact.damping = 1e+07: " in text, text
     assert "contact.stiffness" not in text and "without it the start converges" in text
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("coupling,dt", [("explicit", 0.001), ("gauss-seidel", 0.001),
+                                         ("explicit", 0.0005), ("explicit", 0.005)])
+def test_run_command_refuses_the_modal_20_hz_rows(tmp_path, capsys, monkeypatch, built,
+                                                 coupling, dt):
+    """``pantocosim run en50318-300 --catenary-model modal --modal-cutoff-hz 20`` with the
+    explicit couplings (which ran to 62.6 N mean, 36.5 % loss of contact, unwarned): exit 2,
+    one line naming the cutoff, nothing written."""
+    monkeypatch.chdir(built.parent.parent)
+    preset = Path(stability.__file__).with_name("scenarios") / "en50318-300.toml"
+    path = tmp_path / "en50318-300.toml"
+    path.write_text(preset.read_text().replace("dt = 0.001", f"dt = {dt}"))
+    out = tmp_path / "o"
+    code = main(["run", str(path), "--catenary-model", "modal", "--modal-cutoff-hz", "20",
+                 "--coupling", coupling, "--no-plots", "--quiet", "--out", str(out)])
+    err = [l for l in capsys.readouterr().err.splitlines() if l.strip()
+           and not l.startswith("building")]
+    assert code == 2
+    assert len(err) == 1 and "en50318-300.toml: simulation.modal_cutoff_hz = 20.0: " in \
+        err[0] and "instantaneous compliance" in err[0] and f"dt = {dt:g} s" in err[0], err
+    assert not out.exists()
