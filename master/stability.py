@@ -1,4 +1,5 @@
-"""Numerical stability of a run: checked before it starts and watched while it runs.
+"""Numerical stability of a run: checked before it starts, watched while it runs, judged
+after it ends.
 
 Before. The explicit (Jacobi) and Gauss-Seidel couplings exchange the penalty force once per
 step: each side steps under the force of the previous exchange, a lag of one step plus the
@@ -10,14 +11,29 @@ at the contact point, ``1 / (g^T M^-1 g)`` of the model's linearisation, ``g`` t
 its contact height). The lag of ``1.5 dt`` turns the dashpot's -90 degrees into -180 degrees at
 ``w* = pi / (3 dt)``; the exchange is stable while the loop gain there is below 1::
 
-    G = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2) < 1.
+    G_w = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2) < 1.
 
 Measured on en50318 (3 spans, 250 km/h, en50318-2mass; ``scripts/stability_breakpoints.py``,
 checked in ``tests/test_stability.py``):
 the Jacobi and Gauss-Seidel couplings break between k_c = 3e5 (G = 0.87) and 4e5 N/m
 (G = 1.16) at 1 ms, between 8e4 (G = 1.2) and 1.2e5 N/m at 5 ms and between 8e4 (G = 2.6)
 and 1e5 N/m at 10 ms: at longer steps the catenary is stiffer than a wire alone, so the limit
-errs on the safe side there. A run with ``G >= 1`` is refused, one with ``G >= 0.5`` warned.
+errs on the safe side there.
+
+A catenary that answers a force within the instant it is applied (a modal model's static
+correction, a massless spring of compliance ``s`` in series with the contact; each model
+declares it, ``contact_compliance``) closes an algebraic loop through the exchange. At the
+Nyquist frequency the force alternates from step to step: the first-order hold of the
+exchange, ``2 F_n - F_(n-1)``, triples it, and the HHT-alpha velocity of a displacement that
+alternates is ``4 / (|alpha| dt)`` times it, in phase (Newmark with ``gamma = 1/2 - alpha``,
+``beta = (1 - alpha)^2 / 4``), so the exchange is stable while::
+
+    G_s = 3 s (k_c + 4 c_c / (|alpha| dt)) < 1
+
+(with ``c_c = 0``: ``F_(n+1) = -k_c s (2 F_n - F_(n-1))``, whose roots stay inside the unit
+circle while ``3 k_c s < 1``, at any step); ``s`` is the largest compliance the pantograph
+meets on its run. The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` is
+refused, one with ``G >= 0.5`` warned.
 
 Any coupling, the monolithic one too, warns when the step does not resolve the contact
 frequency ``f_c = sqrt(k_c / m_p) / (2 pi)``: above ``1 / (10 dt)`` the contact force chatters
@@ -28,6 +44,12 @@ During. :class:`Monitor` stops a run whose contact force is not finite or exceed
 :data:`FORCE_CAP_FACTOR` times the pantograph's static force (its mean uplift when larger),
 or whose pantograph stays off the wire for :data:`SEPARATION_LIMIT_S` after its raising: the
 run ends with :class:`Diverged`, its results so far kept as for Ctrl-C.
+
+After. :func:`departures` flags a run whose mean contact force departs from the mean uplift
+its static start sets by more than :data:`MEAN_DEPARTURE` of it, or whose loss of contact
+exceeds what the normal law of its own force statistics predicts by more than
+:data:`LOSS_EXCESS_POINTS` (a force that alternates from step to step loses contact while
+its filtered statistics say it should not).
 """
 
 from __future__ import annotations
@@ -38,6 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
+from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0
@@ -52,6 +75,17 @@ FORCE_CAP_FACTOR = 20.0
 SEPARATION_LIMIT_S = 0.5
 #: couplings that exchange the force once per step
 STAGGERED = ("jacobi", "explicit", "gauss-seidel")
+#: the exchange's first-order hold ``2 F_n - F_(n-1)`` on a force alternating from step to step
+HOLD_GAIN_NYQUIST = 3.0
+#: track spacing [m] at which the catenary's contact compliance is read along a run ...
+COMPLIANCE_SPACING_M = 0.05
+#: ... in at most this many readings
+COMPLIANCE_SAMPLES = 20000
+#: a mean contact force farther than this share of the mean uplift from it flags the run
+MEAN_DEPARTURE = 0.2
+#: loss of contact [percentage points] beyond the normal law of the run's own force
+#: statistics that flags the run
+LOSS_EXCESS_POINTS = 10.0
 
 
 class Diverged(PantocosimError):
@@ -85,9 +119,37 @@ def receptance(dt: float, mass: float, impedance: float) -> float:
 
 def exchange_gain(stiffness: float, damping: float, dt: float, mass: float,
                   impedance: float) -> float:
-    """Loop gain of a once-per-step exchange of the penalty force (module docstring)."""
+    """``G_w``: loop gain of a once-per-step exchange of the penalty force between the wire
+    and the contact mass (module docstring)."""
     law = math.hypot(stiffness, critical_frequency(dt) * damping)
     return law * receptance(dt, mass, impedance)
+
+
+def nyquist_velocity_gain(dt: float, alpha: float) -> float:
+    """``|v / x|`` of the HHT-alpha velocity of a displacement alternating from step to step:
+    ``(2 gamma - 1) / (dt (2 beta - gamma)) = 4 / (|alpha| dt)``; infinite at alpha = 0."""
+    return math.inf if alpha == 0.0 else 4.0 / (abs(alpha) * dt)
+
+
+def feedthrough_gain(stiffness: float, damping: float, dt: float, alpha: float,
+                     compliance: float) -> float:
+    """``G_s = 3 s (k_c + 4 c_c / (|alpha| dt))``: loop gain of the exchange through the
+    catenary's instantaneous compliance ``s`` at the contact (module docstring)."""
+    if compliance <= 0.0:
+        return 0.0
+    law = stiffness + (damping * nyquist_velocity_gain(dt, alpha) if damping > 0.0 else 0.0)
+    return HOLD_GAIN_NYQUIST * law * compliance
+
+
+def run_compliance(prep) -> np.ndarray:
+    """The largest instantaneous compliance [m/N] each pantograph meets on the run, from the
+    catenary's ``contact_compliance`` every :data:`COMPLIANCE_SPACING_M` of track (a row's
+    sum of magnitudes: it bounds the loop through several pantographs)."""
+    duration = prep.duration
+    n = int(min(math.ceil(abs(prep.scenario.speed) * duration / COMPLIANCE_SPACING_M) + 1,
+                COMPLIANCE_SAMPLES))
+    times = np.linspace(0.0, duration, max(n, 1))
+    return np.abs(prep.catenary.contact_compliance(times)).sum(axis=2).max(axis=0)
 
 
 def contact_frequency(stiffness: float, mass: float) -> float:
@@ -100,45 +162,62 @@ class Estimate:
     """The stability figures of one pantograph's contact."""
     mass: float              # m_p [kg]
     impedance: float         # Z_w [N s/m]
-    gain: float              # G of the staggered exchange
+    compliance: float        # s [m/N]: the largest instantaneous compliance on the run
+    wave_gain: float         # G_w of the wire and the contact mass
+    feedthrough_gain: float  # G_s of the compliance
     frequency: float         # f_c [Hz]
+
+    @property
+    def gain(self) -> float:
+        """The exchange gain ``G = max(G_w, G_s)``."""
+        return max(self.wave_gain, self.feedthrough_gain)
 
 
 def estimates(prep) -> list[Estimate]:
     """:class:`Estimate` of every pantograph of a :class:`~pantocosim.master.run.Prepared`."""
     sc = prep.scenario
     z = wire_impedance(prep.definition)
+    compliance = run_compliance(prep)
     out = []
     for k, pan in enumerate(prep.pantographs):
         m = contact_mass(pan, prep.q_pan0[k], float(pan.options.mean_uplift))
-        out.append(Estimate(mass=m, impedance=z,
-                            gain=exchange_gain(sc.contact_stiffness, sc.contact_damping,
-                                               sc.dt, m, z),
-                            # a rigid contact (compliance 0) has no contact mode
-                            frequency=(contact_frequency(sc.contact_stiffness, m)
-                                       if prep.contact.compliance > 0.0 else 0.0)))
+        s = float(compliance[k])
+        out.append(Estimate(
+            mass=m, impedance=z, compliance=s,
+            wave_gain=exchange_gain(sc.contact_stiffness, sc.contact_damping, sc.dt, m, z),
+            feedthrough_gain=feedthrough_gain(sc.contact_stiffness, sc.contact_damping, sc.dt,
+                                              sc.alpha, s),
+            # a rigid contact (compliance 0) has no contact mode
+            frequency=(contact_frequency(sc.contact_stiffness, m)
+                       if prep.contact.compliance > 0.0 else 0.0)))
     return out
 
 
+def _wave_gain_at(sc, est: Estimate, dt: float) -> float:
+    return exchange_gain(sc.contact_stiffness, sc.contact_damping, dt, est.mass, est.impedance)
+
+
 def _largest_stable_step(sc, est: Estimate) -> float | None:
-    """The largest dt with a gain below the limit (bisection on the monotone gain); None if
-    no step runs (the contact damping alone gives ``c_c / Z_w`` at any step)."""
+    """The largest dt with both gains below the limit (bisection on the monotone ``G_w``;
+    ``G_s`` does not fall with the step); None if no step runs (``G_s`` at this step, or the
+    contact damping alone, which gives ``c_c / Z_w`` at any step)."""
     lo, hi = 1e-9, sc.dt
-    if exchange_gain(sc.contact_stiffness, sc.contact_damping, lo, est.mass,
-                     est.impedance) >= GAIN_LIMIT:
+    if est.feedthrough_gain >= GAIN_LIMIT or _wave_gain_at(sc, est, lo) >= GAIN_LIMIT:
         return None
     for _ in range(60):
         mid = math.sqrt(lo * hi)
-        if exchange_gain(sc.contact_stiffness, sc.contact_damping, mid, est.mass,
-                         est.impedance) < GAIN_LIMIT:
+        if _wave_gain_at(sc, est, mid) < GAIN_LIMIT:
             lo = mid
         else:
             hi = mid
+    if feedthrough_gain(sc.contact_stiffness, sc.contact_damping, lo, sc.alpha,
+                        est.compliance) >= GAIN_LIMIT:
+        return None
     return lo
 
 
 def _culprit(sc, est: Estimate) -> tuple[str, float, str]:
-    """The contact field that sets the gain, its value and the largest one that runs."""
+    """The contact field that sets ``G_w``, its value and the largest one that runs."""
     w = critical_frequency(sc.dt)
     budget = GAIN_LIMIT / receptance(sc.dt, est.mass, est.impedance)   # |k + i w c| that runs
     if sc.contact_stiffness >= w * sc.contact_damping:
@@ -147,6 +226,76 @@ def _culprit(sc, est: Estimate) -> tuple[str, float, str]:
     # the damping's share of the gain tends to c_c / Z_w at small steps
     return ("contact.damping", sc.contact_damping,
             f"contact.damping < {GAIN_LIMIT * est.impedance:.3g} N s/m")
+
+
+def _down(x: float) -> float:
+    """``x`` rounded down to 3 significant digits (a bound that still holds as printed)."""
+    e = math.floor(math.log10(x)) - 2
+    return math.floor(x / 10.0 ** e) * 10.0 ** e
+
+
+def _feedthrough_culprit(prep, est: Estimate) -> tuple[str, float, str]:
+    """What the user set that makes ``G_s``: the contact damping when its share is the
+    larger, else a contact stiffness the scenario sets, else the catenary model's setting
+    of its compliance (the modal cutoff); with what runs."""
+    sc = prep.scenario
+    budget = GAIN_LIMIT / (HOLD_GAIN_NYQUIST * est.compliance)   # k_c + c_c |v/x| that runs
+    velocity = nyquist_velocity_gain(sc.dt, sc.alpha)
+    damped = sc.contact_damping > 0.0
+    stiffness = f"contact.stiffness < {_down(budget):.3g} N/m" + (" without contact damping"
+                                                                   if damped else "")
+    if damped and sc.contact_damping * velocity >= sc.contact_stiffness:
+        rest = (budget - sc.contact_stiffness) / velocity
+        runs = f"contact.damping < {_down(rest):.3g} N s/m" if rest > 0.0 else stiffness
+        return "contact.damping", sc.contact_damping, runs
+    setting = prep.catenary.compliance_setting
+    if sc.contact_stiffness != DEFAULT_CONTACT_STIFFNESS or setting is None:
+        return "contact.stiffness", sc.contact_stiffness, stiffness
+    return f"simulation.{setting}", getattr(sc, setting), stiffness
+
+
+def _setting_names(setting: str) -> str:
+    """A catenary model's setting as the scenario and the command line name it."""
+    return f"simulation.{setting} (--{setting.replace('_', '-')})"
+
+
+def _refusal(prep, est: Estimate, name: str, who: str) -> ParameterError:
+    """The one-line refusal of a staggered coupling beyond its limit."""
+    sc = prep.scenario
+    if est.wave_gain >= est.feedthrough_gain:
+        field, value, smaller = _culprit(sc, est)
+        step = _largest_stable_step(sc, est)
+        runs = ("no step size runs it; " if step is None else
+                f"runs with simulation.dt <= {step:.2g} s, ")
+        return ParameterError(
+            field, value,
+            f"the {name} coupling is unstable at simulation.dt = {sc.dt:g} s "
+            f"({who}: exchange gain {est.gain:.3g} >= {GAIN_LIMIT:g}, contact mass "
+            f"{est.mass:.3g} kg, wire impedance {est.impedance:.3g} N s/m); {runs}"
+            f"{smaller}, --coupling implicit or monolithic", sc.source)
+    field, value, smaller = _feedthrough_culprit(prep, est)
+    setting = prep.catenary.compliance_setting
+    higher = "" if setting is None else f", a higher {_setting_names(setting)}"
+    return ParameterError(
+        field, value,
+        f"the {name} coupling is unstable at simulation.dt = {sc.dt:g} s through the "
+        f"catenary's instantaneous compliance at the contact ({who}: {est.compliance:.3g} "
+        f"m/N, exchange gain {est.gain:.3g} >= {GAIN_LIMIT:g}); no smaller step runs it; "
+        f"runs with {smaller}{higher}, --coupling implicit or monolithic", sc.source)
+
+
+def _near_limit(prep, est: Estimate, name: str, who: str) -> str:
+    sc = prep.scenario
+    if est.wave_gain >= est.feedthrough_gain:
+        return (f"{who}: the {name} coupling is near its stability limit at dt = {sc.dt:g} s "
+                f"(exchange gain {est.gain:.2f}, refused at {GAIN_LIMIT:g}); check against "
+                "--coupling implicit or a smaller step")
+    setting = prep.catenary.compliance_setting
+    higher = "" if setting is None else f" or a higher {_setting_names(setting)}"
+    return (f"{who}: the {name} coupling is near its stability limit through the catenary's "
+            f"instantaneous compliance at the contact ({est.compliance:.3g} m/N, exchange gain "
+            f"{est.gain:.2f}, refused at {GAIN_LIMIT:g}); check against --coupling implicit"
+            f"{higher}")
 
 
 def check(prep, coupling: str) -> list[str]:
@@ -159,21 +308,9 @@ def check(prep, coupling: str) -> list[str]:
         who = f"pantograph {k + 1}" if len(prep.pantographs) > 1 else "the pantograph"
         if coupling in STAGGERED:
             if est.gain >= GAIN_LIMIT:
-                field, value, smaller = _culprit(sc, est)
-                step = _largest_stable_step(sc, est)
-                runs = ("no step size runs it; " if step is None else
-                        f"runs with simulation.dt <= {step:.2g} s, ")
-                raise ParameterError(
-                    field, value,
-                    f"the {name} coupling is unstable at simulation.dt = {sc.dt:g} s "
-                    f"({who}: exchange gain {est.gain:.3g} >= {GAIN_LIMIT:g}, contact mass "
-                    f"{est.mass:.3g} kg, wire impedance {est.impedance:.3g} N s/m); {runs}"
-                    f"{smaller}, --coupling implicit or monolithic", sc.source)
+                raise _refusal(prep, est, name, who)
             if est.gain >= GAIN_WARNING:
-                warnings.append(
-                    f"{who}: the {name} coupling is near its stability limit at dt = "
-                    f"{sc.dt:g} s (exchange gain {est.gain:.2f}, refused at "
-                    f"{GAIN_LIMIT:g}); check against --coupling implicit or a smaller step")
+                warnings.append(_near_limit(prep, est, name, who))
         if est.frequency * sc.dt > 1.0 / STEPS_PER_CONTACT_PERIOD:
             warnings.append(
                 f"{who}: contact frequency {est.frequency:.0f} Hz (contact.stiffness = "
@@ -182,6 +319,33 @@ def check(prep, coupling: str) -> list[str]:
                 f"{1.0 / (STEPS_PER_CONTACT_PERIOD * est.frequency):.2g} s): the force "
                 "chatters and the loss of contact is the step's")
     return warnings
+
+
+def departures(prep, statistics) -> list[str]:
+    """Warnings of a finished run whose statistics (one
+    :class:`~pantocosim.master.statistics.ContactStatistics` per pantograph) depart grossly
+    from what its static start sets: a mean contact force off the mean uplift by more than
+    :data:`MEAN_DEPARTURE` of it, or a loss of contact above the normal law of the run's mean
+    and standard deviation by more than :data:`LOSS_EXCESS_POINTS`."""
+    from scipy.special import ndtr
+
+    out = []
+    many = len(prep.pantographs) > 1
+    for k, (pan, st) in enumerate(zip(prep.pantographs, statistics)):
+        who = f"pantograph {k + 1}" if many else "the pantograph"
+        target = float(pan.options.mean_uplift)
+        doubt = "the numbers are doubtful; check against --coupling implicit or monolithic"
+        if abs(st.mean_n - target) > MEAN_DEPARTURE * abs(target):
+            out.append(f"{who}: mean contact force {st.mean_n:.1f} N departs from the "
+                       f"{target:.1f} N mean uplift its static start sets (by more than "
+                       f"{100 * MEAN_DEPARTURE:.0f} %): {doubt}")
+        expected = 100.0 * float(ndtr(-st.mean_n / st.std_n)) if st.std_n > 0 else 0.0
+        if st.loss_of_contact_percent > expected + LOSS_EXCESS_POINTS:
+            out.append(f"{who}: loss of contact {st.loss_of_contact_percent:.1f} % where its "
+                       f"force statistics (mean {st.mean_n:.1f} N, standard deviation "
+                       f"{st.std_n:.1f} N) predict {expected:.1f} % (normal law): the force "
+                       f"alternates faster than its statistics resolve; {doubt}")
+    return out
 
 
 class Monitor:

@@ -173,6 +173,27 @@ class ModalCatenary(SecondOrderModel):
         g.t = t
         return g
 
+    #: the cutoff sets the static correction, hence :meth:`contact_compliance`
+    compliance_setting = "modal_cutoff_hz"
+
+    def contact_compliance(self, times) -> np.ndarray:
+        """G(t) of the contact points' static correction at each time [m/N] (pantographs x
+        pantographs): xi follows the contact forces at once (G^-1 xi = N^T f has neither
+        mass nor damping), a massless spring in series with the contact (docs/stability.md).
+        The droppers' residual zeta is not instantaneous (its Rayleigh share beta k damps
+        it); a complete basis has no residual: zero. The geometry buffers are left at the
+        time they held."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        out = np.zeros((times.size, self.n_p, self.n_p))
+        if not self.nx:
+            return out
+        held = self._g.t
+        for i, t in enumerate(times):
+            out[i] = self.geometry(t).G
+        if held is not None:
+            self.geometry(held)
+        return out
+
     def contact_points(self, t: float):
         return self.geometry(t).points
 

@@ -160,6 +160,18 @@ class CatenaryModel(SecondOrderModel):
         """Axial force of every dropper (N, tension positive, zero when slack)."""
         return self.structure.bars.axial_forces(self.structure.full(q))[self.mesh.dropper_bars]
 
+    #: the model setting that sets :meth:`contact_compliance` (None: nothing does)
+    compliance_setting: str | None = None
+
+    def contact_compliance(self, times) -> np.ndarray:
+        """The catenary's instantaneous compliance at its contact points [m/N], one
+        (pantographs x pantographs) matrix per time in ``times``: how far each contact point
+        moves under the contact forces applied within the same instant, with no mass or
+        damping between (docs/stability.md). Zero here: every DOF of the contact wire
+        carries mass."""
+        n = len(self.x0)
+        return np.zeros((np.atleast_1d(times).size, n, n))
+
     # ------------------------------------------------------------------ statics
     def static_solution(self, point_loads=(), tol: float = 1e-10):
         """Static equilibrium (3.5)-(3.8) with upward point loads [(x, F), ...] on the

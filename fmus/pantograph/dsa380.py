@@ -404,7 +404,10 @@ class Dsa380Model(TorqueActuatedPantograph):
         half = 0.5 * p.bars[6].L
         W = p.bars[6].m * p.g + load
         # (2.12): 2 k_l (l - l0) z / l = W, l = sqrt(z^2 + (L7/2)^2); z = y5 - y10
-        z = self._solve_drop(W, half)
+        try:
+            z = self._solve_drop(W, half)
+        except ParameterError as exc:
+            raise self._uncarried(exc, W, half) from None
         n = self.n_dofs
         q = np.zeros(n)
         q[0] = th
@@ -431,6 +434,23 @@ class Dsa380Model(TorqueActuatedPantograph):
                                  self.name)
         th7 = 0.0 if n == 3 else float(q[3])
         return float(q[1] - p5[0]), float(q[2] - p5[1]), th7
+
+    def _uncarried(self, exc: ParameterError, W: float, half: float) -> ParameterError:
+        """The springs' refusal of the collector load ``W``, naming the speed when it is the
+        aerodynamic uplift at the speed the springs cannot carry (the load without it they
+        can)."""
+        o = self.options
+        if o.aero_force == 0.0:
+            return exc
+        try:
+            self._solve_drop(W + o.aero_force, half)
+        except ParameterError:
+            return exc
+        return ParameterError(
+            "speed_kmh", o.speed_kmh,
+            f"the aerodynamic uplift at this speed, {o.aero_force:.3g} N (aero_c1 v + aero_c2 "
+            f"v^2), leaves the collector a net load of {W:.3g} N that its springs "
+            f"(springs.k_l = {self.params.k_l:g} N/m) cannot carry")
 
     def _solve_drop(self, W: float, half: float) -> float:
         """Scalar (2.12) for the symmetric collector drop z = y5 - y10 (bisection).

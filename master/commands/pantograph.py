@@ -54,6 +54,7 @@ def run(args) -> int:
     from pantocosim.master.standalone import force_expression, simulate_pantograph
     from pantocosim.pantograph.presets import load_pantograph
 
+    from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
 
     check_times(args.duration, args.dt, args.alpha, args.max_steps)
@@ -69,8 +70,11 @@ def run(args) -> int:
     folder = OutputFolder(args.out, known=[f"{stem}.csv", f"{stem}.png"])
     try:
         with stop_on_interrupt() as stop:
-            res = simulate_pantograph(model, force, args.duration, args.dt, args.alpha,
-                                      linear=args.linear, stop=stop)
+            try:
+                res = simulate_pantograph(model, force, args.duration, args.dt, args.alpha,
+                                          linear=args.linear, stop=stop)
+            except ParameterError as exc:   # the model's speed is this command's --speed
+                raise exc.renamed({"speed_kmh": "--speed"}) from None
         if res.stopped is not None and len(res.time) < 2:
             raise Interrupted(f"{res.stopped}: nothing written")
         with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
