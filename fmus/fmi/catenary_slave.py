@@ -46,13 +46,16 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.core.hht import DEFAULT_ALPHA, FactorReuse
+from pantocosim.core.stepping import make_stepper
 
 from .front import Status
 from .given import track_sets
 from .slave_base import IntegratorSlave
 
 MAX_PANTOGRAPHS = 4
+#: the parameter ``factorization``: full Newton, once per step, reuse across steps
+FACTORIZATION_POLICIES = (FactorReuse.NEVER, FactorReuse.PER_STEP, FactorReuse.ACROSS_STEPS)
 #: a pantograph height at t0 that differs from the settled one by more settles it again [m]
 HEIGHT_TOL_M = 1e-9
 #: a pantograph height first delivered after t0 may differ from the height the start was
@@ -419,12 +422,12 @@ class CatenarySlave(IntegratorSlave):
         if policy not in (0, 1, 2):
             raise ParameterError("factorization", policy, "must be 0 (full Newton), 1 (once "
                                  "per step) or 2 (reuse across steps)")
-        self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
+        self._settings.reuse_factorization = FACTORIZATION_POLICIES[policy]
         self._mode, self._n = mode, n
         self._port_names = PortNames.of(n)
         if mode == 0:
             q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
-            integ = _forced_integrator(model, self._settings)
+            integ = make_stepper(model, self._settings, redo=True)
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
             self._system = model
             self._prev_inputs = F0.copy()
@@ -563,9 +566,7 @@ class CatenarySlave(IntegratorSlave):
         if self._prepared:
             return
         self._prepared = True
-        prepare = getattr(getattr(self._integ, "structure", None), "prepare", None)
-        if prepare is not None:
-            prepare(h)
+        self._integ.prepare(h)
 
     def _first_step_heights(self, new):
         """A zero-order-hold master passes the pantographs' heights at t0 before the first
@@ -618,20 +619,3 @@ class CatenarySlave(IntegratorSlave):
         d.update(zip(names.wire_velocities, vw.tolist()))
         d.update(zip(names.forces_out, F.tolist()))
         d.update(zip(names.uplifts, model.support_uplift(qc).tolist()))
-
-
-def _forced_integrator(model, settings):
-    """The integrator of the catenary under force inputs: closed-form steps for a model with
-    an affine form (constant matrices) or its own closed-form stepper, else Newton-Raphson."""
-    if hasattr(model, "closed_form"):
-        from pantocosim.core.affine_hht import ForcedAffineIntegrator
-
-        return ForcedAffineIntegrator(None, model.contact_points, settings,
-                                      structure=model.closed_form(settings, True))
-    if hasattr(model, "affine_form"):
-        from pantocosim.core.affine_hht import ForcedAffineIntegrator
-
-        return ForcedAffineIntegrator(model.affine_form(), model.contact_points, settings)
-    from pantocosim.core.hht import HHTIntegrator
-
-    return HHTIntegrator(model, settings)
