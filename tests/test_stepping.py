@@ -31,26 +31,33 @@ def line2():
     return with_spans(load_catenary("en50318"), 2)
 
 
-@pytest.mark.parametrize("name, forced, coupled, structure", [
-    ("nonlinear", HHTIntegrator, AssembledStepper, None),
-    ("linear", ForcedStepper, CondensedStepper, AffineHHT),
-    ("modal", ForcedStepper, CondensedStepper, "ModalHHT")])
-def test_the_factory_picks_what_the_model_declares(line2, name, forced, coupled, structure):
-    cat = make_catenary(name, line2, x0=[20.0], speed=250 / 3.6)
+def test_the_catenary_models_declare_their_stepping():
+    from pantocosim.catenary.linear import LinearCatenary
+    from pantocosim.catenary.modal import ModalCatenary
+    from pantocosim.catenary.modal_step import ModalHHT
+    from pantocosim.catenary.model import CatenaryModel
+
+    assert CatenaryModel.stepping == contract.NEWTON
+    assert LinearCatenary.stepping == "affine" and ModalCatenary.stepping == "modal"
+    assert contract.STRUCTURE_STEPS["modal"] is ModalHHT
+
+
+def test_the_factory_picks_what_the_model_declares(line2):
+    cat = make_catenary("linear", line2, x0=[20.0], speed=250 / 3.6)
     pan = load_pantograph("en50318-2mass", speed_kmh=250.0)
     alone = make_stepper(cat, SETTINGS, redo=True)
     with_pan = make_stepper(cat, SETTINGS, [pan], PenaltyContact(50_000.0, 0.0))
-    assert type(alone) is forced and type(with_pan) is coupled
-    if structure is not None:
-        for st in (alone.structure, with_pan.structure):
-            assert type(st).__name__ == getattr(structure, "__name__", structure)
-        assert alone.structure.keep_free_response and not with_pan.structure.keep_free_response
+    assert type(alone) is ForcedStepper and type(with_pan) is CondensedStepper
+    for st in (alone.structure, with_pan.structure):
+        assert type(st) is AffineHHT
+    assert alone.structure.keep_free_response and not with_pan.structure.keep_free_response
+    assert type(make_stepper(pan, SETTINGS)) is HHTIntegrator
     # in-process co-simulation takes the catenary's stepper from the same factory
     from pantocosim.master.cosim import ModelSubsystem
 
     sub = ModelSubsystem(cat, cat.static_state([120.0]), SETTINGS, [120.0],
                          lambda integ: cat.wire_state(integ.t, integ.q, integ.v))
-    assert type(sub.integ) is forced
+    assert type(sub.integ) is ForcedStepper
 
 
 def test_an_unknown_stepping_is_refused():
@@ -124,8 +131,14 @@ def test_worked_example_runs_a_pantograph_like_the_assembled_newton(example):
     z_wire = bed.z0 + cp.weights @ q_bed[cp.dofs]
     q0 = np.concatenate([q_bed, pan.static_equilibrium(F0, z_wire + F0 / contact.stiffness)])
     fast = make_stepper(bed, SETTINGS, [pan], contact)
-    ref = AssembledStepper(bed, [pan], contact, SETTINGS)
-    assert isinstance(fast, CondensedStepper)
+
+    class NewtonBed(type(bed)):
+        stepping = contract.NEWTON
+
+    newton_bed = _bed(example)
+    newton_bed.__class__ = NewtonBed
+    ref = make_stepper(newton_bed, SETTINGS, [pan], contact)
+    assert isinstance(fast, CondensedStepper) and isinstance(ref, AssembledStepper)
     for st in (fast, ref):
         st.initialize(0.0, q0)
         st.prepare(1e-3)
