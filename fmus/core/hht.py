@@ -590,9 +590,19 @@ class HHTIntegrator:
         self.model.set_internal_state(state.get("model"))
 
     @staticmethod
-    def picklable_state(state: dict) -> dict:
-        """A copy of ``state`` without the (unpicklable) factorization object."""
-        out = dict(state)
-        if out.get("factor") is not None:
-            out["factor"] = replace(out["factor"], solve=None)
-        return out
+    def picklable_state(state):
+        """:func:`picklable_state`."""
+        return picklable_state(state)
+
+
+def picklable_state(state):
+    """A copy of a stepper's state (:meth:`HHTIntegrator.get_state`, or one holding such
+    states) that pickles: every kept :class:`Factorization` without its solve object
+    (:meth:`HHTIntegrator.set_state` factorizes its matrix again, bit for bit)."""
+    if isinstance(state, Factorization):
+        return replace(state, solve=None)
+    if isinstance(state, dict):
+        return {k: picklable_state(v) for k, v in state.items()}
+    if type(state) in (list, tuple):
+        return type(state)(picklable_state(v) for v in state)
+    return state

@@ -208,7 +208,6 @@ class CatenarySlave(IntegratorSlave):
         self.real("newton_iterations", 0.0, "local", None,
                   "Newton iterations of the last communication step")
         self._model = None       # CatenaryModel
-        self._system = None      # the model the integrator drives (catenary or coupled)
         self._standins = []      # PrescribedPantograph per pantograph (mode 1)
         self._integ = None
         self._n = 1
@@ -429,7 +428,6 @@ class CatenarySlave(IntegratorSlave):
             q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
             integ = make_stepper(model, self._settings, redo=True)
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
-            self._system = model
             self._prev_inputs = F0.copy()
             for k in range(1, n + 1):
                 setattr(self, f"contact_force_{k}", float(F0[k - 1]))
@@ -465,8 +463,6 @@ class CatenarySlave(IntegratorSlave):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
         static start (settled against the heights where no static force is given)."""
         from pantocosim.catenary.operating_height import static_height_law
-        from pantocosim.core.coupled import CoupledSystem
-        from pantocosim.core.hht import HHTIntegrator
         from pantocosim.core.prescribed import PrescribedPantograph
 
         if np.all(F0 > 0):
@@ -483,10 +479,9 @@ class CatenarySlave(IntegratorSlave):
         for k, (z, v) in enumerate(heights, start=1):
             setattr(self, f"pantograph_height_{k}", float(z))
             setattr(self, f"pantograph_velocity_{k}", float(v))
-        system = CoupledSystem(model, standins, contact)
-        integ = HHTIntegrator(system, self._settings)
-        integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
-        self._system, self._standins, self._integ = system, standins, integ
+        integ = make_stepper(model, self._settings, standins, contact, redo=True)
+        integ.initialize(0.0, q0)
+        self._standins, self._integ = standins, integ
         self._settled_forces = F0
         self._prev_inputs = np.array(heights, float)
 
@@ -613,7 +608,7 @@ class CatenarySlave(IntegratorSlave):
         if self._mode == 0:
             F = self._prev_inputs
         else:
-            F = self._system.contact_forces(t, integ.q, integ.v)
+            F = integ.contacts()[0]
         names, d = self._port_names, self.__dict__
         d.update(zip(names.wire_heights, zw.tolist()))
         d.update(zip(names.wire_velocities, vw.tolist()))
