@@ -15,7 +15,7 @@ import numpy as np
 
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.stepper import warm_up
+from pantocosim.core.stepper import CoupledStepper, warm_up
 from pantocosim.core.stepping import make_stepper
 from pantocosim.master import stability
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
@@ -34,7 +34,7 @@ def progress_bar(total: int, label: str, enabled: bool | None = None):
                 smoothing=0.1)
 
 
-def monolithic_stepper(prep: Prepared, settings: HHTSettings):
+def monolithic_stepper(prep: Prepared, settings: HHTSettings) -> CoupledStepper:
     """The stepper of catenary + pantographs + contacts in the static start, prepared and
     warmed up for steps of the scenario's dt (a paced loop then has no first-use step)."""
     stepper = make_stepper(prep.catenary, settings, prep.pantographs, prep.contact)

@@ -78,6 +78,18 @@ class Stepper(Protocol):
     def set_state(self, state: Any) -> None: ...
 
 
+class CoupledStepper(Stepper, Protocol):
+    """A stepper of a structure with bodies (pantographs) in contact, q = [structure |
+    body 1 | ...]: what a monolithic run reads after each step."""
+
+    @property
+    def structure_q(self) -> np.ndarray: ...
+
+    def contacts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(contact forces, contact heights, wire heights), one per body."""
+        ...
+
+
 class StructureStep(Protocol):
     """A closed-form HHT-alpha step of a structure loaded on moving points, in two halves:
     ``begin(h, loads)`` (loads: (dofs, weights) of each load vector n_k(t + h)) predicts and

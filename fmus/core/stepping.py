@@ -23,8 +23,8 @@ from . import affine_hht  # noqa: F401  (registers the "affine" structure step)
 from .condensed import CondensedStepper
 from .coupled import CoupledSystem
 from .hht import HHTIntegrator
-from .stepper import NEWTON, Stepper, StepReport, StructureStep, declared_stepping, \
-    structure_step
+from .stepper import NEWTON, CoupledStepper, Stepper, StepReport, StructureStep, \
+    declared_stepping, structure_step
 
 
 class ForcedStepper:
@@ -121,12 +121,14 @@ class AssembledStepper:
         self.integ.set_state(state)
 
 
-def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False) -> Stepper:
+def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False
+                 ) -> Stepper | CoupledStepper:
     """The stepper of ``model`` under its inputs, or with ``bodies`` (pantographs) in
     ``contact`` (a penalty law), as the model declares (``stepping``, :mod:`.stepper`; table
     above). ``redo``: keep what a step redone from the same state reuses (a co-simulation
     rollback redoes steps). Initialize it with ``initialize(t0, q0, v0, inputs0)``; with
-    bodies, q0 is [structure | body 1 | ...] at rest."""
+    bodies it is a :class:`~.stepper.CoupledStepper`, q0 = [structure | body 1 | ...] at
+    rest."""
     closed = declared_stepping(model) != NEWTON
     if bodies:
         if closed:
