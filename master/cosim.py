@@ -1,9 +1,9 @@
 """Co-simulation runs of a scenario: the pantograph FMUs and the catenary FMU coupled by the
 master through their ports only (explicit Jacobi / Gauss-Seidel, or implicit with rollback).
 
-The same coupling runs on in-process subsystems (:class:`ModelSubsystem`: a model and its own
-HHT integrator behind the same port semantics), which the tests use to check the algorithms
-against the monolithic solution without FMUs.
+The same coupling runs on in-process subsystems (:class:`ModelSubsystem`: a model and the
+stepper it declares, as inside its FMU, behind the same port semantics), which the tests use
+to check the algorithms against the monolithic solution without FMUs.
 """
 
 from __future__ import annotations
@@ -15,14 +15,17 @@ import numpy as np
 
 from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import Interrupted, PantocosimError
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import HHTSettings
+from pantocosim.core.stepping import make_stepper
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import REQUIRED_PORTS
 from pantocosim.master.coupling import Coupler, CouplingSettings, scheme_named
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.recorder import Recorder
-from pantocosim.master.run import Prepared, RunResult, column_names, progress_bar
+from pantocosim.master.run_results import COSIM_COUNTERS, RunResult, column_names
+from pantocosim.master.run_setup import Prepared
+from pantocosim.master.run_stepping import progress_bar
 
 #: pantograph options a pantocosim pantograph FMU takes as parameters: the master sets them
 #: from the scenario's model, so the FMU runs the same pantograph
@@ -32,11 +35,12 @@ PANTOGRAPH_OPTIONS = ("static_force", "aero_c1", "aero_c2", "friction_force",
 
 # ---------------------------------------------------------------------- subsystems
 class ModelSubsystem:
-    """A model with its own HHT integrator behind the FMU port semantics (in-process)."""
+    """A model with the stepper it declares (:func:`~pantocosim.core.stepping.make_stepper`,
+    as its FMU takes it) behind the FMU port semantics (in-process)."""
 
     def __init__(self, model, q0, settings: HHTSettings, inputs0, outputs):
         self.model = model
-        self.integ = HHTIntegrator(model, settings)
+        self.integ = make_stepper(model, settings, redo=True)
         self.integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.asarray(inputs0, float))
         self._outputs = outputs
         self._forces = np.asarray(inputs0, float).copy()
@@ -246,7 +250,7 @@ def fmu_subsystems(prep: Prepared, instances: list, plan=None):
         else:
             ramp = pan.options.ramp
             p.update(initial_contact_force=F0, start_mode=1,
-                     initial_height=float(prep.extra["actuation_height"][k]),
+                     initial_height=float(prep.actuation.height[k]),
                      ramp_start_time=ramp.start, ramp_duration=ramp.duration,
                      lowered_height=ramp.lowered_height)
         fmu.initialize(p)
@@ -290,17 +294,16 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     instances: list = []
     # the FMU files are checked before anything is written
     plan = None if in_process else (plan or fmu_paths(prep))
-    names = column_names(len(prep.pantographs), len(prep.support_x))
+    names = column_names(len(prep.pantographs), len(prep.support_x), COSIM_COUNTERS)
     rec = Recorder(None if out_dir is None else Path(out_dir) / "timeseries.csv", names,
                    rows=prep.n_steps + 1)
     with stop_on_interrupt() as stop:
-        result = _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
-                            stop)
-    result.warnings = warnings
-    return result
+        return _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress,
+                          stop, warnings)
 
 
-def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, stop):
+def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, stop,
+               warnings):
     """The set-up and time loop of :func:`run_cosim` (a Ctrl-C sets ``stop``: the loop ends
     after the step in flight; a diverging run stops with
     :class:`~pantocosim.master.stability.Diverged`)."""
@@ -324,11 +327,11 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
         n_sup = len(prep.support_x)
 
         #: a row: time, (x, contact force, contact height, wire height) per pantograph,
-        #: support uplifts, iterations (:func:`column_names`)
+        #: support uplifts, coupling and Newton iterations (:func:`column_names`)
         width = len(rec.names)
         first_uplift = 1 + 4 * n_p
 
-        def record(t, forces, iterations):
+        def record(t, forces, iterations, newton):
             zp, _, zw, _ = coupler.interface()
             row = np.zeros(width)
             row[0] = t
@@ -336,26 +339,28 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
                 row[1 + 4 * k:5 + 4 * k] = (spec_x(k, t), forces[k], zp[k], zw[k])
             u = csub.uplift()[:n_sup]
             row[first_uplift:first_uplift + len(u)] = u
-            row[-1] = iterations
+            row[-2:] = iterations, newton
             rec.append(row)
             monitor.check(t, forces)
 
         def spec_x(k, t):
             return sc.pantographs[k].position_m + sc.speed * t
 
-        record(0.0, prep.static_forces, 0)
+        record(0.0, prep.static_forces, 0, 0.0)
         bar = progress_bar(prep.n_steps, f"{sc.name} {scheme}", progress)
         t = 0.0
         t_loop = _time.perf_counter()
         try:
             stop.check(t, 0, prep.n_steps)   # a Ctrl-C during the set-up
+            newton = coupler.catenary_newton_iterations
             for i in clock.steps(prep.n_steps):
+                done = len(newton)
                 iters = coupler.step(t, sc.dt)
                 t = (i + 1) * sc.dt
                 # explicit schemes record the force the law gives at the new state; implicit
                 # records the converged interface force
                 F = coupler.forces if coupler.scheme.iterative else coupler.contact_forces()
-                record(t, F, iters)
+                record(t, F, iters, sum(newton[done:]))
                 bar.update(1)
                 stop.check(t, i + 1, prep.n_steps)
         finally:
@@ -370,17 +375,12 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
         rec.close()
         for inst in instances:
             inst.terminate()
-    iterations = np.array(coupler.iterations if coupler else [])
-    newton = np.array(coupler.catenary_newton_iterations if coupler else [])
     end = _time.perf_counter()
     t_loop = end if t_loop is None else t_loop
     # wall time of the time stepping (what the real-time factor measures); setting up the
     # FMUs (instantiation, the catenary's initial configuration) is reported apart
-    result = RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
-                       wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall,
-                       summary=clock.summary())
-    iterative = scheme_named(scheme).iterative
-    result.coupling_iterations = iterations if iterative else None
-    result.coupling_tolerance = settings.tolerance if iterative else None
-    result.newton_iterations = newton
-    return result
+    return RunResult(prep=prep, coupling=scheme, columns=rec.columns(),
+                     wall_time_s=end - t_loop, error=error, setup_time_s=t_loop - t_wall,
+                     summary=clock.summary(), warnings=warnings,
+                     coupling_tolerance=(settings.tolerance if scheme_named(scheme).iterative
+                                         else None))

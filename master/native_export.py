@@ -115,7 +115,7 @@ def lumped_pantograph(model, settings, h: float, height: float, force: float,
     integ.initialize(0.0, q0, np.zeros(n), np.array([force]))
     a0, f0 = integ.a.copy(), integ.f_rest.copy()
     integ.step(h, np.array([force]))            # forms S^-1 of step h (_step_linear)
-    S_inv = integ._linear[6]
+    S_inv = integ.closed_form_step.S_inv
     lo, hi = model.height_range()
     o = model.options
     scalars = [h, settings.alpha, settings.beta, settings.gamma, lo, hi, o.static_force,

@@ -131,7 +131,7 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
     static start of the scenario, as the Python FMU starts in our master)."""
     from pantocosim.core.hht import HHTSettings
     from pantocosim.master import native_export
-    from pantocosim.master.run import scenario_pantograph
+    from pantocosim.master.run_setup import scenario_pantograph
 
     sc = prep.scenario
     spec = sc.pantographs[k]

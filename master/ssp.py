@@ -85,7 +85,7 @@ def scenario_start_values(scenario) -> dict:
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.model import CatenaryModel
     from pantocosim.catenary.operating_height import contact_height_laws
-    from pantocosim.master.run import analysis_window
+    from pantocosim.master.run_checks import analysis_window
     from pantocosim.master.scenario import load_scenario
     from pantocosim.pantograph.presets import load_pantograph
     from pantocosim.pantograph.static_start import static_start_on_laws

@@ -42,7 +42,7 @@ def main(argv: list[str]) -> None:
         else:
             prep.scenario = dataclasses.replace(sc, newton_rtol=rtol)
             run = ref_run if rtol == 1e-10 else run_monolithic(prep, None, progress=False)
-            its = float(np.mean(run.columns["iterations"][1:]))
+            its = float(np.mean(run.columns["newton_iterations"][1:]))
         if run.error is not None:
             raise SystemExit(f"rtol {rtol:g}: {run.error}")
         F = run.columns["contact_force_1"]

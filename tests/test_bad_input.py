@@ -470,12 +470,12 @@ def test_failing_run_leaves_earlier_results_intact(tmp_path, capsys, monkeypatch
                             raising=False)
         extra = []
     else:
-        import pantocosim.master.run as run
+        import pantocosim.master.run_results as run_results
 
         def full(path, data):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-        monkeypatch.setattr(run, "write_json", full)
+        monkeypatch.setattr(run_results, "write_json", full)
         extra = ["--no-plots"]
     sc = tmp_path / "bad.toml"
     sc.write_text(text)

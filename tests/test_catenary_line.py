@@ -13,7 +13,7 @@ from pantocosim.catenary.model import CatenaryModel
 from pantocosim.catenary.statics import (element_tensions, group_horizontal_tensions,
                                          solve_static)
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 from pantocosim.master.cli import main
 
 EN_TEXT = (DATA_DIR / "en50318.toml").read_text()
@@ -229,7 +229,7 @@ def _run(model, integ, steps, F):
 def test_slack_droppers_and_bitwise_rollback(small):
     F = 300.0
     m = CatenaryModel(small, x0=[40.0], speed=80.0)
-    integ = HHTIntegrator(m, HHTSettings(alpha=-0.1, reuse_factorization=True))
+    integ = HHTIntegrator(m, HHTSettings(alpha=-0.1, reuse_factorization=FactorReuse.ACROSS_STEPS))
     integ.initialize(0.0, m.static_state([F]), None, [F])
     keys, slack_seen, hist = set(), 0, []
     for _ in range(250):

@@ -8,7 +8,7 @@ from scipy.optimize import brentq
 
 from pantocosim.catenary.mesh import straight_wire
 from pantocosim.catenary.model import CatenaryModel
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 
 MU, EA, EI, T, L = 1.35, 1.4e7, 195.0, 20000.0, 60.0
 
@@ -82,7 +82,7 @@ def test_moving_force_on_taut_string():
     v = beta * c
     model = CatenaryModel(straight_wire(L, 120, MU, EA, 0.0, T, gravity=0.0), x0=[0.0],
                           speed=v)
-    integ = HHTIntegrator(model, HHTSettings(alpha=-0.05, reuse_factorization=True))
+    integ = HHTIntegrator(model, HHTSettings(alpha=-0.05, reuse_factorization=FactorReuse.ACROSS_STEPS))
     integ.initialize(0.0, model.q_static, None, [F])
     h = 1e-3
     z0 = model.wire_height(0.0, model.q_static)[0]

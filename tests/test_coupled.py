@@ -116,8 +116,8 @@ def test_static_start_is_an_equilibrium(short_monolithic):
     assert prep.static_forces[0] == pytest.approx(115.0, rel=0.02)
     # the actuation delivers the mean uplift at the mean loaded height of the window
     pant = prep.pantographs[0]
-    q_mean = pant.static_equilibrium(115.0, prep.extra["actuation_height"][0])
-    assert pant.contact_height(q_mean) == pytest.approx(prep.extra["actuation_height"][0])
+    q_mean = pant.static_equilibrium(115.0, prep.actuation.height[0])
+    assert pant.contact_height(q_mean) == pytest.approx(prep.actuation.height[0])
 
 
 @pytest.mark.slow

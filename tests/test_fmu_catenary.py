@@ -91,6 +91,7 @@ def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus, policy):
     factorization policy (1: once per step; 2: reuse across steps, the default) and the run
     settings (linear predictor, Newton tolerance newton_rtol)."""
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
+    from pantocosim.fmi.catenary_slave import FACTORIZATION_POLICIES
 
     x0, F0 = [30.0, 95.0], [120.0, 100.0]
     steps = 120
@@ -105,7 +106,7 @@ def test_mode0_equals_the_in_process_model_and_rolls_back_bitwise(fmus, policy):
     # in-process reference: CatenaryModel + HHTIntegrator with the same settings
     m = short_catenary(x0)
     settings = HHTSettings.for_runs(-0.05, 1e-6)
-    settings.reuse_factorization = {1: "step", 2: True}[policy]
+    settings.reuse_factorization = FACTORIZATION_POLICIES[policy]
     integ = HHTIntegrator(m, settings)
     integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
     ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
@@ -154,7 +155,7 @@ def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0
     static handshake of the SSP)."""
     from pantocosim.core.penalty_contact import PenaltyContact
     from pantocosim.core.coupled import CoupledSystem
-    from pantocosim.core.hht import HHTIntegrator, HHTSettings
+    from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
     from pantocosim.pantograph.presets import load_pantograph
 
     cat = short_catenary([x0], speed_kmh)
@@ -166,7 +167,7 @@ def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0
     qp = pan.static_equilibrium(F0, z_w + F0 / contact.stiffness)
     system = CoupledSystem(cat, [pan], contact)
     q0 = np.concatenate([qc, qp])
-    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05, reuse_factorization="step"))
+    integ = HHTIntegrator(system, HHTSettings(alpha=-0.05, reuse_factorization=FactorReuse.PER_STEP))
     integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
     rec = []
 

@@ -13,7 +13,7 @@ pytestmark = pytest.mark.slow
 def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.linear import LinearCatenary
-    from pantocosim.core.affine_hht import ForcedAffineIntegrator
+    from pantocosim.core.stepping import ForcedStepper, make_stepper
     from pantocosim.core.hht import HHTSettings
 
     x0, F0 = [30.0], [120.0]
@@ -25,8 +25,8 @@ def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):
     res = probe("catenary_trace", fmus["catenary"], params=params, forces=forces.tolist(),
                 n_uplift=5)
     m = LinearCatenary(with_spans(load_catenary("en50318"), 4), x0=x0, speed=300.0 / 3.6)
-    integ = ForcedAffineIntegrator(m.affine_form(), m.contact_points,
-                                   HHTSettings.for_runs(-0.05, 1e-6))
+    integ = make_stepper(m, HHTSettings.for_runs(-0.05, 1e-6), redo=True)
+    assert isinstance(integ, ForcedStepper)
     integ.initialize(0.0, m.static_state(np.array(F0)), np.zeros(m.n_dofs), np.array(F0))
     ref = [list(m.wire_height(0.0, integ.q)) + list(m.wire_velocity(0.0, integ.q, integ.v))]
     slack_seen = False

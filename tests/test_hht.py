@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pantocosim.core.errors import ConvergenceError, ParameterError
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 from pantocosim.core.linear_model import LinearModel
 from pantocosim.core.model import Evaluation, SecondOrderModel
 
@@ -134,7 +134,7 @@ def test_bad_alpha_is_rejected():
 def test_factorization_reuse_matches_full_newton():
     model = _Cubic(eps=1.0)
     out = []
-    for reuse in (False, True):
+    for reuse in (FactorReuse.NEVER, FactorReuse.ACROSS_STEPS):
         integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization=reuse))
         integ.initialize(0.0, [1.0], [0.0])
         for _ in range(500):
@@ -145,7 +145,7 @@ def test_factorization_reuse_matches_full_newton():
 
 def test_state_rollback_is_bitwise():
     model = _Cubic(eps=3.0)
-    integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization=True))
+    integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization=FactorReuse.ACROSS_STEPS))
     integ.initialize(0.0, [1.0], [0.0])
     for _ in range(10):
         integ.step(1e-2)
@@ -158,7 +158,7 @@ def test_state_rollback_is_bitwise():
 
 def test_step_policy_redo_reuses_factorization_bitwise():
     model = _Cubic(eps=3.0)
-    integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization="step"))
+    integ = HHTIntegrator(model, HHTSettings(alpha=-0.1, reuse_factorization=FactorReuse.PER_STEP))
     integ.initialize(0.0, [1.0], [0.0])
     for _ in range(5):
         integ.step(1e-2)

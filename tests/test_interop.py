@@ -120,7 +120,7 @@ def test_handshake_start_is_the_monolithic_static_start():
         assert pan.contact_height(q) == pytest.approx(h_mono, abs=1e-3), model
         # the actuation the laws set is the monolithic one: same operating height
         z_op = laws.operating_offset[0] + laws.operating_slope[0] * pan.options.mean_uplift
-        assert z_op == pytest.approx(prep.extra["actuation_height"][0], abs=1e-4)
+        assert z_op == pytest.approx(prep.actuation.height[0], abs=1e-4)
 
 
 # ------------------------------------------------------------------------- masters

@@ -157,7 +157,7 @@ def pantograph_matches(prep, folder, host, tmp_path):
     """The native pantograph of ``prep``'s first pantograph in the C host against the Python
     pantograph FMU's stepper (the same model, start and closed-form step), to 1e-12."""
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
-    from pantocosim.master.run import scenario_pantograph
+    from pantocosim.master.run_setup import scenario_pantograph
 
     sc = prep.scenario
     got, counts = run_host(host, ["pantograph", folder, STEPS, DT], tmp_path)

@@ -28,20 +28,19 @@ def python_loop(scenario: Path, n_steps: int) -> dict:
     from pantocosim.core.hht import HHTSettings
     from pantocosim.master.pacing import StepClock
     from pantocosim.master.run import prepare
+    from pantocosim.master.run_stepping import monolithic_stepper
     from pantocosim.master.scenario import load_scenario
-    from pantocosim.master.steppers import make_stepper
 
     sc = load_scenario(scenario)
     sc.catenary_model = "linear"
     prep = prepare(sc)                                  # model set-up: before the loop
-    stepper = make_stepper(prep, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
-    stepper.warm_up(sc.dt)
+    stepper = monolithic_stepper(prep, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
     clock = StepClock(sc.dt, realtime=True)             # step k ends at t0 + (k + 1) dt
     forces = []
     for k in clock.steps(n_steps):
         stepper.step(sc.dt)
-        contacts, uplift = stepper.observe()            # (F, z_pantograph, z_wire) each
-        forces.append(contacts[0][0])                   # ... to the hardware, and back
+        F, z_pantograph, z_wire = stepper.contacts()    # one of each per pantograph
+        forces.append(F[0])                             # ... to the hardware, and back
     timing = clock.summary()
     # --8<-- [end:loop]
     return {"timing": timing_of(timing), "forces": forces}

@@ -36,6 +36,9 @@ class LinearCatenary(CatenaryModel):
     matrices and exact dropper slackening in the dynamics and in :meth:`static_solution`."""
 
     name = "linear"
+    #: its HHT steps are taken in closed form on :meth:`affine_form`
+    #: (:class:`~pantocosim.core.affine_hht.AffineHHT`)
+    stepping = "affine"
 
     def __init__(self, catenary, x0=(0.0,), speed: float = 0.0, **kwargs):
         super().__init__(catenary, x0, speed, **kwargs)

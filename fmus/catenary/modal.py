@@ -36,6 +36,7 @@ from .linear import LinearCatenary
 from . import modal_kernels as _k
 from .modal_basis import modes_below
 from .modal_residual import InterfaceFlexibility
+from .modal_step import ModalSolve
 from .model import CatenaryModel
 
 #: coefficient sets (time steps) whose shared Woodbury pieces are kept
@@ -60,6 +61,8 @@ class ModalCatenary(SecondOrderModel):
     """``ModalCatenary(catenary, x0, speed, cutoff_hz=...)``, or around a ``linear`` model."""
 
     name = "modal"
+    #: its HHT steps are taken in closed form (:class:`~.modal_step.ModalHHT`)
+    stepping = "modal"
 
     def __init__(self, catenary=None, x0=(0.0,), speed: float = 0.0, *, cutoff_hz: float = 20.0,
                  element_size=None, linear: LinearCatenary | None = None,
@@ -245,12 +248,6 @@ class ModalCatenary(SecondOrderModel):
             del kept[next(iter(kept))]
         return base
 
-    def closed_form(self, settings, keep_free_response: bool = False):
-        """The closed-form HHT stepper of this model (:mod:`.modal_step`)."""
-        from .modal_step import ModalHHT
-
-        return ModalHHT(self, settings, keep_free_response)
-
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         g = self.geometry(t)
         m, nz = self.m, self.nz
@@ -278,7 +275,7 @@ class ModalCatenary(SecondOrderModel):
         """Solve with diag(c_a + c_f (c_v zeta + omega^2)) on eta, c_f k on zeta, c_f G^-1
         on xi (G at the latest evaluated time), minus the slack droppers' rank-one terms
         (Woodbury)."""
-        return _ModalSolve(self, *S.c, S.rows, S.s)
+        return ModalSolve(self, *S.c, S.rows, S.s)
 
     def commit(self, t, q, v, a, inputs) -> None:
         self._slack_committed = self._dropper_forces(q, v)[1]
@@ -349,30 +346,3 @@ class ModalCatenary(SecondOrderModel):
         finally:
             self._slack_committed = saved
         raise ConvergenceError("modal catenary statics: the slack set did not settle")
-
-
-class _ModalSolve:
-    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi (G at
-    the latest geometry). The diagonal, U = T diag^-1 and the droppers' Gram matrix
-    T diag^-1 T^T are the model's per coefficient set (:meth:`ModalCatenary.woodbury_base`),
-    so a slack set costs the inverse of its own small block only."""
-
-    def __init__(self, model: ModalCatenary, c_a, c_v, c_f, rows, s):
-        self.model, self.c = model, (c_a, c_v, c_f)
-        self.inv_diag, self.U, gram = model.woodbury_base(c_a, c_v, c_f)
-        self.K = model.m + model.nz
-        self.rows = np.ascontiguousarray(rows, dtype=np.int64)
-        self.s = np.ascontiguousarray(s, dtype=float)
-        ns = self.rows.size
-        self.small_inv = np.empty((ns, ns))
-        if not _k.slack_block_inverse(gram, self.rows, self.s, np.empty((ns, 2 * ns)),
-                                      self.small_inv):
-            raise np.linalg.LinAlgError("modal catenary: singular slack-set correction")
-        self.y = np.zeros(ns)
-
-    def __call__(self, r, out=None):
-        r = np.ascontiguousarray(r, dtype=float)
-        out = np.empty_like(r) if out is None else out
-        _k.diag_woodbury(r, 1.0, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
-                         self.model.T_K, self.rows, self.small_inv, self.s, self.y, out)
-        return out

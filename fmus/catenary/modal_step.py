@@ -29,18 +29,25 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.affine_hht import _new_id, check_slack_passes, restore_step_state, step_state
+from ..core.stepper import register_structure_step
 from . import modal_kernels as _k
-from .modal import _ModalSolve
 
 #: slack sets whose Woodbury pieces are kept (first in, first out)
 KEPT_SOLVES = 64
 
 
+@register_structure_step("modal")
 class ModalHHT:
     """``ModalHHT(model, settings)``: ``initialize(t0, y0, v0, F0)``; per step
     ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`, then
     ``finish(F)`` (False: the slack set changed and the step was re-solved; supply F
-    again)."""
+    again): a :class:`~pantocosim.core.stepper.StructureStep`, registered as ``"modal"``.
+
+    The constant step data are the model's (:class:`~.modal.ModalCatenary`): ``omega2``
+    and ``zeta_c`` (the modal diagonal), ``kbar`` and ``T_K`` (the droppers' static
+    correction and elongation rows), ``droppers`` (their rank-one terms), ``r0``, and the
+    moving interface ``geometry(t)``; :class:`ModalSolve` holds the Woodbury pieces of a
+    slack set."""
 
     def __init__(self, model, settings, keep_free_response: bool = False):
         self.model, self.settings = model, settings
@@ -91,6 +98,10 @@ class ModalHHT:
     def c_v(self) -> float:
         return self._coef[1]
 
+    def prepare(self, h: float) -> None:
+        """Nothing to pay ahead: the Newton matrix is diagonal plus the Woodbury pieces of
+        each slack set, formed when the set first occurs."""
+
     # ------------------------------------------------------------------ one step
     def begin(self, h: float, loads) -> None:
         s = self.settings
@@ -131,7 +142,7 @@ class ModalHHT:
         if self.W.shape[0] != len(loads):
             self.W = np.zeros((len(loads), self.N))
 
-    def _woodbury(self, slack: np.ndarray) -> _ModalSolve:
+    def _woodbury(self, slack: np.ndarray) -> ModalSolve:
         """The solve with the step's Newton matrix less the rank-one rows of ``slack`` and
         the committed set (kept per pair of sets)."""
         key = slack.tobytes() + self.committed.tobytes()
@@ -139,7 +150,7 @@ class ModalHHT:
         if ws is None:
             c_a, c_v, c_f = self._coef
             rows, s = self.model.droppers.removed_stiffness(slack, self.committed, c_v, c_f)
-            ws = _ModalSolve(self.model, c_a, c_v, c_f, rows, s)
+            ws = ModalSolve(self.model, c_a, c_v, c_f, rows, s)
             if len(self._solves) >= KEPT_SOLVES:
                 del self._solves[next(iter(self._solves))]
             self._solves[key] = ws
@@ -206,3 +217,30 @@ def _screen_tables(model) -> tuple:
     tol = np.array([2.0 * (K + 2) * u / (1.0 - (K + 2) * u) for u in (2.0 ** -24, 2.0 ** -53)])
     return (np.ascontiguousarray(T, dtype=np.float32), T, np.ascontiguousarray(Tb),
             np.ascontiguousarray(Tm), tol, dr.N0, dr.ka, dr.tension_only, max(1, nd // 8))
+
+
+class ModalSolve:
+    """(A0 - sum_d s_d t_d t_d^T)^-1 with A0 = diag on eta and zeta (+) c_f G^-1 on xi (G at
+    the latest geometry). The diagonal, U = T diag^-1 and the droppers' Gram matrix
+    T diag^-1 T^T are the model's per coefficient set (:meth:`~.modal.ModalCatenary.woodbury_base`),
+    so a slack set costs the inverse of its own small block only."""
+
+    def __init__(self, model, c_a, c_v, c_f, rows, s):
+        self.model, self.c = model, (c_a, c_v, c_f)
+        self.inv_diag, self.U, gram = model.woodbury_base(c_a, c_v, c_f)
+        self.K = model.m + model.nz
+        self.rows = np.ascontiguousarray(rows, dtype=np.int64)
+        self.s = np.ascontiguousarray(s, dtype=float)
+        ns = self.rows.size
+        self.small_inv = np.empty((ns, ns))
+        if not _k.slack_block_inverse(gram, self.rows, self.s, np.empty((ns, 2 * ns)),
+                                      self.small_inv):
+            raise np.linalg.LinAlgError("modal catenary: singular slack-set correction")
+        self.y = np.zeros(ns)
+
+    def __call__(self, r, out=None):
+        r = np.ascontiguousarray(r, dtype=float)
+        out = np.empty_like(r) if out is None else out
+        _k.diag_woodbury(r, 1.0, self.inv_diag, self.K, self.model._g.G, self.c[2], self.U,
+                         self.model.T_K, self.rows, self.small_inv, self.s, self.y, out)
+        return out

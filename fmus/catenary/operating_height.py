@@ -26,9 +26,15 @@ class LinearisedCatenary:
     (3.5)), as an :class:`~pantocosim.core.affine_hht.AffineForm` whose HHT steps are taken in
     closed form (one kept banded factorization, one solve a step)."""
 
+    #: stepped in closed form on :meth:`affine_form` (:mod:`pantocosim.core.stepper`)
+    stepping = "affine"
+
     def __init__(self, catenary):
         self.cat = catenary
         self.n_dofs = catenary.n_dofs
+        self.speed = catenary.speed
+        #: the moving load points: the catenary's contact points
+        self.contact_points = catenary.contact_points
         st = catenary.structure
         self.M = catenary.M
         self.K0 = st.csr(catenary.K0_data)
@@ -87,12 +93,11 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
-    under the moving forces."""
-    from pantocosim.core.affine_hht import ForcedAffineIntegrator
+    under the moving forces (its declared stepper, :func:`~pantocosim.core.stepping.make_stepper`)."""
+    from pantocosim.core.stepping import make_stepper
 
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
-    integ = ForcedAffineIntegrator(model.affine_form(), catenary.contact_points,
-                                   HHTSettings(alpha=alpha))
+    integ = make_stepper(model, HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)
     n = len(forces)
     total = np.zeros(n)

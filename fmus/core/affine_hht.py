@@ -40,6 +40,7 @@ from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
 from .state_label import new_label as _new_id
+from .stepper import register_structure_step
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
@@ -106,15 +107,20 @@ class KeptProducts:
 
 @dataclass
 class AffineForm:
-    """What :class:`AffineHHT` needs of a linear structure."""
+    """What :class:`AffineHHT` needs of a linear structure: the constant data of its step
+    (a native export writes these)."""
 
     n: int
-    M_band: np.ndarray          # lower band storage (LAPACK 'L'): X_band[k, j] = X[j + k, j]
+    #: mass and stiffness, lower band storage (LAPACK 'L'): X_band[k, j] = X[j + k, j]
+    M_band: np.ndarray
     K_band: np.ndarray
-    alpha_r: float              # C = alpha_r M + beta_r K
+    #: Rayleigh damping C = alpha_r M + beta_r K (3.1)
+    alpha_r: float
     beta_r: float
+    #: the reference configuration d = q - q_ref is measured from
     q_ref: np.ndarray
-    r0: np.ndarray              # f_rest at q_ref, v = 0, no load (round-off of the statics)
+    #: f_rest at q_ref, v = 0, no load (round-off of the statics)
+    r0: np.ndarray
     #: the unilateral elements: axial(d, out), slack(N), slack_after(N_p, b_free, b_W, F,
     #: b_delta, previous), force(coef, mask),
     #: removed_stiffness(slack, damped, c_v, c_f), step_terms(N, v, slack, damped, c_v, c_f,
@@ -130,7 +136,12 @@ class AffineHHT:
     """``AffineHHT(form, settings)``; ``initialize(t0, q0, v0, F0)``; per step
     ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`,
     then ``finish(F)`` (False: the slack set changed, the free response and W were
-    re-solved; supply F again)."""
+    re-solved; supply F again): a :class:`~.stepper.StructureStep`, registered as
+    ``"affine"`` (a model declaring ``stepping = "affine"`` gives its ``affine_form()``).
+
+    The constant step data: :attr:`form` (matrices, unilateral elements' rank-one terms
+    ``form.unilateral``), :meth:`factorization` (the kept banded factor of the step's
+    Newton matrix)."""
 
     def __init__(self, form: AffineForm, settings, keep_free_response: bool = False):
         self.form = form
@@ -194,6 +205,13 @@ class AffineHHT:
     def c_v(self) -> float:
         """dv/dq of the step begun, (3.18)."""
         return self._coef[1]
+
+    def factorization(self, h: float):
+        """(kept factorization, (c_a, c_v, c_f)) of A = c_a M + c_f (c_v C + K) for steps
+        of h (3.18): a :class:`~.lowrank.ColumnCache` whose ``solve`` is the banded Cholesky
+        factor (:class:`~.banded.BandedCholesky`), made once per coefficient set."""
+        coef = self.settings.newton_coefficients(h)
+        return self.form.factor(*coef), coef
 
     def _coefficients(self, h: float):
         if h != self._h:
@@ -382,48 +400,7 @@ class AffineHHT:
         self._prev_id = None
 
 
-class ForcedAffineIntegrator:
-    """The :class:`~.hht.HHTIntegrator` interface (``initialize``, ``step(h, F)``, ``t``,
-    ``q``, ``v``, ``get_state``/``set_state``) for an affine structure under given point
-    loads: ``points(t)`` gives the load vectors (``dofs``, ``weights``) of F at t, e.g. the
-    catenary's contact points under forces read from FMU inputs."""
-
-    closed_form = True
-
-    def __init__(self, form: AffineForm | None, points, settings, structure=None):
-        #: ``structure``: a stepper with the :class:`AffineHHT` interface (default: one of
-        #: ``form``), e.g. the modal catenary's
-        self.structure = structure or AffineHHT(form, settings, keep_free_response=True)
-        self.points = points
-        self.settings = settings
-
-    @property
-    def t(self) -> float:
-        return self.structure.t
-
-    @property
-    def q(self) -> np.ndarray:
-        return self.structure.q
-
-    @property
-    def v(self) -> np.ndarray:
-        return self.structure.v
-
-    def initialize(self, t0, q0, v0=None, inputs0=None) -> None:
-        self.structure.initialize(t0, q0, v0, inputs0)
-
-    def step(self, h: float, inputs):
-        from .hht import StepInfo
-
-        st = self.structure
-        st.begin(h, [(cp.dofs, cp.weights) for cp in self.points(st.t + h)])
-        F = np.asarray(inputs, dtype=float)
-        while not st.finish(F):
-            pass
-        return StepInfo(iterations=st.passes, residual=0.0, refactorizations=0)
-
-    def get_state(self) -> dict:
-        return self.structure.get_state()
-
-    def set_state(self, state: dict) -> None:
-        self.structure.set_state(state)
+@register_structure_step("affine")
+def affine_step(model, settings, redo: bool = False) -> AffineHHT:
+    """The closed-form step of a model with an ``affine_form()``."""
+    return AffineHHT(model.affine_form(), settings, keep_free_response=redo)

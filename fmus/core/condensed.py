@@ -21,10 +21,10 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
-from .affine_hht import AffineHHT
 from .hht import HHTIntegrator
 from .model import Evaluation, SecondOrderModel
 from .penalty_contact import condensed_forces
+from .stepper import StepReport, StructureStep
 
 
 @njit(cache=True)
@@ -179,6 +179,14 @@ class NewtonBodies:
     def begin(self) -> None:
         self._saved = None
 
+    @property
+    def q(self) -> np.ndarray:
+        return self.integ.q
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.integ.v
+
     def get_state(self):
         c = self.contacts
         return self.integ.get_state(), [x.copy() for x in (c.forces, c.heights,
@@ -256,6 +264,14 @@ class LinearBodies:
     def begin(self) -> None:
         self._stepped = False
 
+    @property
+    def q(self) -> np.ndarray:
+        return np.concatenate([i.q for i in self.integs])
+
+    @property
+    def v(self) -> np.ndarray:
+        return np.concatenate([i.v for i in self.integs])
+
     def get_state(self):
         return ([i.get_state() for i in self.integs],
                 [x.copy() for x in (self.forces, self.heights, self.wire_heights,
@@ -310,14 +326,20 @@ def bodies_solver(bodies, contact, settings):
 
 class CondensedStepper:
     """One HHT-alpha step of structure + bodies + contacts: the structure's free response,
-    the bodies' step on the condensed interface, the structure's step with the forces."""
+    the bodies' step on the condensed interface, the structure's step with the forces (a
+    :class:`~.stepper.Stepper`; the structure's constant step data are those of
+    :attr:`structure`)."""
 
-    def __init__(self, structure: AffineHHT, points, bodies, contact, settings,
+    #: the bodies' Newton iterations may fail half-way through a step
+    closed_form = False
+
+    def __init__(self, structure: StructureStep, points, bodies, contact, settings,
                  speed: float = 0.0):
         #: ``points(t)``: the structure's contact points at t (dofs, weights, offset,
         #: dweights_dx, doffset_dx), one per body
         self.structure, self.points, self.speed = structure, points, float(speed)
         self.bodies = bodies_solver(bodies, contact, settings)
+        self._sizes = np.cumsum([b.n_dofs for b in bodies])
         m = len(bodies)
         self.m = m
         self._inputs = np.zeros(2 * m + 2 * m * m)
@@ -326,9 +348,35 @@ class CondensedStepper:
     def t(self) -> float:
         return self.structure.t
 
-    def initialize(self, t0: float, q_structure, q_bodies) -> None:
-        """Start at rest in the static configuration q_structure, q_bodies."""
-        q_structure = np.asarray(q_structure, float)
+    @property
+    def structure_q(self) -> np.ndarray:
+        """The structure's coordinates."""
+        return self.structure.q
+
+    @property
+    def q(self) -> np.ndarray:
+        """[structure | body 1 | ...] (a new array)."""
+        return np.concatenate([self.structure.q, self.bodies.q])
+
+    @property
+    def v(self) -> np.ndarray:
+        """[structure | body 1 | ...] velocities (a new array)."""
+        return np.concatenate([self.structure.v, self.bodies.v])
+
+    def contacts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(contact forces, contact heights, wire heights), one per body."""
+        b = self.bodies
+        return b.forces, b.heights, b.wire_heights
+
+    def prepare(self, h: float) -> None:
+        """The structure's set-up for steps of h."""
+        self.structure.prepare(h)
+
+    def initialize(self, t0: float, q0, v0=None, inputs0=None) -> None:
+        """Start at rest in the static configuration q0 = [structure | body 1 | ...]."""
+        n = len(q0) - int(self._sizes[-1] if len(self._sizes) else 0)
+        q_structure = np.asarray(q0[:n], float)
+        q_bodies = np.split(np.asarray(q0[n:], float), self._sizes[:-1])
         self._inputs[:] = 0.0
         self._inputs[:self.m] = [cp.weights @ q_structure[cp.dofs] + cp.offset
                                  for cp in self.points(t0)]
@@ -361,8 +409,9 @@ class CondensedStepper:
         self.bodies.set_state(state[1])
         self._inputs[:] = state[2]
 
-    def step(self, h: float) -> int:
-        """Advance structure and bodies by h; returns the bodies' Newton iterations."""
+    def step(self, h: float, inputs=None) -> StepReport:
+        """Advance structure and bodies by h (no inputs); reports the bodies' Newton
+        iterations of the last pass."""
         st = self.structure
         cps = self.points(st.t + h)
         st.begin(h, [(cp.dofs, cp.weights) for cp in cps])
@@ -370,4 +419,4 @@ class CondensedStepper:
         while True:
             iterations = self.bodies.solve(h, self.interface(cps))
             if st.finish(self.bodies.forces):
-                return iterations
+                return StepReport(iterations=iterations)

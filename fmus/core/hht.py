@@ -19,7 +19,9 @@ q_{n+1} with v and a expressed through (3.18); convergence is checked with the e
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from enum import Enum
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -28,8 +30,34 @@ from .errors import ConvergenceError, ParameterError
 from .hht_defaults import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX  # noqa: F401
 from .model import SecondOrderModel
 from .state_label import new_label
+from .stepper import StepReport
 
 
+class FactorReuse(Enum):
+    """When the Newton matrix is factorized (:attr:`HHTSettings.reuse_factorization`)."""
+
+    #: full Newton: at every iteration
+    NEVER = "never"
+    #: at the first iteration of each step, reused within the step (chord method); a step
+    #: redone from the same state (co-simulation rollback) reuses it too
+    PER_STEP = "per-step"
+    #: also reused across steps while the model's structure_key and the step size are
+    #: unchanged (modified Newton)
+    ACROSS_STEPS = "across-steps"
+
+
+@dataclass(frozen=True)
+class Factorization:
+    """A factorized Newton matrix c_a M + c_f (c_v C + K) kept for reuse."""
+
+    #: the model's ``structure_key`` at the evaluation it was made from
+    structure_key: Any
+    #: the step size it was made for [s]
+    h: float
+    #: the Newton matrix (a deserialized state factorizes it again, bit for bit)
+    matrix: Any
+    #: ``model.factorize(matrix)``; None in a picklable state
+    solve: Any
 
 
 @dataclass
@@ -40,11 +68,8 @@ class HHTSettings:
     #: energy test: |dq_k . R_k| <= etol * |dq_0 . R_0|
     etol: float = 1e-14
     max_iterations: int = 30
-    #: factorization policy of the Newton matrix: False = full Newton (refactorize every
-    #: iteration); "step" = factorize at the first iteration of each step and reuse it within
-    #: the step (chord method); True = also reuse it across steps while the model's
-    #: structure_key and the step size are unchanged (modified Newton)
-    reuse_factorization: bool | str = False
+    #: factorization policy of the Newton matrix (:class:`FactorReuse`)
+    reuse_factorization: FactorReuse = FactorReuse.NEVER
     #: with reuse across steps: a step that needed more iterations than this marks the
     #: factorization stale, so the next step refactorizes at its first iteration; a step
     #: still unconverged after ``refresh_after + 4`` iterations refactorizes at once
@@ -68,7 +93,8 @@ class HHTSettings:
         contact force is far below the time-discretization error). Checked: ``alpha`` in
         [-1/3, 0] and ``rtol`` in (0, :data:`RUN_RTOL_MAX`]."""
         out = cls(alpha=alpha, rtol=RUN_RTOL if rtol is None else float(rtol),
-                  reuse_factorization=True, refresh_after=2, predictor="linear")
+                  reuse_factorization=FactorReuse.ACROSS_STEPS, refresh_after=2,
+                  predictor="linear")
         out.validate()
         if not out.rtol <= RUN_RTOL_MAX:
             raise ParameterError("rtol", out.rtol, f"must lie in (0, {RUN_RTOL_MAX:g}]")
@@ -77,9 +103,10 @@ class HHTSettings:
     def validate(self, source: str | None = None) -> None:
         if not np.isfinite(self.alpha) or not (ALPHA_MIN <= self.alpha <= ALPHA_MAX):
             raise ParameterError("alpha", self.alpha, "HHT alpha must lie in [-1/3, 0]", source)
-        if self.reuse_factorization not in (False, True, "step"):
+        if not isinstance(self.reuse_factorization, FactorReuse):
             raise ParameterError("reuse_factorization", self.reuse_factorization,
-                                 'must be false, true or "step"', source)
+                                 "must be one of " + ", ".join(
+                                     f"FactorReuse.{r.name}" for r in FactorReuse), source)
         if not (self.rtol > 0) or not (self.etol >= 0):
             raise ParameterError("rtol", self.rtol, "tolerances must be positive", source)
         if self.predictor not in ("constant", "linear"):
@@ -245,10 +272,21 @@ def _vector(x, n: int) -> np.ndarray:
 
 
 @dataclass
-class StepInfo:
-    iterations: int
-    residual: float
-    refactorizations: int
+class ClosedFormStep:
+    """The closed-form step of a model with a :class:`~.model.LinearForm`: its matrices,
+    the load vector w, and S^-1 for the step size ``h`` (:func:`_linear_step`)."""
+
+    form: Any
+    C: np.ndarray
+    K: np.ndarray
+    B: np.ndarray
+    w: np.ndarray
+    alpha: float
+    beta: float
+    gamma: float
+    #: the step size S_inv was formed for (None: not yet)
+    h: float | None = None
+    S_inv: np.ndarray | None = None
 
 
 class HHTIntegrator:
@@ -275,7 +313,7 @@ class HHTIntegrator:
         self.f_rest = np.zeros(n)
         self._stale = False     # refactorize at the next step (reuse across steps)
         self.inputs = None
-        self._factor = None  # (key, h, matrix, solve)
+        self._factor: Factorization | None = None
         self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
         self._label = new_label()    # of the current state (:mod:`.state_label`)
         #: the steps taken from the last state stepped from: (its label, h, {inputs key: end
@@ -286,8 +324,8 @@ class HHTIntegrator:
         self._last_step = None
         self.total_iterations = 0
         self.total_factorizations = 0
-        self._linear = None     # closed-form step: (LinearForm, w, h, S_inv)
-        self._linear_info = StepInfo(iterations=1, residual=0.0, refactorizations=0)
+        self._linear: ClosedFormStep | None = None
+        self._linear_info = StepReport(iterations=1)
         self._bind_linear()
 
     def _bind_linear(self) -> None:
@@ -305,14 +343,23 @@ class HHTIntegrator:
             raise ParameterError("linear_form", [x.shape for x in mats],
                                  f"M, C, K must be {n} x {n}")
         s = self.settings
-        # form, C, K, B, load vector w, step size of S_inv, S_inv, alpha, beta, gamma
-        self._linear = [form, mats[1], mats[2], B, np.zeros(B.shape[1]), None, None,
-                        float(s.alpha), float(s.beta), float(s.gamma)]
+        self._linear = ClosedFormStep(form, mats[1], mats[2], B, np.zeros(B.shape[1]),
+                                      float(s.alpha), float(s.beta), float(s.gamma))
 
     @property
     def closed_form(self) -> bool:
         """True when steps are taken in closed form (a linear model, no Newton)."""
         return self._linear is not None
+
+    @property
+    def closed_form_step(self) -> ClosedFormStep | None:
+        """The closed-form step's constant data (its matrices and S^-1 once a step of size
+        ``h`` was taken; read by the native FMU export), None for a Newton stepper."""
+        return self._linear
+
+    def prepare(self, h: float) -> None:
+        """Nothing to pay ahead: the first Newton step factorizes (a warm-up step pays it,
+        :func:`~.stepper.warm_up`)."""
 
     # ------------------------------------------------------------------ setup
     def initialize(self, t0: float, q0, v0=None, inputs0=None, a0=None) -> None:
@@ -341,7 +388,7 @@ class HHTIntegrator:
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
 
     # ------------------------------------------------------------------ stepping
-    def step(self, h: float, inputs=None) -> StepInfo:
+    def step(self, h: float, inputs=None) -> StepReport:
         """Advance from t to t + h with the coupling inputs valid at t + h."""
         if self._linear is not None:
             return self._step_linear(h, inputs)
@@ -364,13 +411,14 @@ class HHTIntegrator:
                                      beta, gamma)
         n = q.shape[0]
 
-        factor = self._factor if s.reuse_factorization is True and not self._stale else None
-        if factor is not None and factor[1] != h:
+        reuse = s.reuse_factorization
+        factor = self._factor if reuse is FactorReuse.ACROSS_STEPS and not self._stale else None
+        if factor is not None and factor.h != h:
             factor = None
         # "step" policy: a step redone from the same state (co-simulation rollback) meets the
         # same predictor, hence the same first Newton matrix: reuse its factorization
         redo_key = None
-        if s.reuse_factorization == "step":
+        if reuse is FactorReuse.PER_STEP:
             redo_key = (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes(),
                         None if self.a_prev is None else self.a_prev.tobytes())
             memo = self._redo_memo
@@ -384,9 +432,9 @@ class HHTIntegrator:
         for k in range(s.max_iterations + 1):
             a, v = _iterate_kinematics(q, q_p, v_p, c_a, c_v)
             need_tangent = (factor is None or (k > s.refresh_after + 4)
-                            or (s.reuse_factorization is False and k > 0))
+                            or (reuse is FactorReuse.NEVER and k > 0))
             ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
-            if factor is not None and not need_tangent and ev.structure_key != factor[0]:
+            if factor is not None and not need_tangent and ev.structure_key != factor.structure_key:
                 need_tangent = True
                 ev = model.evaluate(t1, q, v, a, inputs, tangent=True)
             R, res_norm, scale = _hht_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
@@ -406,12 +454,12 @@ class HHTIntegrator:
                 break
             if need_tangent:
                 S = model.effective_matrix(ev, c_a, c_v, c_f)
-                factor = (ev.structure_key, h, S, model.factorize(S))
+                factor = Factorization(ev.structure_key, h, S, model.factorize(S))
                 refactorizations += 1
                 if k == 0 and redo_key is not None:
                     self._redo_memo = (redo_key, factor)
             q, e, dq_size, q_size = _newton_update(
-                q, _vector(model.newton_solve(factor[3], ev, R), n), R)
+                q, _vector(model.newton_solve(factor.solve, ev, R), n), R)
             if e0 is None:
                 e0 = max(e, 1e-300)
             e_prev = e
@@ -429,11 +477,11 @@ class HHTIntegrator:
         self.n_steps += 1
         self.total_iterations += k
         self.total_factorizations += refactorizations
-        if s.reuse_factorization is True:
+        if reuse is FactorReuse.ACROSS_STEPS:
             self._factor = factor
             self._stale = k > s.refresh_after
         model.commit(self.t, self.q, self.v, self.a, self.inputs)
-        info = StepInfo(iterations=k, residual=res_norm, refactorizations=refactorizations)
+        info = StepReport(iterations=k, residual=res_norm, refactorizations=refactorizations)
         self._label = new_label()
         end = {"t": t1, "q": q, "v": v, "a": a, "a_prev": self.a_prev, "f_rest": self.f_rest,
                "factor": self._factor, "stale": self._stale, "residual": res_norm,
@@ -450,7 +498,7 @@ class HHTIntegrator:
         last = self._last_step
         return last[2] if last is not None and last[0] == start and last[1] == h else None
 
-    def _repeat(self, end: dict, inputs) -> StepInfo:
+    def _repeat(self, end: dict, inputs) -> StepReport:
         """The step last taken from this state with these inputs, again: its end state."""
         self.t = end["t"]
         self.q, self.v, self.a, self.a_prev, self.f_rest = (
@@ -459,18 +507,18 @@ class HHTIntegrator:
         self._factor, self._stale, self._label = end["factor"], end["stale"], end["label"]
         self.n_steps += 1
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
-        return StepInfo(iterations=0, residual=end["residual"], refactorizations=0)
+        return StepReport(iterations=0, residual=end["residual"])
 
-    def _step_linear(self, h: float, inputs) -> StepInfo:
+    def _step_linear(self, h: float, inputs) -> StepReport:
         """The closed-form step of a :class:`LinearForm` model: writes q, v, a, a_prev,
         f_rest and inputs in place (no allocation once the arrays exist)."""
         lin = self._linear
-        form, C, K, B, w, h_inv, S_inv, alpha, beta, gamma = lin
-        if h != h_inv:
-            M = form.M
-            S = M + (1.0 + alpha) * (gamma * h * C + beta * h * h * K)
-            S_inv = np.ascontiguousarray(np.linalg.inv(S))
-            lin[5], lin[6] = h, S_inv
+        C, K, B, w = lin.C, lin.K, lin.B, lin.w
+        alpha, beta, gamma = lin.alpha, lin.beta, lin.gamma
+        if h != lin.h:
+            S = lin.form.M + (1.0 + alpha) * (gamma * h * C + beta * h * h * K)
+            lin.h, lin.S_inv = h, np.ascontiguousarray(np.linalg.inv(S))
+        S_inv = lin.S_inv
         t1 = self.t + h
         stored = self.inputs
         if inputs is None:
@@ -480,7 +528,7 @@ class HHTIntegrator:
             stored = self.inputs = np.array(inputs, dtype=float)
         else:
             stored[...] = inputs
-        form.fill(t1, stored, w)
+        lin.form.fill(t1, stored, w)
         if self.a_prev is None:
             self.a_prev = np.empty_like(self.a)
         _linear_step(self.q, self.v, self.a, self.a_prev, self.f_rest, w, S_inv, C, K, B, h,
@@ -541,17 +589,26 @@ class HHTIntegrator:
         self.f_rest = np.array(state["f_rest"], dtype=float)
         self.inputs = None if state["inputs"] is None else np.array(state["inputs"], float)
         factor = state.get("factor")
-        if factor is not None and (len(factor) < 4 or factor[3] is None):
-            factor = (factor[0], factor[1], factor[2], self.model.factorize(factor[2]))
+        if factor is not None and factor.solve is None:
+            factor = replace(factor, solve=self.model.factorize(factor.matrix))
         self._factor = factor
         self._label = state.get("label") or new_label()
         self.model.set_internal_state(state.get("model"))
 
     @staticmethod
-    def picklable_state(state: dict) -> dict:
-        """A copy of ``state`` without the (unpicklable) factorization object."""
-        out = dict(state)
-        if out.get("factor") is not None:
-            key, h, S, _ = out["factor"]
-            out["factor"] = (key, h, S, None)
-        return out
+    def picklable_state(state):
+        """:func:`picklable_state`."""
+        return picklable_state(state)
+
+
+def picklable_state(state):
+    """A copy of a stepper's state (:meth:`HHTIntegrator.get_state`, or one holding such
+    states) that pickles: every kept :class:`Factorization` without its solve object
+    (:meth:`HHTIntegrator.set_state` factorizes its matrix again, bit for bit)."""
+    if isinstance(state, Factorization):
+        return replace(state, solve=None)
+    if isinstance(state, dict):
+        return {k: picklable_state(v) for k, v in state.items()}
+    if type(state) in (list, tuple):
+        return type(state)(picklable_state(v) for v in state)
+    return state

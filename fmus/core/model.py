@@ -29,6 +29,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .stepper import NEWTON
+
 
 @dataclass
 class Evaluation:
@@ -68,6 +70,9 @@ class SecondOrderModel:
     """Base class of the models the HHT-alpha integrator (:mod:`pantocosim.core.hht`) drives."""
 
     n_dofs: int = 0
+    #: how the model is stepped (:mod:`.stepper`): Newton-Raphson HHT on :meth:`evaluate`
+    #: unless a model with a closed-form step names it
+    stepping: str = NEWTON
 
     def linear_form(self) -> LinearForm | None:
         """The model's :class:`LinearForm` if it is linear with constant matrices (with its

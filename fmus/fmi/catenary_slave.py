@@ -27,12 +27,16 @@ import numpy as np
 
 from pantocosim.catenary.start import (START_FORCE_TOL_N, settled_start, start_laws,
                                        static_contact_heights)
+from pantocosim.core.hht import FactorReuse
+from pantocosim.core.stepping import make_stepper
 
 from .catenary_ports import MAX_PANTOGRAPHS, MAX_SUPPORTS, TIMING, VARIABLES, PortNames
 from .front import Status
 from .given import track_sets
 from .slave_base import IntegratorSlave
 
+#: the parameter ``factorization``: full Newton, once per step, reuse across steps
+FACTORIZATION_POLICIES = (FactorReuse.NEVER, FactorReuse.PER_STEP, FactorReuse.ACROSS_STEPS)
 #: a pantograph height at t0 that differs from the settled one by more settles it again [m]
 HEIGHT_TOL_M = 1e-9
 #: model field -> this FMU's parameter, for errors raised by the model side
@@ -57,7 +61,6 @@ class CatenarySlave(IntegratorSlave):
         self._law_names = {name for names in ports.laws for name in names}
         self._attribute_reals -= {vr for vr, v in self.vars.items() if v.name in self._law_names}
         self._model = None       # CatenaryModel
-        self._system = None      # the model the integrator drives (catenary or coupled)
         self._standins = []      # PrescribedPantograph per pantograph (mode 1)
         self._integ = None
         self._n = 1
@@ -224,14 +227,13 @@ class CatenarySlave(IntegratorSlave):
         contact = self._contact()
         F0 = self._static_forces(n)
         policy = self.value("factorization")
-        self._settings.reuse_factorization = {0: False, 1: "step", 2: True}[policy]
+        self._settings.reuse_factorization = FACTORIZATION_POLICIES[policy]
         self._mode, self._n = mode, n
         self._port_names = PortNames.of(n)
         if mode == 0:
             q0 = model.static_state(F0 if np.any(F0 != 0.0) else None)
-            integ = _forced_integrator(model, self._settings)
+            integ = make_stepper(model, self._settings, redo=True)
             integ.initialize(0.0, q0, np.zeros(model.n_dofs), F0.copy())
-            self._system = model
             self._prev_inputs = F0.copy()
             self.__dict__.update(zip(self._port_names.forces, F0.tolist()))
             self._integ = integ
@@ -265,8 +267,6 @@ class CatenarySlave(IntegratorSlave):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
         static start (:func:`~pantocosim.catenary.start.settled_start`: settled against the
         heights where no static force is given)."""
-        from pantocosim.core.coupled import CoupledSystem
-        from pantocosim.core.hht import HHTIntegrator
         from pantocosim.core.prescribed import PrescribedPantograph
 
         q0, self._late_height_tol = settled_start(model, contact, F0, heights[:, 0])
@@ -274,10 +274,9 @@ class CatenarySlave(IntegratorSlave):
         names = self._port_names
         self.__dict__.update(zip(names.heights, heights[:, 0].tolist()))
         self.__dict__.update(zip(names.velocities, heights[:, 1].tolist()))
-        system = CoupledSystem(model, standins, contact)
-        integ = HHTIntegrator(system, self._settings)
-        integ.initialize(0.0, q0, np.zeros(system.n_dofs), None)
-        self._system, self._standins, self._integ = system, standins, integ
+        integ = make_stepper(model, self._settings, standins, contact, redo=True)
+        integ.initialize(0.0, q0)
+        self._standins, self._integ = standins, integ
         self._settled_forces = F0
         self._prev_inputs = np.array(heights, float)
 
@@ -357,9 +356,7 @@ class CatenarySlave(IntegratorSlave):
         if self._prepared:
             return
         self._prepared = True
-        prepare = getattr(getattr(self._integ, "structure", None), "prepare", None)
-        if prepare is not None:
-            prepare(h)
+        self._integ.prepare(h)
 
     def _first_step_heights(self, new):
         """A zero-order-hold master passes the pantographs' heights at t0 before the first
@@ -406,26 +403,9 @@ class CatenarySlave(IntegratorSlave):
         if self._mode == 0:
             F = self._prev_inputs
         else:
-            F = self._system.contact_forces(t, integ.q, integ.v)
+            F = integ.contacts()[0]
         names, d = self._port_names, self.__dict__
         d.update(zip(names.wire_heights, zw.tolist()))
         d.update(zip(names.wire_velocities, vw.tolist()))
         d.update(zip(names.forces_out, F.tolist()))
         d.update(zip(names.uplifts, model.support_uplift(qc).tolist()))
-
-
-def _forced_integrator(model, settings):
-    """The integrator of the catenary under force inputs: closed-form steps for a model with
-    an affine form (constant matrices) or its own closed-form stepper, else Newton-Raphson."""
-    if hasattr(model, "closed_form"):
-        from pantocosim.core.affine_hht import ForcedAffineIntegrator
-
-        return ForcedAffineIntegrator(None, model.contact_points, settings,
-                                      structure=model.closed_form(settings, True))
-    if hasattr(model, "affine_form"):
-        from pantocosim.core.affine_hht import ForcedAffineIntegrator
-
-        return ForcedAffineIntegrator(model.affine_form(), model.contact_points, settings)
-    from pantocosim.core.hht import HHTIntegrator
-
-    return HHTIntegrator(model, settings)

@@ -162,7 +162,8 @@ class PantographSlave(IntegratorSlave):
 
     def initialise(self):
         from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTIntegrator, HHTSettings
+        from pantocosim.core.hht import HHTSettings
+        from pantocosim.core.stepping import make_stepper
 
         self.check_build_stamp()
         if self._error:
@@ -175,7 +176,7 @@ class PantographSlave(IntegratorSlave):
         except ParameterError as exc:
             raise exc.renamed({"alpha": "hht_alpha"}) from None
         q0, F0 = self._start(model)
-        integ = HHTIntegrator(model, settings)
+        integ = make_stepper(model, settings, redo=True)
         integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
         self._model, self._integ = model, integ
         self._height_range = model.height_range()

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 
 from .beam3d import Section, straight_beam
 from ..core.errors import ConvergenceError, ParameterError
@@ -257,7 +257,7 @@ def simulate(model, t_end: float, h, alpha: float = DEFAULT_ALPHA, nodes=(12, 23
     # one factorization per step (chord iterations): the same solution as full Newton to
     # 1e-11 m through an impact, at less than half the cost
     integ = HHTIntegrator(s, HHTSettings(alpha=alpha, rtol=rtol, max_iterations=40,
-                                         reuse_factorization="step"))
+                                         reuse_factorization=FactorReuse.PER_STEP))
     integ.initialize(0.0, q, v, a0=a)
     step_size = h if callable(h) else (lambda t: h)
     times = [0.0]

@@ -203,6 +203,12 @@ class PantographModel(SecondOrderModel):
         (uplift force or torque) so that this state is an equilibrium and returns q0."""
         raise NotImplementedError
 
+    def equilibrium(self, contact_force: float, height: float) -> tuple[np.ndarray, float]:
+        """(q, actuation): the equilibrium under ``contact_force`` with the contact point at
+        ``height`` and the actuation (force or torque) that holds it there; nothing is set
+        (:meth:`static_equilibrium` sets the actuation)."""
+        raise NotImplementedError
+
     def lowered_equilibrium(self, height: float) -> np.ndarray:
         """Equilibrium without contact at a lowered ``height`` (ramp-raising start)."""
         raise NotImplementedError

@@ -168,6 +168,15 @@ class LumpedPantograph(PantographModel):
         ``height``; sets the reference height h_ref accordingly."""
         F = self.options.mean_uplift if contact_force is None else float(contact_force)
         h = self.params.working_height if height is None else float(height)
+        z, self.reference_height = self.equilibrium(F, h)
+        if self.options.ramp is None:
+            self.lowered_reference = self.reference_height
+        return z
+
+    def equilibrium(self, contact_force: float, height: float) -> tuple[np.ndarray, float]:
+        """(heights of the masses, reference height h_ref) in equilibrium under the contact
+        force F with the head at ``height`` (nothing is set)."""
+        F, h = float(contact_force), float(height)
         if not np.isfinite(F) or F < 0:
             raise ParameterError("contact_force", contact_force, "must be finite and >= 0",
                                  self.name)
@@ -193,10 +202,7 @@ class LumpedPantograph(PantographModel):
         z[0] = h
         for i in range(n - 1):
             z[i + 1] = z[i] + carried[i] / k[i]
-        self.reference_height = z[-1] + carried[-1] / k[-1]
-        if self.options.ramp is None:
-            self.lowered_reference = self.reference_height
-        return z
+        return z, z[-1] + carried[-1] / k[-1]
 
     def lowered_equilibrium(self, height):
         """All masses at the lowered height with no load (ramp start, thesis 3.3.1)."""

@@ -15,6 +15,7 @@ returns its record with ``fatal``: the message naming the file, which stops the 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import time
@@ -129,7 +130,7 @@ def _run(folder: Path, run: dict, times: dict, report_dir: Path | None = None) -
 
     if isinstance(result.error, OutputError):   # a full disk while the run wrote
         raise result.error
-    result.coupling = run["coupling"]
+    result = dataclasses.replace(result, coupling=run["coupling"])   # the campaign's name
     t = time.perf_counter()
     summary = finish(result, folder, plots=run["plots"], report_dir=report_dir)
     times["finish_time_s"] = time.perf_counter() - t

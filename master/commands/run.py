@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -189,5 +190,4 @@ def simulate(args, scenario, coupling: str, out: Path):
 
         result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
                            progress=progress, realtime=args.realtime, plan=plan)
-    result.coupling = args.coupling
-    return result
+    return dataclasses.replace(result, coupling=args.coupling)   # the name the user gave
