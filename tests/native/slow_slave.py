@@ -1,16 +1,15 @@
 """A small FMU slave for the tests of the export libraries (tests/test_export_library.py):
 what the bridge calls, with a settable delay in its steps and state serialisation, so that a
-test can act on another thread while a call is under way, and an optional import of numpy
-(a missing package is then named by the library). Variables: vr 0 ``x`` (output, grows by h
-each step), vr 1 ``delay`` [s], vr 2 ``import_numpy`` (0/1, read at instantiation from the
-environment variable SLOW_SLAVE_NUMPY)."""
+test can act on another thread while a call is under way, and the import of the module the
+environment variable SLOW_SLAVE_IMPORT names, if set (a missing one is then named by the
+library). Variables: vr 0 ``x`` (grows by h each step), vr 1 ``delay`` [s]."""
 
 import os
 import pickle
 import time
 
-if os.environ.get("SLOW_SLAVE_NUMPY"):
-    import numpy  # noqa: F401
+if os.environ.get("SLOW_SLAVE_IMPORT"):
+    __import__(os.environ["SLOW_SLAVE_IMPORT"])
 
 
 class Message:
