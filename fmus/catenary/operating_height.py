@@ -102,7 +102,7 @@ def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np
     n = len(forces)
     total = np.zeros(n)
     count = np.zeros(n)
-    for _ in range(int(np.ceil(duration / dt - 1e-9))):
+    for _ in range(law_run_steps(duration, dt)):
         integ.step(dt, forces)
         x = catenary.positions(integ.t)
         inside = (x >= window[0]) & (x <= window[1])
@@ -123,6 +123,16 @@ def passage_duration(window_end: float, positions, speed: float) -> float:
     """Duration of a run by default: until the last pantograph leaves the analysis window,
     plus :data:`RUN_TAIL_S`."""
     return max((window_end - float(x)) / speed for x in positions) + RUN_TAIL_S
+
+
+#: most HHT steps of one moving-load run behind the start laws (about 20 times the run of
+#: the en50318 line at 250 km/h with 1 ms steps; a minute or two on one core)
+MAX_LAW_STEPS = 200_000
+
+
+def law_run_steps(duration: float, dt: float) -> int:
+    """The steps of one moving-load run of :func:`mean_dynamic_wire_height`."""
+    return int(np.ceil(duration / dt - 1e-9))
 
 
 #: contact forces [N] between which the start laws below are secants (the range of mean and
@@ -183,11 +193,16 @@ def contact_height_laws(catenary, contact_stiffness: float, window: tuple[float,
                         dt: float, duration: float, alpha: float = DEFAULT_ALPHA
                         ) -> ContactHeightLaws:
     """The start laws of every pantograph of ``catenary`` (a CatenaryModel); each force acts
-    alone (the cross terms of several pantographs are left out)."""
+    alone (the cross terms of several pantographs are left out). A standing train (speed 0)
+    has no moving-load run: a force that does not move leaves the wire at its static
+    deflection, so its operating law is its static law."""
     n = len(catenary.x0)
-    op = np.array([mean_dynamic_height_law(catenary, k, window, dt, duration, alpha)
-                   for k in range(n)])
     st = np.array([static_height_law(catenary, k) for k in range(n)])
+    if catenary.speed == 0.0:
+        op = st
+    else:
+        op = np.array([mean_dynamic_height_law(catenary, k, window, dt, duration, alpha)
+                       for k in range(n)])
     compliance = 1.0 / contact_stiffness
     return ContactHeightLaws(operating_offset=op[:, 0], operating_slope=op[:, 1] + compliance,
                              static_offset=st[:, 0], static_slope=st[:, 1] + compliance)

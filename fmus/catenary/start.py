@@ -15,13 +15,14 @@ from __future__ import annotations
 import numpy as np
 
 from pantocosim.core.coupled import CoupledSystem
+from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA
 from pantocosim.core.prescribed import PrescribedPantograph
 
 from .analysis import central_window
 from .models import law_model
-from .operating_height import (ContactHeightLaws, contact_height_laws, passage_duration,
-                               static_height_law)
+from .operating_height import (MAX_LAW_STEPS, ContactHeightLaws, contact_height_laws,
+                               law_run_steps, passage_duration, static_height_law)
 
 #: a pantograph height first delivered after t0 may differ from the height the start was
 #: settled against by at most the height of this static contact force [N] (a pantograph that
@@ -33,11 +34,23 @@ def start_laws(model, contact_stiffness: float, window: tuple[float, float], dt:
                alpha: float = DEFAULT_ALPHA) -> ContactHeightLaws:
     """The start laws of every pantograph of ``model`` over ``window`` (an empty window,
     end <= start: the middle span of the line), from moving-load runs of steps ``dt`` until
-    the last pantograph leaves the window (:func:`~.operating_height.passage_duration`; a
-    train at rest: 1 m/s)."""
+    the last pantograph leaves the window (:func:`~.operating_height.passage_duration`); a
+    train at rest has no moving-load run (its operating laws are its static laws), and a
+    speed whose runs would take more than :data:`~.operating_height.MAX_LAW_STEPS` steps is
+    refused naming ``speed_kmh``."""
     if window[1] <= window[0]:
         window = central_window(model.support_x)
-    duration = passage_duration(window[1], model.x0, model.speed if model.speed > 0 else 1.0)
+    duration = 0.0
+    if model.speed > 0:
+        duration = passage_duration(window[1], model.x0, model.speed)
+        steps = law_run_steps(duration, dt)
+        if steps > MAX_LAW_STEPS:
+            raise ParameterError("speed_kmh", model.speed * 3.6, f"the start laws' moving-load "
+                                 f"run over the analysis window would take {steps:,} steps "
+                                 f"of averaging_step = {dt:g} s (at most {MAX_LAW_STEPS:,}): "
+                                 f"use a speed of at least "
+                                 f"{model.speed * 3.6 * steps / MAX_LAW_STEPS:.3g} km/h, 0 "
+                                 "for a standing train, or a longer averaging_step")
     return contact_height_laws(law_model(model), contact_stiffness, window, dt, duration,
                                alpha)
 

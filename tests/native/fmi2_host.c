@@ -10,6 +10,7 @@
  *   getstate A K   setstate A K [B]   freestate A K   serialize A K   deserialize A K [B]
  *   garbage A K    (fmi2DeSerializeFMUstate of 16 bytes of garbage into slot K)
  *   terminated A   lasttime A     unsupported A
+ *   intstatus A KIND   (fmi2GetIntegerStatus: FMI 2.0 defines none, so Error)
  *
  * Each call prints "= LINE CALL STATUS [values]"; the FMU's log messages print
  * "LOG INSTANCE STATUS CATEGORY MESSAGE". Values are printed with 17 digits.
@@ -215,6 +216,11 @@ static int run(int line, char **a, int n)
         typedef fmi2Status (*Rs)(fmi2Component, int, double *);
         s = CALL(f, "fmi2GetRealStatus", Rs, f->c, 2, &v);
         snprintf(extra, sizeof extra, " %.17g", v);
+    } else if (!strcmp(cmd, "intstatus")) {
+        int v = -1;
+        typedef fmi2Status (*Is)(fmi2Component, int, int *);
+        s = CALL(f, "fmi2GetIntegerStatus", Is, f->c, atoi(a[2]), &v);
+        snprintf(extra, sizeof extra, " %d", v);
     } else if (!strcmp(cmd, "unsupported")) {
         fmi2ValueReference vr = 0;
         int order = 1;

@@ -18,16 +18,23 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <poll.h>
 #include <pthread.h>
+#include <signal.h>
+#include <spawn.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 #include <wchar.h>
+
+extern char **environ;
 
 #include "export_common.h"
 
@@ -42,14 +49,12 @@ PythonApi py;
 static pthread_mutex_t registry_lock = PTHREAD_MUTEX_INITIALIZER;
 static Component *live[MAX_COMPONENTS];
 
-int registered(const Component *c)
+/* c is in the registry (under registry_lock: only then is c->magic safe to read) */
+static int is_live(const Component *c)
 {
-    int found = 0;
-    if (c == NULL) return 0;
-    pthread_mutex_lock(&registry_lock);
-    for (int i = 0; i < MAX_COMPONENTS && !found; i++) found = live[i] == c;
-    pthread_mutex_unlock(&registry_lock);
-    return found && c->magic == COMPONENT_MAGIC;
+    for (int i = 0; i < MAX_COMPONENTS; i++)
+        if (live[i] == c) return c->magic == COMPONENT_MAGIC;
+    return 0;
 }
 
 int register_component(Component *c)
@@ -74,10 +79,24 @@ static void unregister_component(Component *c)
 Component *new_component(const char *instanceName, int loggingOn, LogSink sink,
                          void *hostLogger, void *hostEnvironment)
 {
+    pthread_mutexattr_t recursive; /* a host's logger may call the instance back */
     Component *c = calloc(1, sizeof *c);
     if (c == NULL) return NULL;
-    c->magic = COMPONENT_MAGIC;
     c->instanceName = strdup(instanceName ? instanceName : "");
+    if (c->instanceName == NULL || pthread_mutexattr_init(&recursive) != 0) {
+        free(c->instanceName);
+        free(c);
+        return NULL;
+    }
+    pthread_mutexattr_settype(&recursive, PTHREAD_MUTEX_RECURSIVE);
+    int made = pthread_mutex_init(&c->call_lock, &recursive);
+    pthread_mutexattr_destroy(&recursive);
+    if (made != 0) {
+        free(c->instanceName);
+        free(c);
+        return NULL;
+    }
+    c->magic = COMPONENT_MAGIC;
     c->loggingOn = loggingOn;
     c->sink = sink;
     c->hostLogger = hostLogger;
@@ -93,24 +112,72 @@ static void drop_state(State *s)
     free(s);
 }
 
-void free_component(Component *c, const char *call)
+/* the states and the adapter released (the GIL is taken here) */
+static void drop_python(Component *c, const char *call)
 {
     int gil;
-    unregister_component(c);
-    if (c->adapter) {
-        gil = py.GILEnsure();
-        while (c->states) {
-            State *next = c->states->next;
-            drop_state(c->states);
-            c->states = next;
-        }
-        done(c, py.CallMethod(c->adapter, "free", NULL), call);
-        py.DecRef(c->adapter);
-        py.GILRelease(gil);
+    if (c->adapter == NULL) return;
+    gil = py.GILEnsure();
+    while (c->states) {
+        State *next = c->states->next;
+        drop_state(c->states);
+        c->states = next;
     }
+    done(c, py.CallMethod(c->adapter, "free", NULL), call);
+    py.DecRef(c->adapter);
+    c->adapter = NULL;
+    if (py.ErrOccurred()) py.ErrClear();
+    py.GILRelease(gil);
+}
+
+static void release_memory(Component *c)
+{
+    pthread_mutex_destroy(&c->call_lock);
     free(c->instanceName);
     c->magic = 0;
     free(c);
+}
+
+int enter_component(Component *c)
+{
+    int ok;
+    if (c == NULL) return 0;
+    pthread_mutex_lock(&registry_lock);
+    ok = is_live(c);
+    if (ok) c->users++; /* pinned: its memory stays until leave_component */
+    pthread_mutex_unlock(&registry_lock);
+    if (!ok) return 0;
+    pthread_mutex_lock(&c->call_lock);
+    if (c->freed) { /* freed by the call it waited for */
+        leave_component(c);
+        return 0;
+    }
+    return 1;
+}
+
+void leave_component(Component *c)
+{
+    int last;
+    pthread_mutex_unlock(&c->call_lock);
+    pthread_mutex_lock(&registry_lock);
+    last = --c->users == 0 && c->freed;
+    pthread_mutex_unlock(&registry_lock);
+    if (last) release_memory(c);
+}
+
+void free_instance(Component *c, const char *call)
+{
+    if (!enter_component(c)) return;
+    c->freed = 1;
+    unregister_component(c); /* from now on, new calls are refused */
+    drop_python(c, call);
+    leave_component(c);
+}
+
+void discard_component(Component *c, const char *call)
+{
+    drop_python(c, call);
+    release_memory(c);
 }
 
 /* ------------------------------------------------------------------ logging */
@@ -235,43 +302,7 @@ static const char PROBE[] =
     "print(','.join(['python>=3.11'] * old + [m for m in ('numpy', 'scipy', 'numba',"
     ") if u.find_spec(m) is None]))\n";
 
-/* Run `exe -c PROBE` and read its three lines; 1 if it ran. */
-static int probe_python(const char *exe, char *lib, char *resolved, char *missing, size_t size)
-{
-    int fds[2];
-    pid_t pid;
-    FILE *f;
-    int status = 0;
-    char *lines[3] = {lib, resolved, missing};
-    if (pipe(fds) != 0) return 0;
-    pid = fork();
-    if (pid < 0) {
-        close(fds[0]);
-        close(fds[1]);
-        return 0;
-    }
-    if (pid == 0) {
-        int null = open("/dev/null", O_WRONLY);
-        dup2(fds[1], 1);
-        if (null >= 0) dup2(null, 2);
-        close(fds[0]);
-        close(fds[1]);
-        execlp(exe, exe, "-I", "-c", PROBE, (char *)NULL);
-        _exit(127);
-    }
-    close(fds[1]);
-    f = fdopen(fds[0], "r");
-    for (int i = 0; i < 3; i++) {
-        lines[i][0] = '\0';
-        if (f && fgets(lines[i], (int)size, f)) lines[i][strcspn(lines[i], "\r\n")] = '\0';
-    }
-    if (f) fclose(f);
-    else close(fds[0]);
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
+static void append_problem(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 static void append_problem(const char *fmt, ...)
 {
     size_t used = strlen(problem);
@@ -282,13 +313,160 @@ static void append_problem(const char *fmt, ...)
     va_end(args);
 }
 
+/* the time bound of one probe [s]: $PANTOCOSIM_PROBE_TIMEOUT_S if a positive number, else
+   PROBE_TIMEOUT_S */
+#define PROBE_TIMEOUT_S 30.0
+static double probe_timeout(void)
+{
+    const char *text = getenv("PANTOCOSIM_PROBE_TIMEOUT_S");
+    char *end = NULL;
+    double value = text ? strtod(text, &end) : 0.0;
+    return text && end != text && *end == '\0' && value > 0.0 && value < 1e6 ? value
+                                                                               : PROBE_TIMEOUT_S;
+}
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Start `exe -I -c PROBE` (posix_spawnp: no fork of a possibly threaded host) in a process
+   group of its own, its standard output into *out_fd; its pid, or -1 with errno's text in
+   why. */
+static pid_t spawn_probe(const char *exe, int *out_fd, char *why, size_t why_size)
+{
+    int fds[2], err;
+    pid_t pid = -1;
+    posix_spawn_file_actions_t actions;
+    posix_spawnattr_t attr;
+    sigset_t none, defaults;
+    char *argv[] = {(char *)exe, "-I", "-c", (char *)PROBE, NULL};
+    if (pipe2(fds, O_CLOEXEC) != 0) {
+        snprintf(why, why_size, "cannot be started (pipe: %s)", strerror(errno));
+        return -1;
+    }
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+    posix_spawnattr_init(&attr);
+    sigemptyset(&none);
+    sigemptyset(&defaults); /* the host's handlers and mask are not the probe's */
+    sigaddset(&defaults, SIGPIPE);
+    sigaddset(&defaults, SIGINT);
+    sigaddset(&defaults, SIGTERM);
+    posix_spawnattr_setsigmask(&attr, &none);
+    posix_spawnattr_setsigdefault(&attr, &defaults);
+    posix_spawnattr_setpgroup(&attr, 0);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGMASK
+                                        | POSIX_SPAWN_SETSIGDEF);
+    err = posix_spawnp(&pid, exe, &actions, &attr, argv, environ);
+    posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attr);
+    close(fds[1]);
+    if (err != 0) {
+        close(fds[0]);
+        snprintf(why, why_size, "does not run (%s)", strerror(err));
+        return -1;
+    }
+    *out_fd = fds[0];
+    return pid;
+}
+
+/* What the probe prints, into out (at most size - 1 bytes, the rest read and dropped, so
+   the probe never blocks on a full pipe), until it closes its output or `limit` seconds
+   have passed; 1 if it closed its output in time. */
+static int read_probe(int fd, char *out, size_t size, double limit)
+{
+    size_t used = 0;
+    double deadline = now_s() + limit;
+    char scratch[4096];
+    for (;;) {
+        double left = deadline - now_s();
+        struct pollfd p = {fd, POLLIN, 0};
+        ssize_t n;
+        int ready;
+        if (left <= 0.0) break;
+        ready = poll(&p, 1, (int)(left * 1000.0) + 1);
+        if (ready < 0 && errno == EINTR) continue;
+        if (ready <= 0) break;
+        if (used + 1 < size) n = read(fd, out + used, size - 1 - used);
+        else n = read(fd, scratch, sizeof scratch);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            out[used] = '\0';
+            return n == 0;
+        }
+        if (used + 1 < size) used += (size_t)n;
+    }
+    out[used] = '\0';
+    return 0;
+}
+
+/* The next line of *text into out (size bytes, without its newline); 0 when it does not fit */
+static int next_line(const char **text, char *out, size_t size)
+{
+    size_t n = strcspn(*text, "\n");
+    int fits = n < size;
+    snprintf(out, size, "%.*s", (int)(fits ? n : size - 1), *text);
+    out[strcspn(out, "\r")] = '\0';
+    *text += n + ((*text)[n] == '\n');
+    return fits;
+}
+
+/* Run the probe in `exe` within the time bound and read its three lines (libpython,
+   executable, modules it lacks); 1 if it answered, else 0 with the reason in why. */
+static int probe_python(const char *exe, char *lib, char *resolved, char *missing,
+                        size_t size, char *why, size_t why_size)
+{
+    char output[3 * PATH_MAX + 256];
+    const char *text = output;
+    double limit = probe_timeout();
+    int fd = -1, status = 0, closed, waited, fits;
+    pid_t pid = spawn_probe(exe, &fd, why, why_size);
+    if (pid < 0) return 0;
+    closed = read_probe(fd, output, sizeof output, limit);
+    close(fd);
+    if (!closed) kill(-pid, SIGKILL); /* the probe and whatever it started */
+    while ((waited = (int)waitpid(pid, &status, 0)) < 0 && errno == EINTR) {
+    }
+    if (!closed) {
+        snprintf(why, why_size, "did not answer within %g s (stopped; "
+                 "PANTOCOSIM_PROBE_TIMEOUT_S sets this time bound)", limit);
+        return 0;
+    }
+    if (waited == pid && !(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+        if (WIFSIGNALED(status))
+            snprintf(why, why_size, "does not run (killed by signal %d)", WTERMSIG(status));
+        else
+            snprintf(why, why_size, "does not run (exit status %d)", WEXITSTATUS(status));
+        return 0;
+    } /* waited < 0 (the host reaps its children itself): its answer decides */
+    fits = next_line(&text, lib, size);
+    fits &= next_line(&text, resolved, size);
+    fits &= next_line(&text, missing, size);
+    if (!fits || *resolved == '\0') {
+        snprintf(why, why_size, "is not a Python that answers the probe (it printed %.200s%s)",
+                 output, strlen(output) > 200 ? "..." : "");
+        return 0;
+    }
+    return 1;
+}
+
+/* the Python the FMUs run in, for messages: "the host process's own Python" or the
+   candidate that was started */
+static char runtime_origin[2 * PATH_MAX + 256];
+
+const char *runtime_used(void) { return runtime_origin; }
+
 /* Open libpython `lib` and start its interpreter as if run as `exe` (its venv, its
    site-packages). The GIL is released afterwards; the interpreter is never finalised. */
-static int start_interpreter(const char *lib_path, const char *exe)
+static int start_interpreter(const char *lib_path, const char *exe, const char *origin)
 {
     void *lib = dlopen(lib_path, RTLD_NOW | RTLD_GLOBAL);
     if (lib == NULL) {
-        append_problem("; %s: %s", lib_path, dlerror());
+        append_problem("; %s %s: %s", origin, exe, dlerror());
         return 0;
     }
     if (!resolve_api(lib)) return 0;
@@ -300,15 +478,17 @@ static int start_interpreter(const char *lib_path, const char *exe)
         py.InitializeEx(0); /* no signal handlers: the host owns them */
         py.SaveThread();
     }
+    snprintf(runtime_origin, sizeof runtime_origin, "%.200s %.4095s (%.4095s)", origin, exe,
+             lib_path);
     return 1;
 }
 
 static int try_candidate(const char *exe, const char *origin)
 {
-    char lib[PATH_MAX], resolved[PATH_MAX], missing[1024];
+    char lib[PATH_MAX], resolved[PATH_MAX], missing[PATH_MAX], why[512];
     if (exe == NULL || *exe == '\0') return 0;
-    if (!probe_python(exe, lib, resolved, missing, sizeof lib)) {
-        append_problem("; %s %s: does not run", origin, exe);
+    if (!probe_python(exe, lib, resolved, missing, sizeof lib, why, sizeof why)) {
+        append_problem("; %s %s: %s", origin, exe, why);
         return 0;
     }
     if (*missing) {
@@ -321,7 +501,7 @@ static int try_candidate(const char *exe, const char *origin)
                        origin, resolved);
         return 0;
     }
-    return start_interpreter(lib, resolved);
+    return start_interpreter(lib, resolved, origin);
 }
 
 /* The host's interpreter if the process has one, else the first candidate that fits. */
@@ -336,11 +516,17 @@ int ensure_runtime(const char *resources)
     }
     problem[0] = '\0';
     if (dlsym(RTLD_DEFAULT, "Py_IsInitialized") != NULL) {
+        Dl_info where;
+        void *symbol = dlsym(RTLD_DEFAULT, "Py_IsInitialized");
         ok = resolve_api(RTLD_DEFAULT);
         if (ok && !py.IsInitialized()) {
             py.InitializeEx(0);
             py.SaveThread();
         }
+        snprintf(runtime_origin, sizeof runtime_origin, "the host process's own Python (%s, "
+                 "already loaded in the process: the FMU runs in it, so it needs numpy, "
+                 "scipy and numba)",
+                 dladdr(symbol, &where) && where.dli_fname ? where.dli_fname : "linked in");
     } else {
         snprintf(runtime_file, sizeof runtime_file, "%s/pantocosim_runtime.txt", resources);
         read_key(runtime_file, "executable", exe, sizeof exe);
@@ -352,7 +538,14 @@ int ensure_runtime(const char *resources)
             append_problem(". Set PANTOCOSIM_PYTHON to a Python >= 3.11 executable with numpy, "
                            "scipy, numba and pythonfmu, built with a shared libpython");
     }
-    runtime_ready = ok;
+    if (ok && strchr(problem, ';')) { /* started on a later candidate: say which, and why */
+        char skipped[sizeof problem];
+        snprintf(skipped, sizeof skipped, "%s", strchr(problem, ';') + 2);
+        snprintf(problem, sizeof problem, "the FMUs run in %.2000s; skipped: %.6000s",
+                 runtime_origin, skipped);
+        ok = 2;
+    }
+    runtime_ready = ok != 0;
     pthread_mutex_unlock(&runtime_lock);
     return ok;
 }
@@ -428,11 +621,33 @@ int done(Component *c, PyObject *result, const char *call)
     return status;
 }
 
+int leave_clean(Component *c, const char *call, int status)
+{
+    char message[2048];
+    if (!py.ErrOccurred()) return status;
+    take_exception(message, sizeof message);
+    LOGF(c, ST_ERROR, "%s: a Python error was left pending (cleared): %s", call, message);
+    return status > ST_ERROR ? status : ST_ERROR;
+}
+
+PyObject *put_item(PyObject *list, size_t i, PyObject *item)
+{
+    if (list == NULL) {
+        if (item) py.DecRef(item);
+        return NULL;
+    }
+    if (item == NULL || py.ListSetItem(list, (Py_ssize_t)i, item) != 0) { /* item stolen */
+        py.DecRef(list);
+        return NULL;
+    }
+    return list;
+}
+
 PyObject *vr_list(const unsigned int vr[], size_t n)
 {
     PyObject *list = py.ListNew((Py_ssize_t)n);
     for (size_t i = 0; list && i < n; i++)
-        py.ListSetItem(list, (Py_ssize_t)i, py.LongFromLong((long)vr[i]));
+        list = put_item(list, i, py.LongFromLong((long)vr[i]));
     return list;
 }
 
@@ -475,10 +690,54 @@ char *resources_path(const char *location)
     return out;
 }
 
+int resources_complete(Component *c, const char *resources, const char *location,
+                       const char *bridge_module, const char *call)
+{
+    char bridge[PATH_MAX];
+    struct stat info;
+    if (stat(resources, &info) != 0 || !S_ISDIR(info.st_mode)) {
+        LOGF(c, ST_ERROR, "%s: the FMU's resources folder %s is missing (%s; the resource "
+             "location given is '%s'): it holds the FMU's Python model and its bridge "
+             "%s.py; extract the whole FMU", call, resources,
+             stat(resources, &info) != 0 ? strerror(errno) : "not a folder", location,
+             bridge_module);
+        return 0;
+    }
+    snprintf(bridge, sizeof bridge, "%s/%s.py", resources, bridge_module);
+    if (access(bridge, R_OK) != 0) {
+        LOGF(c, ST_ERROR, "%s: the FMU's resources folder %s has no readable %s.py (%s): the "
+             "FMU is incomplete; build it again with pantocosim build-fmus", call, resources,
+             bridge_module, strerror(errno));
+        return 0;
+    }
+    return 1;
+}
+
+/* "Python 3.11.2 (/usr/bin/python3, prefix /usr)" of the running interpreter, into out */
+static void python_identity(char *out, size_t size)
+{
+    const char *names[] = {"version", "executable", "prefix"};
+    char text[3][512] = {"?", "?", "?"};
+    PyObject *sys = py.ImportModule("sys");
+    for (int i = 0; sys && i < 3; i++) {
+        PyObject *value = py.GetAttrString(sys, names[i]);
+        PyObject *str = value ? py.ObjectStr(value) : NULL;
+        const char *utf8 = str ? py.UnicodeAsUTF8(str) : NULL;
+        if (utf8) snprintf(text[i], sizeof text[i], "%s", utf8);
+        if (str) py.DecRef(str);
+        if (value) py.DecRef(value);
+    }
+    if (sys) py.DecRef(sys);
+    if (py.ErrOccurred()) py.ErrClear();
+    text[0][strcspn(text[0], " ")] = '\0';
+    snprintf(out, size, "Python %s (sys.executable '%s', prefix %s)", text[0], text[1],
+             text[2]);
+}
+
 int make_adapter(Component *c, const char *resources, const char *bridge_module, int fmi,
                  const char *token, int visible, const char *call)
 {
-    char message[4096];
+    char message[4096], identity[1600];
     PyObject *sys = py.ImportModule("sys"), *path, *bridge, *added;
     if (sys == NULL) goto fail;
     path = py.GetAttrString(sys, "path");
@@ -497,7 +756,8 @@ int make_adapter(Component *c, const char *resources, const char *bridge_module,
     return 1;
 fail:
     take_exception(message, sizeof message);
-    LOGF(c, ST_ERROR, "%s: %s", call, message);
+    python_identity(identity, sizeof identity);
+    LOGF(c, ST_ERROR, "%s: %s [in %s: %s]", call, message, identity, runtime_used());
     return 0;
 }
 
@@ -507,8 +767,8 @@ int get_values(Component *c, const char *call, const char *method, const unsigne
 {
     if (!arrays_given(c, call, vr, n, out)) return ST_ERROR;
     PyObject *refs = vr_list(vr, n);
-    PyObject *result = py.CallMethod(c->adapter, method, "O", refs);
-    py.DecRef(refs);
+    PyObject *result = refs ? py.CallMethod(c->adapter, method, "O", refs) : NULL;
+    if (refs) py.DecRef(refs);
     int status = status_of(c, result, call);
     if (result != NULL) {
         PyObject *values = py.TupleGetItem(result, 1);
@@ -537,7 +797,7 @@ int set_values(Component *c, const char *call, const char *method, const unsigne
                size_t n, const void *in, ValueKind kind)
 {
     if (!arrays_given(c, call, vr, n, in)) return ST_ERROR;
-    PyObject *refs = vr_list(vr, n), *values = py.ListNew((Py_ssize_t)n);
+    PyObject *refs = vr_list(vr, n), *values = refs ? py.ListNew((Py_ssize_t)n) : NULL;
     for (size_t i = 0; values && i < n; i++) {
         PyObject *item = NULL;
         switch (kind) {
@@ -547,11 +807,12 @@ int set_values(Component *c, const char *call, const char *method, const unsigne
         case V_CBOOL: item = py.LongFromLong(((const _Bool *)in)[i] ? 1 : 0); break;
         case V_INTBOOL: item = py.LongFromLong(((const int *)in)[i] ? 1 : 0); break;
         }
-        py.ListSetItem(values, (Py_ssize_t)i, item);
+        values = put_item(values, i, item);
     }
-    int status = done(c, py.CallMethod(c->adapter, method, "OO", refs, values), call);
-    py.DecRef(refs);
-    py.DecRef(values);
+    int status = done(c, values ? py.CallMethod(c->adapter, method, "OO", refs, values) : NULL,
+                      call);
+    if (refs) py.DecRef(refs);
+    if (values) py.DecRef(values);
     return status;
 }
 
@@ -561,8 +822,8 @@ int get_strings(Component *c, const char *call, const unsigned int vr[], size_t 
     if (!arrays_given(c, call, vr, n, out)) return ST_ERROR;
     PyObject *refs = vr_list(vr, n);
     /* the strings stay valid until the next call: the adapter keeps the list it returns */
-    PyObject *result = py.CallMethod(c->adapter, "get_string", "O", refs);
-    py.DecRef(refs);
+    PyObject *result = refs ? py.CallMethod(c->adapter, "get_string", "O", refs) : NULL;
+    if (refs) py.DecRef(refs);
     int status = status_of(c, result, call);
     if (result != NULL) {
         PyObject *values = py.TupleGetItem(result, 1);
@@ -585,12 +846,13 @@ int set_strings(Component *c, const char *call, const unsigned int vr[], size_t 
                 const char *const in[])
 {
     if (!arrays_given(c, call, vr, n, in)) return ST_ERROR;
-    PyObject *refs = vr_list(vr, n), *values = py.ListNew((Py_ssize_t)n);
+    PyObject *refs = vr_list(vr, n), *values = refs ? py.ListNew((Py_ssize_t)n) : NULL;
     for (size_t i = 0; values && i < n; i++)
-        py.ListSetItem(values, (Py_ssize_t)i, py.UnicodeFromString(in[i] ? in[i] : ""));
-    int status = done(c, py.CallMethod(c->adapter, "set_string", "OO", refs, values), call);
-    py.DecRef(refs);
-    py.DecRef(values);
+        values = put_item(values, i, py.UnicodeFromString(in[i] ? in[i] : ""));
+    int status = done(c, values ? py.CallMethod(c->adapter, "set_string", "OO", refs, values)
+                                : NULL, call);
+    if (refs) py.DecRef(refs);
+    if (values) py.DecRef(values);
     return status;
 }
 
@@ -677,42 +939,59 @@ int state_free(Component *c, const char *call, void **state)
     return ST_OK;
 }
 
-static int serialised(Component *c, State *s, const char *call)
+/* the state's bytes (made at the first call, then kept) into data and n */
+static int serialised(Component *c, State *s, const char *call, char **data, Py_ssize_t *n)
 {
-    if (s->bytes) return ST_OK;
-    PyObject *result = py.CallMethod(c->adapter, "serialize", "O", s->object);
-    int status = status_of(c, result, call);
-    if (result && status < ST_DISCARD) {
-        s->bytes = py.TupleGetItem(result, 1);
-        py.IncRef(s->bytes);
+    int status = ST_OK;
+    if (s->bytes == NULL) {
+        PyObject *result = py.CallMethod(c->adapter, "serialize", "O", s->object);
+        PyObject *bytes = NULL;
+        status = status_of(c, result, call);
+        if (result && status < ST_DISCARD) bytes = py.TupleGetItem(result, 1);
+        if (bytes) py.IncRef(bytes);
+        if (result) py.DecRef(result);
+        if (status >= ST_DISCARD) {
+            if (bytes) py.DecRef(bytes);
+            return status;
+        }
+        s->bytes = bytes;
     }
-    if (result) py.DecRef(result);
-    return s->bytes ? status : ST_ERROR;
+    if (s->bytes == NULL || py.BytesAsStringAndSize(s->bytes, data, n) != 0 || *n < 0) {
+        char message[1024];
+        take_exception(message, sizeof message);
+        if (s->bytes) py.DecRef(s->bytes);
+        s->bytes = NULL;
+        LOGF(c, ST_ERROR, "%s: the FMU's bridge gave no bytes for the state (%s)", call,
+             message);
+        return ST_ERROR;
+    }
+    return status;
 }
 
 int state_size(Component *c, const char *call, void *state, size_t *size)
 {
-    char *data;
-    Py_ssize_t n;
+    char *data = NULL;
+    Py_ssize_t n = 0;
     State *s = find_state(c, state);
     if (s == NULL) return state_refused(c, call, state);
-    int status = serialised(c, s, call);
-    if (status >= ST_DISCARD || size == NULL) return size ? status : ST_ERROR;
-    py.BytesAsStringAndSize(s->bytes, &data, &n);
-    *size = (size_t)n;
+    if (size == NULL) {
+        LOGF(c, ST_ERROR, "%s: the size argument is NULL", call);
+        return ST_ERROR;
+    }
+    int status = serialised(c, s, call, &data, &n);
+    if (status < ST_DISCARD) *size = (size_t)n;
     return status;
 }
 
 int state_serialize(Component *c, const char *call, void *state, unsigned char *buffer,
                     size_t size)
 {
-    char *data;
-    Py_ssize_t n;
+    char *data = NULL;
+    Py_ssize_t n = 0;
     State *s = find_state(c, state);
     if (s == NULL) return state_refused(c, call, state);
-    int status = serialised(c, s, call);
+    int status = serialised(c, s, call, &data, &n);
     if (status >= ST_DISCARD) return status;
-    py.BytesAsStringAndSize(s->bytes, &data, &n);
     if (buffer == NULL || size < (size_t)n) {
         LOGF(c, ST_ERROR, "%s: the buffer holds %zu bytes; the state needs %zd", call, size,
              n);
@@ -730,7 +1009,7 @@ int state_deserialize(Component *c, const char *call, const unsigned char *data,
         return ST_ERROR;
     }
     PyObject *bytes = py.BytesFromStringAndSize((const char *)data, (Py_ssize_t)size);
-    PyObject *result = py.CallMethod(c->adapter, "deserialize", "O", bytes);
-    py.DecRef(bytes);
+    PyObject *result = bytes ? py.CallMethod(c->adapter, "deserialize", "O", bytes) : NULL;
+    if (bytes) py.DecRef(bytes);
     return keep_state(c, result, state, NULL, call);
 }

@@ -9,6 +9,7 @@
 #ifndef PANTOCOSIM_EXPORT_COMMON_H
 #define PANTOCOSIM_EXPORT_COMMON_H
 
+#include <pthread.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <sys/types.h>
@@ -59,10 +60,15 @@ typedef struct {
 
 extern PythonApi py;
 
-/* 1 when a Python runtime is ready (the host's, or one started from a candidate); else 0 and
-   runtime_problem() says why, naming every candidate */
+/* 1 when a Python runtime is ready (the host's, or one started from a candidate); 2 when this
+   call started it on a candidate after skipping others (runtime_problem() says which
+   Python runs and why the others were skipped, for a warning); else 0 and
+   runtime_problem() says why, naming every candidate and what it lacked */
 int ensure_runtime(const char *resources);
 const char *runtime_problem(void);
+/* the Python the FMUs run in, for messages ("PANTOCOSIM_PYTHON = /x/python (libpython...)",
+   "the host process's own Python (...)") */
+const char *runtime_used(void);
 
 /* ------------------------------------------------------------------ instances and states */
 typedef struct State {
@@ -79,6 +85,11 @@ typedef void (*LogSink)(const struct Component *c, int status, const char *categ
 
 typedef struct Component {
     uint64_t magic;
+    /* one call at a time on an instance: a call, or the freeing of the instance or of one of
+       its states, waits for the call under way on another thread (taken before the GIL) */
+    pthread_mutex_t call_lock;
+    int users;  /* calls holding or waiting for call_lock (under the registry's lock) */
+    int freed;  /* set by the instance's free call: the last user releases the memory */
     char *instanceName;
     int loggingOn;
     PyObject *adapter; /* the bridge's Adapter over the slave */
@@ -91,9 +102,18 @@ typedef struct Component {
 Component *new_component(const char *instanceName, int loggingOn, LogSink sink,
                          void *hostLogger, void *hostEnvironment);
 int register_component(Component *c);
-int registered(const Component *c);
-/* unregister, drop the states and the adapter, free (the GIL is taken here) */
-void free_component(Component *c, const char *call);
+/* the start of a call on c: 1 with c held for this thread (c is a live instance: registered
+   and not freed; calls of other threads on it wait), else 0 */
+int enter_component(Component *c);
+/* the end of a call begun by enter_component (the memory of an instance freed meanwhile is
+   released by its last user) */
+void leave_component(Component *c);
+/* the instance's free call (fmi2FreeInstance, fmi3FreeInstance): unregistered, its states
+   and adapter dropped (the GIL is taken here), its memory released once no call uses it;
+   nothing for a pointer that is not a live instance */
+void free_instance(Component *c, const char *call);
+/* an instance that was never registered (a failed instantiation) released at once */
+void discard_component(Component *c, const char *call);
 
 void log_message(const Component *c, int status, const char *category, const char *message);
 void logf_message(const Component *c, int status, const char *fmt, ...)
@@ -104,6 +124,10 @@ const char *category_of(int status);
 /* the file path of a resource location (file: URI or plain path), percent-decoded, no
    trailing slash; malloc'ed */
 char *resources_path(const char *location);
+/* 1 when the resources folder holds the bridge module; else 0 with a log naming what is
+   missing (the folder, or the module in it) and the location the host gave */
+int resources_complete(Component *c, const char *resources, const char *location,
+                       const char *bridge_module, const char *call);
 /* import the bridge module from the resources and make the adapter of FMI `fmi`; 0 with a
    log (naming `call`) on failure */
 int make_adapter(Component *c, const char *resources, const char *bridge_module, int fmi,
@@ -113,6 +137,10 @@ void take_exception(char *out, size_t size);
 int status_of(Component *c, PyObject *result, const char *call);
 int done(Component *c, PyObject *result, const char *call);
 
+/* list[i] = item (the reference stolen), the list; NULL (the list released, the Python
+   error left for the caller's status) when the list or the item is NULL */
+PyObject *put_item(PyObject *list, size_t i, PyObject *item);
+/* the value references as a Python list; NULL (a Python error set) when it cannot be made */
 PyObject *vr_list(const unsigned int vr[], size_t n);
 int arrays_given(Component *c, const char *call, const void *vr, size_t n, const void *values);
 
@@ -141,20 +169,26 @@ int state_deserialize(Component *c, const char *call, const unsigned char *data,
    Error; the GIL is held between ENTER and LEAVE */
 #define ENTER(c_in, call)                                                      \
     Component *c = (Component *)(c_in);                                       \
+    const char *enter_call_ = (call);                                          \
     int gil;                                                                   \
-    if (!registered(c)) {                                                      \
+    if (!enter_component(c)) {                                                 \
         fprintf(stderr, "[logStatusError] %s: not a live pantocosim FMU "      \
-                        "instance (%p)\n", call, (void *)c);                   \
-        return ST_ERROR;                                                       \
+                        "instance (%p)\n", enter_call_, (void *)c);            \
+        return (int)ST_ERROR;                                                  \
     }                                                                          \
     gil = py.GILEnsure()
 
+/* the call's status; a Python error still set is logged and cleared (the next call on this
+   thread starts clean), then the GIL and the instance are released */
 #define LEAVE(status)                                                          \
     do {                                                                       \
-        int leave_status_ = (status);                                          \
+        int leave_status_ = leave_clean(c, enter_call_, (status));             \
         py.GILRelease(gil);                                                    \
+        leave_component(c);                                                    \
         return leave_status_;                                                  \
     } while (0)
+
+int leave_clean(Component *c, const char *call, int status);
 
 #define LOGF(c, status, ...) logf_message(c, status, __VA_ARGS__)
 

@@ -67,24 +67,27 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
                                  functions ? (void *)functions->logger : NULL,
                                  functions ? functions->componentEnvironment : NULL);
     char *resources;
-    int gil, ok;
+    int gil, ok, runtime;
     if (c == NULL) return NULL;
     if (fmuType != fmi2CoSimulation) {
         LOGF(c, ST_ERROR, "fmi2Instantiate: this FMU supports co-simulation only");
-        free_component(c, "fmi2Instantiate");
+        discard_component(c, "fmi2Instantiate");
         return NULL;
     }
     resources = resources_path(fmuResourceLocation);
     if (resources == NULL) {
         LOGF(c, ST_ERROR, "fmi2Instantiate: fmuResourceLocation is NULL: the FMU needs its "
              "resources");
-        free_component(c, "fmi2Instantiate");
+        discard_component(c, "fmi2Instantiate");
         return NULL;
     }
-    if (!ensure_runtime(resources)) {
-        log_message(c, ST_ERROR, "logStatusError", runtime_problem());
+    runtime = resources_complete(c, resources, fmuResourceLocation, BRIDGE, "fmi2Instantiate")
+              ? ensure_runtime(resources) : -1;
+    if (runtime == 2) log_message(c, ST_WARNING, "logStatusWarning", runtime_problem());
+    if (runtime <= 0) {
+        if (runtime == 0) log_message(c, ST_ERROR, "logStatusError", runtime_problem());
         free(resources);
-        free_component(c, "fmi2Instantiate");
+        discard_component(c, "fmi2Instantiate");
         return NULL;
     }
     gil = py.GILEnsure();
@@ -94,7 +97,7 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
     free(resources);
     if (!ok || !register_component(c)) {
         if (ok) LOGF(c, ST_ERROR, "fmi2Instantiate: too many live instances");
-        free_component(c, "fmi2Instantiate");
+        discard_component(c, "fmi2Instantiate");
         return NULL;
     }
     return c;
@@ -102,25 +105,22 @@ EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
 
 EXPORT void fmi2FreeInstance(fmi2Component comp)
 {
-    Component *c = (Component *)comp;
-    if (!registered(c)) return;
-    free_component(c, "fmi2FreeInstance");
+    free_instance((Component *)comp, "fmi2FreeInstance");
 }
 
 EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn,
                                       size_t nCategories, const fmi2String categories[])
 {
     ENTER(comp, "fmi2SetDebugLogging");
-    PyObject *list = py.ListNew(0);
-    for (size_t i = 0; list && categories && i < nCategories; i++) {
-        PyObject *s = py.UnicodeFromString(categories[i] ? categories[i] : "");
-        py.CallMethod(list, "append", "O", s);
-        py.DecRef(s);
-    }
+    size_t n = categories ? nCategories : 0;
+    PyObject *list = py.ListNew((Py_ssize_t)n);
+    for (size_t i = 0; list && i < n; i++)
+        list = put_item(list, i, py.UnicodeFromString(categories[i] ? categories[i] : ""));
     c->loggingOn = loggingOn;
-    int status = done(c, py.CallMethod(c->adapter, "set_debug_logging", "iO", loggingOn,
-                                       list), "fmi2SetDebugLogging");
-    py.DecRef(list);
+    int status = done(c, list ? py.CallMethod(c->adapter, "set_debug_logging", "iO",
+                                              (int)loggingOn, list) : NULL,
+                      "fmi2SetDebugLogging");
+    if (list) py.DecRef(list);
     LEAVE(status);
 }
 
@@ -250,8 +250,19 @@ static int status_call(Component *c, const char *call, fmi2StatusKind s, int *in
     int status = status_of(c, result, call);
     if (result && status < ST_DISCARD) {
         PyObject *value = py.TupleGetItem(result, 1);
-        if (integer) *integer = (int)py.LongAsLong(value);
-        if (real) *real = py.FloatAsDouble(value);
+        long i = value && integer ? py.LongAsLong(value) : 0;
+        double r = value && real ? py.FloatAsDouble(value) : 0.0;
+        if (value == NULL || py.ErrOccurred()) { /* never left set for the next call */
+            py.ErrClear();
+            LOGF(c, ST_ERROR, "%s: status kind %d has no %s value (fmi2DoStepStatus is read "
+                 "with fmi2GetStatus, fmi2LastSuccessfulTime with fmi2GetRealStatus, "
+                 "fmi2Terminated with fmi2GetBooleanStatus)", call, (int)s,
+                 integer ? "integer" : "real");
+            status = ST_ERROR;
+        } else {
+            if (integer) *integer = (int)i;
+            if (real) *real = r;
+        }
     }
     if (result) py.DecRef(result);
     return status;
@@ -302,8 +313,9 @@ EXPORT fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s
 static fmi2Status unsupported(fmi2Component comp, const char *call, const char *why)
 {
     Component *c = (Component *)comp;
-    if (!registered(c)) return fmi2Error;
+    if (!enter_component(c)) return fmi2Error;
     LOGF(c, ST_ERROR, "%s: not supported (%s)", call, why);
+    leave_component(c);
     return fmi2Error;
 }
 

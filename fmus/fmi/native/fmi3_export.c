@@ -87,26 +87,29 @@ EXPORT fmi3Instance fmi3InstantiateCoSimulation(
     Component *c = new_component(instanceName, loggingOn, sink, (void *)logMessage,
                                  instanceEnvironment);
     char *resources;
-    int gil, ok;
+    int gil, ok, runtime;
     (void)earlyReturnAllowed, (void)requiredIntermediateVariables, (void)intermediateUpdate;
     if (c == NULL) return NULL;
     if (nRequiredIntermediateVariables > 0) {
         LOGF(c, ST_ERROR, "%s: %zu required intermediate variables: this FMU provides none "
              "(canReturnEarlyAfterIntermediateUpdate is false)", call,
              nRequiredIntermediateVariables);
-        free_component(c, call);
+        discard_component(c, call);
         return NULL;
     }
     resources = resources_path(resourcePath);
     if (resources == NULL) {
         LOGF(c, ST_ERROR, "%s: resourcePath is NULL: the FMU needs its resources", call);
-        free_component(c, call);
+        discard_component(c, call);
         return NULL;
     }
-    if (!ensure_runtime(resources)) {
-        log_message(c, ST_ERROR, "logStatusError", runtime_problem());
+    runtime = resources_complete(c, resources, resourcePath, BRIDGE, call)
+              ? ensure_runtime(resources) : -1;
+    if (runtime == 2) log_message(c, ST_WARNING, "logStatusWarning", runtime_problem());
+    if (runtime <= 0) {
+        if (runtime == 0) log_message(c, ST_ERROR, "logStatusError", runtime_problem());
         free(resources);
-        free_component(c, call);
+        discard_component(c, call);
         return NULL;
     }
     gil = py.GILEnsure();
@@ -118,7 +121,7 @@ EXPORT fmi3Instance fmi3InstantiateCoSimulation(
     free(resources);
     if (!ok || !register_component(c)) {
         if (ok) LOGF(c, ST_ERROR, "%s: too many live instances", call);
-        free_component(c, call);
+        discard_component(c, call);
         return NULL;
     }
     return c;
@@ -153,25 +156,22 @@ EXPORT fmi3Instance fmi3InstantiateScheduledExecution(
 
 EXPORT void fmi3FreeInstance(fmi3Instance instance)
 {
-    Component *c = (Component *)instance;
-    if (!registered(c)) return;
-    free_component(c, "fmi3FreeInstance");
+    free_instance((Component *)instance, "fmi3FreeInstance");
 }
 
 EXPORT fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn,
                                       size_t nCategories, const fmi3String categories[])
 {
     ENTER(instance, "fmi3SetDebugLogging");
-    PyObject *list = py.ListNew(0);
-    for (size_t i = 0; list && categories && i < nCategories; i++) {
-        PyObject *s = py.UnicodeFromString(categories[i] ? categories[i] : "");
-        py.CallMethod(list, "append", "O", s);
-        py.DecRef(s);
-    }
+    size_t n = categories ? nCategories : 0;
+    PyObject *list = py.ListNew((Py_ssize_t)n);
+    for (size_t i = 0; list && i < n; i++)
+        list = put_item(list, i, py.UnicodeFromString(categories[i] ? categories[i] : ""));
     c->loggingOn = loggingOn;
-    int status = done(c, py.CallMethod(c->adapter, "set_debug_logging", "iO", (int)loggingOn,
-                                       list), "fmi3SetDebugLogging");
-    py.DecRef(list);
+    int status = done(c, list ? py.CallMethod(c->adapter, "set_debug_logging", "iO",
+                                              (int)loggingOn, list) : NULL,
+                      "fmi3SetDebugLogging");
+    if (list) py.DecRef(list);
     LEAVE(status);
 }
 
@@ -393,8 +393,9 @@ EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunica
 static fmi3Status unsupported(fmi3Instance instance, const char *call, const char *why)
 {
     Component *c = (Component *)instance;
-    if (!registered(c)) return fmi3Error;
+    if (!enter_component(c)) return fmi3Error;
     LOGF(c, ST_ERROR, "%s: not supported (%s)", call, why);
+    leave_component(c);
     return fmi3Error;
 }
 
