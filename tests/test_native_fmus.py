@@ -121,11 +121,11 @@ def python_catenary(prep, steps):
     """The Python catenary FMU's stepper and outputs under the host's forcing: rows of t,
     wire height and velocity, support uplifts."""
     from pantocosim.core.hht import HHTSettings
-    from pantocosim.fmi.catenary_slave import _forced_integrator
+    from pantocosim.core.stepping import make_stepper
 
     sc, model = prep.scenario, prep.catenary
     F0 = prep.static_forces
-    integ = _forced_integrator(model, HHTSettings.for_runs(sc.alpha, sc.newton_rtol))
+    integ = make_stepper(model, HHTSettings.for_runs(sc.alpha, sc.newton_rtol), redo=True)
     integ.initialize(0.0, model.static_state(F0), np.zeros(model.n_dofs), F0.copy())
     rows = []
     for i in range(steps):
