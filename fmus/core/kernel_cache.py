@@ -10,6 +10,11 @@ when set), so every copy of the same source (the command line, the campaign work
 extraction of each FMU) shares them. Numba still checks each entry against the source's
 content hash and the CPU, so a changed file or another machine compiles again, never loads
 a stale kernel.
+
+The cache never stops a run: a damaged, truncated or foreign entry (``.nbi``/``.nbc``) is
+compiled again and rewritten, and a folder that cannot be made or written (read-only, full, a
+file in its place) leaves the kernels compiled at each run; either way with one warning line
+(:func:`pantocosim.core.user_cache.cache_warning`).
 """
 
 from __future__ import annotations
@@ -17,11 +22,15 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import tempfile
 from pathlib import Path
 
 from numba.core import caching, config
 
-from .user_cache import cache_root
+from .user_cache import cache_root, cache_warning, describe
+
+REMEDY = "kernels are compiled at each run: make it a writable folder, free space or set " \
+         "NUMBA_CACHE_DIR"
 
 #: modules whose kernels are located here (their names start with it)
 PACKAGE_PREFIX = "pantocosim."
@@ -58,9 +67,81 @@ class PackageCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
     def from_function(cls, py_func, py_file):
         """A locator for the package's functions (None for others, or when the folder cannot
         be written: numba's own locators then apply)."""
-        if not str(getattr(py_func, "__module__", "") or "").startswith(PACKAGE_PREFIX):
+        if not _ours(py_func):
             return None
-        return super().from_function(py_func, py_file)
+        found = super().from_function(py_func, py_file)
+        if found is None:
+            cache_warning(root(), "cannot be made or written", REMEDY)
+        return found
+
+
+def _ours(py_func) -> bool:
+    return str(getattr(py_func, "__module__", "") or "").startswith(PACKAGE_PREFIX)
+
+
+class ScratchCacheLocator(PackageCacheLocator):
+    """The last resort of a package kernel whose other folders all fail: a private temporary
+    folder of this process (the kernels are compiled, not shared)."""
+
+    def __init__(self, py_func, py_file):
+        super().__init__(py_func, py_file)
+        self._cache_path = _scratch_folder()
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not _ours(py_func) or not os.path.exists(py_file):
+            return None
+        return cls(py_func, py_file)
+
+
+@functools.lru_cache(maxsize=None)
+def _scratch_folder() -> str:
+    return tempfile.mkdtemp(prefix="pantocosim-numba-")
+
+
+def _is_package_cache(cache) -> bool:
+    locator = getattr(getattr(cache, "_impl", None), "locator", None)
+    return isinstance(locator, PackageCacheLocator)
+
+
+def _guarded_load(load):
+    @functools.wraps(load)
+    def load_overload(self, sig, target_context):
+        try:
+            return load(self, sig, target_context)
+        except Exception as exc:  # noqa: BLE001 - a damaged entry is compiled again
+            if not _is_package_cache(self):
+                raise
+            index = Path(self._cache_file._index_path)
+            cache_warning(index, f"damaged kernel cache entry ({describe(exc)})",
+                          "the kernel is compiled again and the entry rewritten")
+            _forget(index)
+            return None
+    load_overload.pantocosim_guard = True
+    return load_overload
+
+
+def _guarded_save(save):
+    @functools.wraps(save)
+    def save_overload(self, sig, data):
+        try:
+            return save(self, sig, data)
+        except Exception as exc:  # noqa: BLE001 - an unwritable cache only costs time
+            if not _is_package_cache(self):
+                raise
+            cache_warning(self._cache_path, f"kernel not kept ({describe(exc)})", REMEDY)
+            return None
+    save_overload.pantocosim_guard = True
+    return save_overload
+
+
+def _forget(index: Path) -> None:
+    """Remove a damaged index so that the next save starts a new one (a read-only cache
+    keeps it: each run then compiles)."""
+    try:
+        index.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def install() -> None:
@@ -70,3 +151,8 @@ def install() -> None:
     locators = impl._locator_classes
     if PackageCacheLocator not in locators:
         locators.insert(0, PackageCacheLocator)
+    if ScratchCacheLocator not in locators:
+        locators.append(ScratchCacheLocator)
+    if not getattr(caching.Cache.load_overload, "pantocosim_guard", False):
+        caching.Cache.load_overload = _guarded_load(caching.Cache.load_overload)
+        caching.Cache.save_overload = _guarded_save(caching.Cache.save_overload)
