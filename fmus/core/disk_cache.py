@@ -124,9 +124,9 @@ def limit_bytes() -> float:
     except ValueError:
         mb = float("nan")
     if not mb >= 0.0:
-        raise ParameterError(f"environment variable PANTOCOSIM_CACHE_MB = {given!r} is not a "
-                             "size: give megabytes, a number >= 0 (default "
-                             f"{DEFAULT_LIMIT_MB})")
+        raise ParameterError("PANTOCOSIM_CACHE_MB", given,
+                             "not a size: give megabytes, a number >= 0 (default "
+                             f"{DEFAULT_LIMIT_MB})", source="environment variable")
     return mb * 2**20
 
 
