@@ -63,16 +63,25 @@ class PackageCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheL
     def get_cache_path(self) -> str:
         return self._cache_path
 
+    def ensure_cache_path(self) -> None:
+        """Make the folder, or accept one that can only be read (a read-only cache still
+        gives its kernels; the ones it lacks are compiled at each run, with a warning)."""
+        try:
+            super().ensure_cache_path()
+        except OSError as exc:
+            path = self.get_cache_path()
+            if not (os.path.isdir(path) and os.access(path, os.R_OK | os.X_OK)):
+                cache_warning(root(), f"cannot be made or written ({describe(exc)})", REMEDY,
+                              once_for=f"unwritable {root()}")
+                raise
+
     @classmethod
     def from_function(cls, py_func, py_file):
         """A locator for the package's functions (None for others, or when the folder cannot
         be written: numba's own locators then apply)."""
         if not _ours(py_func):
             return None
-        found = super().from_function(py_func, py_file)
-        if found is None:
-            cache_warning(root(), "cannot be made or written", REMEDY)
-        return found
+        return super().from_function(py_func, py_file)
 
 
 def _ours(py_func) -> bool:
@@ -114,7 +123,8 @@ def _guarded_load(load):
                 raise
             index = Path(self._cache_file._index_path)
             cache_warning(index, f"damaged kernel cache entry ({describe(exc)})",
-                          "the kernel is compiled again and the entry rewritten")
+                          "the kernel is compiled again and the entry rewritten",
+                          once_for=f"damaged {root()}")
             _forget(index)
             return None
     load_overload.pantocosim_guard = True
@@ -129,7 +139,8 @@ def _guarded_save(save):
         except Exception as exc:  # noqa: BLE001 - an unwritable cache only costs time
             if not _is_package_cache(self):
                 raise
-            cache_warning(self._cache_path, f"kernel not kept ({describe(exc)})", REMEDY)
+            cache_warning(root(), f"kernels not kept ({describe(exc)})", REMEDY,
+                          once_for=f"unwritable {root()}")
             return None
     save_overload.pantocosim_guard = True
     return save_overload

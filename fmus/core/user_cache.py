@@ -34,12 +34,14 @@ def describe(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def cache_warning(path, problem: str, remedy: str) -> None:
-    """Warn once per ``path`` and ``problem``: one line naming both and what to do."""
+def cache_warning(path, problem: str, remedy: str, once_for: str | None = None) -> None:
+    """Warn once per ``path`` and ``problem`` (or once per ``once_for`` when given): one line
+    naming both and what to do."""
     message = f"cache {path}: {problem}; going on without it ({remedy})"
-    if message in _warned:
+    seen = once_for or message
+    if seen in _warned:
         return
-    _warned.add(message)
+    _warned.add(seen)
     warnings.warn(CacheWarning(message), stacklevel=3)
 
 
