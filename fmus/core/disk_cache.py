@@ -130,6 +130,12 @@ def limit_bytes() -> float:
     return mb * 2**20
 
 
+def check_settings() -> None:
+    """Refuse a bad ``PANTOCOSIM_CACHE_MB`` (ParameterError naming it) before any work."""
+    if enabled():
+        limit_bytes()
+
+
 def _evict(root: Path) -> None:
     limit = limit_bytes()
     entries = []
