@@ -127,10 +127,13 @@ def solver(w: int):
     name = f"band_window_w{w}_{digest}"
     path = _written(name, source)
     if path is not None:
+        # a module of the package: numba keeps its machine code in the package's kernel
+        # cache (core/kernel_cache.py), which a damaged entry never stops
+        module = f"{__name__.rsplit('.', 1)[0]}.{name}"
         try:
-            return _imported(name, path)
+            return _imported(module, path)
         except Exception:  # noqa: BLE001 - an unreadable file: compile in memory instead
-            sys.modules.pop(name, None)
+            sys.modules.pop(module, None)
     namespace: dict = {}
     exec(compile(source.replace("cache=True", "cache=False"), name, "exec"), namespace)
     return SimpleNamespace(**namespace)
