@@ -6,7 +6,9 @@ dtype, shape and bytes; numbers and strings by repr) together with the model pac
 stamp (:mod:`.stamp`), so a changed input or a changed package misses. An entry is an ``.npz``
 file written whole under a temporary name and moved in place: processes that fill one entry
 at once leave one valid entry. An entry that does not load, or whose stored key is not its
-own, is computed again with a warning, never trusted.
+own, is computed again with a warning, never trusted. A folder that cannot be written
+(read-only, full, a file in its place) is read where it can be and otherwise skipped, with one
+warning line: the cache never stops a run.
 
 Settings (environment, so that worker processes and FMUs inherit them):
 ``PANTOCOSIM_NO_CACHE=1`` (the command line's ``--no-cache``) computes everything;
