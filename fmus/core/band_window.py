@@ -101,14 +101,18 @@ def _written(name: str, source: str) -> Path | None:
     """The path of the module ``name`` holding ``source`` (written once, atomically)."""
     for folder in _folders():
         path = folder / f"{name}.py"
+        part = folder / f".{name}.{os.getpid()}.tmp"
         try:
             if not path.exists():
                 folder.mkdir(parents=True, exist_ok=True)
-                part = folder / f".{name}.{os.getpid()}.tmp"
                 part.write_text(source)
                 os.replace(part, path)
             return path
-        except OSError:
+        except OSError:                  # read-only, full, a file in the way: the next one
+            try:
+                part.unlink(missing_ok=True)
+            except OSError:
+                pass
             continue
     return None
 
