@@ -113,8 +113,9 @@ def children_deaf_to_ctrl_c():
     KeyboardInterrupt traceback of their own, and their parent stops them. A Ctrl-C pressed
     meanwhile is not lost: a watcher process started before (same process group, SIGINT at
     its default action) dies of it, and KeyboardInterrupt is raised on leaving (main thread
-    only; elsewhere nothing changes)."""
-    if threading.current_thread() is not threading.main_thread():
+    only, on POSIX; elsewhere nothing changes)."""
+    if (threading.current_thread() is not threading.main_thread()
+            or not hasattr(signal, "pause")):
         yield
         return
     import subprocess
