@@ -794,6 +794,10 @@ def cases(tmpfs: Path | None) -> list[Case]:
         cache_case("numba cache is a file", xdg, files={"xdg/pantocosim/numba": "a file"}),
         cache_case("numba cache damaged", xdg, setup=damaged_caches),
     ]
+    if tmpfs is not None:                # root: mounts are possible
+        C += [cache_case("cache full", xdg, setup=full_cache),
+              cache_case("cache read-only", xdg, setup=read_only_cache)]
+        C[-2].after = C[-1].after = unmount_cache
     # --------------------------------------------------------------- full disk
     if tmpfs is not None:
         # the second run writes more than the first (a longer window)
@@ -833,6 +837,26 @@ def damaged_caches(d: Path) -> None:
                    timeout=600)
     for p in list((d / "xdg").rglob("*.nb[ic]")) + list((d / "xdg").rglob("*.npz")):
         p.write_bytes(p.read_bytes()[: p.stat().st_size // 3])
+
+
+def full_cache(d: Path) -> None:
+    """The case's cache root on a 64 kB file system (full at once)."""
+    (d / "xdg").mkdir()
+    subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(d / "xdg")],
+                   check=True)
+
+
+def read_only_cache(d: Path) -> None:
+    """The case's cache root filled by a run, then mounted read-only."""
+    damaged_caches(d)                                   # fills it (and damages it)
+    shutil.rmtree(d / "xdg" / "pantocosim" / "setup")   # a set-up entry it lacks
+    subprocess.run(["mount", "--bind", str(d / "xdg"), str(d / "xdg")], check=True)
+    subprocess.run(["mount", "-o", "remount,bind,ro", str(d / "xdg")], check=True)
+
+
+def unmount_cache(d: Path, proc):
+    subprocess.run(["umount", str(d / "xdg")], capture_output=True)
+    return None
 
 
 def custom_file_check(d: Path, proc):
