@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import os
 import shutil
@@ -78,6 +79,7 @@ def extract_cached(fmu_path: str | Path) -> Path:
                       "extracting into a temporary folder: make it a writable folder, free "
                       "space or set PANTOCOSIM_FMU_CACHE")
     scratch = Path(tempfile.mkdtemp(prefix=f"pantocosim-{fmu_path.stem}-"))
+    atexit.register(shutil.rmtree, scratch, True)
     extract(str(fmu_path), unzipdir=str(scratch))
     return scratch
 

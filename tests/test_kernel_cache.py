@@ -98,3 +98,21 @@ def test_a_file_where_the_cache_root_should_be(tmp_path):
     done = probe(tmp_path, "first", cache)
     assert done.returncode == 0 and done.stdout.split()[0] == "6.0", done.stderr
     assert len(warning_lines(done.stderr)) == 1, done.stderr
+
+
+def test_the_last_resort_folder_is_private_and_writable():
+    """Where every other folder fails, a package kernel is kept in a temporary folder of the
+    process (removed at exit); functions of other packages are left to numba."""
+    import tempfile
+    from pathlib import Path
+
+    from pantocosim.core import kernel_cache
+
+    locator = kernel_cache.ScratchCacheLocator.from_function(kernel_cache.root,
+                                                             kernel_cache.__file__)
+    folder = Path(locator.get_cache_path())
+    assert folder.is_dir() and folder.parent == Path(tempfile.gettempdir())
+    locator.ensure_cache_path()
+    assert kernel_cache.ScratchCacheLocator.from_function(tempfile.mkdtemp,
+                                                          tempfile.__file__) is None
+    assert kernel_cache.ScratchCacheLocator in kernel_cache.caching.CacheImpl._locator_classes

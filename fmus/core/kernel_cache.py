@@ -19,9 +19,11 @@ file in its place) leaves the kernels compiled at each run; either way with one 
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -105,7 +107,9 @@ class ScratchCacheLocator(PackageCacheLocator):
 
 @functools.lru_cache(maxsize=None)
 def _scratch_folder() -> str:
-    return tempfile.mkdtemp(prefix="pantocosim-numba-")
+    folder = tempfile.mkdtemp(prefix="pantocosim-numba-")
+    atexit.register(shutil.rmtree, folder, True)
+    return folder
 
 
 def _is_package_cache(cache) -> bool:
