@@ -113,8 +113,14 @@ def _scratch_folder() -> str:
 
 
 def _is_package_cache(cache) -> bool:
-    locator = getattr(getattr(cache, "_impl", None), "locator", None)
-    return isinstance(locator, PackageCacheLocator)
+    """Whether numba's ``cache`` holds a kernel of the package (in any locator's folder)."""
+    return _ours(getattr(cache, "_py_func", None))
+
+
+def _folder_of(cache) -> Path:
+    """The folder to name for ``cache``: the package's root, or numba's own folder."""
+    locator = cache._impl.locator
+    return root() if isinstance(locator, PackageCacheLocator) else Path(cache._cache_path)
 
 
 def _guarded_load(load):
@@ -128,7 +134,7 @@ def _guarded_load(load):
             index = Path(self._cache_file._index_path)
             cache_warning(index, f"damaged kernel cache entry ({describe(exc)})",
                           "the kernel is compiled again and the entry rewritten",
-                          once_for=f"damaged {root()}")
+                          once_for=f"damaged {_folder_of(self)}")
             _forget(index)
             return None
     load_overload.pantocosim_guard = True
@@ -143,8 +149,9 @@ def _guarded_save(save):
         except Exception as exc:  # noqa: BLE001 - an unwritable cache only costs time
             if not _is_package_cache(self):
                 raise
-            cache_warning(root(), f"kernels not kept ({describe(exc)})", REMEDY,
-                          once_for=f"unwritable {root()}")
+            folder = _folder_of(self)
+            cache_warning(folder, f"kernels not kept ({describe(exc)})", REMEDY,
+                          once_for=f"unwritable {folder}")
             return None
     save_overload.pantocosim_guard = True
     return save_overload
@@ -160,8 +167,9 @@ def _forget(index: Path) -> None:
 
 
 def install() -> None:
-    """Put :class:`PackageCacheLocator` first in numba's locators (before any kernel of the
-    package is decorated)."""
+    """Put :class:`PackageCacheLocator` first in numba's locators and
+    :class:`ScratchCacheLocator` last, and make numba's loads and saves of the package's
+    kernels survive a damaged or unwritable cache (before any kernel is decorated)."""
     impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl   # numba < 0.61
     locators = impl._locator_classes
     if PackageCacheLocator not in locators:
