@@ -116,3 +116,40 @@ def test_the_last_resort_folder_is_private_and_writable():
     assert kernel_cache.ScratchCacheLocator.from_function(tempfile.mkdtemp,
                                                           tempfile.__file__) is None
     assert kernel_cache.ScratchCacheLocator in kernel_cache.caching.CacheImpl._locator_classes
+
+
+TWO_KERNELS = """from numba import njit
+
+
+@njit(cache=True)
+def triple(x):
+    return 3.0 * x
+
+
+@njit(cache=True)
+def other(x):
+    return 5.0 * x
+"""
+
+
+def test_a_foreign_kernel_entry_is_not_trusted(tmp_path):
+    """Another function's machine code under a kernel's name is compiled again, never run."""
+    cache = tmp_path / "cache"
+    source = tmp_path / "first" / "kernel_probe.py"
+    source.parent.mkdir()
+    source.write_text(TWO_KERNELS)
+    code = PROBE.replace("print(", "module.other(1.0)\nprint(")
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(cache)
+
+    def run():
+        return subprocess.run([sys.executable, "-c", code, str(source)], env=env, text=True,
+                              capture_output=True, timeout=300)
+    assert run().stdout.split() == ["6.0", "0"]
+    [mine] = (cache / "pantocosim" / "numba").rglob("*triple*.nbc")
+    [theirs] = (cache / "pantocosim" / "numba").rglob("*other*.nbc")
+    mine.write_bytes(theirs.read_bytes())
+    done = run()
+    assert done.stdout.split() == ["6.0", "0"], done.stderr            # 3 x 2, not 5 x 2
+    [line] = warning_lines(done.stderr)
+    assert "holds other, not triple" in line, line

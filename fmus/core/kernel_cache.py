@@ -127,7 +127,9 @@ def _guarded_load(load):
     @functools.wraps(load)
     def load_overload(self, sig, target_context):
         try:
-            return load(self, sig, target_context)
+            found = load(self, sig, target_context)
+            _check_is_of(found, self._py_func)
+            return found
         except Exception as exc:  # noqa: BLE001 - a damaged entry is compiled again
             if not _is_package_cache(self):
                 raise
@@ -139,6 +141,15 @@ def _guarded_load(load):
             return None
     load_overload.pantocosim_guard = True
     return load_overload
+
+
+def _check_is_of(found, py_func) -> None:
+    """Raise if a loaded kernel is another function's (a foreign ``.nbc`` under this name)."""
+    from numba.core.compiler import CompileResult
+
+    if isinstance(found, CompileResult) and found.fndesc.qualname != py_func.__qualname__:
+        raise ValueError(f"the entry holds {found.fndesc.qualname}, not "
+                         f"{py_func.__qualname__}")
 
 
 def _guarded_save(save):
