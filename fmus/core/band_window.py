@@ -125,15 +125,17 @@ def solver(w: int):
     ``local(LT, R, x, lo, hi, rtol)`` (in place, x zero outside [lo, hi])."""
     if not 1 <= w <= MAX_WIDTH:
         return None
-    flush_module = __name__.rsplit(".", 1)[0] + ".banded"
-    source = _source(w, flush_module)
-    digest = hashlib.sha1(source.encode()).hexdigest()[:12]
+    package = __name__.rsplit(".", 1)[0]
+    source = _source(w, package + ".banded")
+    # the file's name also depends on the name it is loaded under: numba's machine code of
+    # one module refers to the others by that name
+    digest = hashlib.sha1(f"{package}.band_window\n{source}".encode()).hexdigest()[:12]
     name = f"band_window_w{w}_{digest}"
     path = _written(name, source)
     if path is not None:
         # a module of the package: numba keeps its machine code in the package's kernel
         # cache (core/kernel_cache.py), which a damaged entry never stops
-        module = f"{__name__.rsplit('.', 1)[0]}.{name}"
+        module = f"{package}.{name}"
         try:
             return _imported(module, path)
         except Exception:  # noqa: BLE001 - an unreadable file: compile in memory instead
