@@ -68,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with remember_interrupts():
+            from pantocosim.core.disk_cache import check_settings
+
+            check_settings()                      # a bad cache setting before any work
             return int(args._run(args) or 0)
     except Interrupted as exc:
         print(f"{prefix}: {one_line(exc)}", file=sys.stderr)

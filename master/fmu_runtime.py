@@ -11,9 +11,11 @@
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import os
 import shutil
+import tempfile
 from ctypes import byref
 from pathlib import Path
 
@@ -24,6 +26,7 @@ import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
+from pantocosim.core.user_cache import cache_warning, describe
 
 STATUS_NAMES = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
@@ -56,14 +59,54 @@ def extract_cached(fmu_path: str | Path) -> Path:
     digest = hashlib.sha256(fmu_path.read_bytes()).hexdigest()[:16]
     target = cache_dir() / f"{fmu_path.stem}-{digest}"
     marker = target / ".complete"
-    if not marker.exists():
+    if marker.exists():
+        damage = _damage(fmu_path, target)
+        if damage is None:
+            return target
+        cache_warning(target, f"extracted FMU damaged ({damage})", "extracting it again")
+        shutil.rmtree(target, ignore_errors=True)
+    try:
         target.parent.mkdir(parents=True, exist_ok=True)
         part = target.parent / f".{target.name}.{os.getpid()}.partial"
         shutil.rmtree(part, ignore_errors=True)
         extract(str(fmu_path), unzipdir=str(part))
         (part / ".complete").write_text("ok\n")
         _move_into_place(part, target)
-    return target
+        if _damage(fmu_path, target) is None:
+            return target
+    except OSError as exc:
+        cache_warning(target.parent, f"FMU not extracted there ({describe(exc)})",
+                      "extracting into a temporary folder: make it a writable folder, free "
+                      "space or set PANTOCOSIM_FMU_CACHE")
+    scratch = Path(tempfile.mkdtemp(prefix=f"pantocosim-{fmu_path.stem}-"))
+    atexit.register(shutil.rmtree, scratch, True)
+    extract(str(fmu_path), unzipdir=str(scratch))
+    return scratch
+
+
+def _damage(fmu_path: Path, folder: Path) -> str | None:
+    """What differs between the extracted ``folder`` and the archive ``fmu_path`` (each
+    archived file's presence, size and CRC-32), or None."""
+    import zipfile
+    import zlib
+
+    with zipfile.ZipFile(fmu_path) as archive:
+        for info in archive.infolist():
+            if info.is_dir():
+                continue
+            path = folder / info.filename
+            try:
+                if path.stat().st_size != info.file_size:
+                    return f"{info.filename}: size differs from the FMU's"
+                crc = 0
+                with open(path, "rb") as f:
+                    for block in iter(lambda: f.read(1 << 20), b""):
+                        crc = zlib.crc32(block, crc)
+            except OSError as exc:
+                return f"{info.filename}: {describe(exc)}"
+            if crc != info.CRC:
+                return f"{info.filename}: content differs from the FMU's"
+    return None
 
 
 def _move_into_place(part: Path, target: Path) -> None:

@@ -103,3 +103,36 @@ def stop_on_interrupt():
         yield stop
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
+def children_deaf_to_ctrl_c():
+    """Within it, SIGINT is ignored, so the processes started meanwhile (e.g. Dask's worker
+    processes, started by its threads) inherit an ignored SIGINT, which Python keeps: they
+    never see the Ctrl-C a terminal sends to its whole process group, print no
+    KeyboardInterrupt traceback of their own, and their parent stops them. A Ctrl-C pressed
+    meanwhile is not lost: a watcher process started before (same process group, SIGINT at
+    its default action) dies of it, and KeyboardInterrupt is raised on leaving (main thread
+    only, on POSIX; elsewhere nothing changes)."""
+    if (threading.current_thread() is not threading.main_thread()
+            or not hasattr(signal, "pause")):
+        yield
+        return
+    import subprocess
+    import sys
+
+    watcher = subprocess.Popen(
+        [sys.executable, "-c", "import signal; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+         "signal.pause()"], stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        pressed = watcher.poll() is not None
+        if not pressed:
+            watcher.kill()
+        watcher.wait()
+    if pressed:
+        raise KeyboardInterrupt

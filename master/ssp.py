@@ -32,11 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.catenary.models import model_code
-from pantocosim.core.errors import ParameterError
+from pantocosim.core.errors import OutputError, ParameterError
 from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT, PortNames
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.pantograph_ports import LAW_INPUTS, REQUIRED_PORTS, SPEED_INPUT
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
+from pantocosim.master.fmu_check import check_binary_fmu
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -252,6 +253,7 @@ def pantograph_connections(fmu: Path) -> list[tuple]:
                     else f"a {found[1]} {found[0]} instead of a Real {causality}")
             raise ParameterError("port", name, f"a required port, {what}; accepted: a "
                                  f"pantograph FMU with {_required_ports_text()}", str(fmu))
+    check_binary_fmu(fmu, "fmu")
     return [c for c in PORTS if c[2] != "pantograph" or c[3] in REQUIRED_PORTS
             or variables.get(c[3]) == ("input", "Real")]
 
@@ -409,12 +411,22 @@ def write_pantograph_ssp(fmu: Path, scenario, dest: Path | None = None) -> tuple
     values = scenario_start_values(scenario)
     sc = values["scenario"]
     dest = Path(dest) if dest else fmu.with_name(f"{fmu.stem}-{sc.name}.ssp")
+    refuse_overwriting(dest, {"--pantograph": fmu, "--scenario": sc.source})
     with tempfile.TemporaryDirectory(prefix="pantocosim_ssp_") as tmp:
         (catenary,) = build_fmus(Path(tmp), only=[CATENARY_FMU], quiet=True,
                                  start_values={CATENARY_FMU: values["catenary"]},
                                  scenario=sc.name, fmi=fmi_version(fmu))
         write_ssp(dest, sc.name, fmu, catenary, values, sc.dt)
     return dest, values
+
+
+def refuse_overwriting(dest: Path, inputs: dict) -> None:
+    """Refuse an SSP destination that is one of the command's input files ({flag: path})."""
+    for flag, given in inputs.items():
+        if given and Path(given).exists() and dest.exists() and dest.samefile(given):
+            raise OutputError("--out", dest, f"is the file given by {flag}: writing the SSP "
+                              "there would replace it; accepted: another file name, e.g. "
+                              f"{Path(given).stem}.ssp")
 
 
 def scenario_support_x(values: dict) -> np.ndarray:

@@ -144,6 +144,7 @@ class Case:
     after: Callable | None = None                  # (dir, proc) -> None | "lost: ..."
     sigint_when: Callable | None = None            # (dir, t) -> bool: send SIGINT now
     needs: str = ""                                # "tmpfs": skip without one
+    env: dict = field(default_factory=dict)        # environment; "{dir}": the case's folder
 
 
 def scenario_case(name, changes, names, kind="scenario", argv_extra=(), files_extra=None,
@@ -772,6 +773,31 @@ def cases(tmpfs: Path | None) -> list[Case]:
               "120 + 30*sin(4*pi*t)", "--duration", "500"],
              expect="interrupt", sigint_when=lambda d, t: t > 3.0, timeout=60),
     ]
+    # --------------------------------------------------------------- caches
+    def cache_case(name, env, files=None, setup=None, expect="ok", names=()):
+        argv = ["run", "sc.toml", "--quiet", "--no-plots", "--out", "out"]
+        return Case(name, "cache", argv, files={"sc.toml": dump_toml(SCENARIO),
+                                                **(files or {})},
+                    env={"MPLCONFIGDIR": "{dir}/mpl", **env}, expect=expect, names=names,
+                    setup=setup, check=None if expect != "ok" else cache_warned,
+                    timeout=120 if expect == "ok" else ERROR_TIMEOUT)
+
+    xdg = {"XDG_CACHE_HOME": "{dir}/xdg", "PANTOCOSIM_CACHE_DIR": "", "NUMBA_CACHE_DIR": ""}
+    C += [
+        cache_case("cache size not a number", {"PANTOCOSIM_CACHE_MB": "lots"},
+                   expect="error", names=("PANTOCOSIM_CACHE_MB", "lots")),
+        cache_case("cache size negative", {"PANTOCOSIM_CACHE_MB": "-3"},
+                   expect="error", names=("PANTOCOSIM_CACHE_MB", "-3")),
+        cache_case("cache root is a file", xdg, files={"xdg/pantocosim": "a file"}),
+        cache_case("set-up cache is a file", dict(xdg, PANTOCOSIM_CACHE_DIR="{dir}/setup"),
+                   files={"setup": "a file"}),
+        cache_case("numba cache is a file", xdg, files={"xdg/pantocosim/numba": "a file"}),
+        cache_case("numba cache damaged", xdg, setup=damaged_caches),
+    ]
+    if tmpfs is not None:                # root: mounts are possible
+        C += [cache_case("cache full", xdg, setup=full_cache),
+              cache_case("cache read-only", xdg, setup=read_only_cache)]
+        C[-2].after = C[-1].after = unmount_cache
     # --------------------------------------------------------------- full disk
     if tmpfs is not None:
         # the second run writes more than the first (a longer window)
@@ -784,6 +810,53 @@ def cases(tmpfs: Path | None) -> list[Case]:
     else:
         C.append(Case("full disk", "disk", [], needs="tmpfs"))
     return C
+
+
+def cache_warned(d: Path, proc):
+    """A run beside an unusable cache: results written, each stderr line a one-line cache
+    warning naming a path of the case's folder, at most one per cache."""
+    if not (d / "out" / "summary.json").exists():
+        return "no results"
+    lines = error_lines(proc.stderr)
+    if not lines:
+        return "no warning"
+    bad = [l for l in lines if not l.startswith(f"pantocosim: warning: cache {d}")]
+    if bad:
+        return f"not a cache warning: {bad[0][:120]}"
+    if len({l.split()[3] for l in lines}) != len(lines):
+        return f"{len(lines)} warnings for {len({l.split()[3] for l in lines})} caches"
+    return None
+
+
+def damaged_caches(d: Path) -> None:
+    """Fill the case's caches with a run, then truncate every numba entry and set-up entry."""
+    env = dict(os.environ, XDG_CACHE_HOME=str(d / "xdg"), MPLCONFIGDIR=str(d / "mpl"),
+               PANTOCOSIM_CACHE_DIR="", NUMBA_CACHE_DIR="")
+    subprocess.run([PY, "-m", "pantocosim.master.cli", "run", "sc.toml", "--quiet",
+                    "--no-plots", "--out", "first"], cwd=d, env=env, capture_output=True,
+                   timeout=600)
+    for p in list((d / "xdg").rglob("*.nb[ic]")) + list((d / "xdg").rglob("*.npz")):
+        p.write_bytes(p.read_bytes()[: p.stat().st_size // 3])
+
+
+def full_cache(d: Path) -> None:
+    """The case's cache root on a 64 kB file system (full at once)."""
+    (d / "xdg").mkdir()
+    subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(d / "xdg")],
+                   check=True)
+
+
+def read_only_cache(d: Path) -> None:
+    """The case's cache root filled by a run, then mounted read-only."""
+    damaged_caches(d)                                   # fills it (and damages it)
+    shutil.rmtree(d / "xdg" / "pantocosim" / "setup")   # a set-up entry it lacks
+    subprocess.run(["mount", "--bind", str(d / "xdg"), str(d / "xdg")], check=True)
+    subprocess.run(["mount", "-o", "remount,bind,ro", str(d / "xdg")], check=True)
+
+
+def unmount_cache(d: Path, proc):
+    subprocess.run(["umount", str(d / "xdg")], capture_output=True)
+    return None
 
 
 def custom_file_check(d: Path, proc):
@@ -890,7 +963,8 @@ def run_case(case: Case, work: Path, verbose: bool = False) -> dict:
     # output to files (a pipe could fill up while we poll); SIGINT as in a terminal (a
     # background shell job would start us with it ignored)
     fo, fe = open(d / ".stdout", "w+"), open(d / ".stderr", "w+")
-    proc = subprocess.Popen([PY, "-m", "pantocosim.master.cli", *case.argv], cwd=d,
+    env = dict(os.environ, **{k: v.format(dir=d) for k, v in case.env.items()})
+    proc = subprocess.Popen([PY, "-m", "pantocosim.master.cli", *case.argv], cwd=d, env=env,
                             stdout=fo, stderr=fe, text=True, stdin=subprocess.DEVNULL,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     sent, why, cpu = None, None, 0.0

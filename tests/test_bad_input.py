@@ -727,3 +727,34 @@ def test_a_ctrl_c_lost_in_a_finaliser_still_stops_the_run():
             assert stop.requested
         with stop_on_interrupt() as stop:   # remembered once
             assert not stop.requested
+
+
+@pytest.mark.parametrize("value", ["lots", "-1"])
+def test_a_bad_cache_size_is_one_line_before_any_work(tmp_path, capsys, monkeypatch, value,
+                                                      no_long_work):
+    monkeypatch.setenv("PANTOCOSIM_CACHE_MB", value)
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(SCENARIO)
+    code, lines = run_cli(capsys, "run", scenario, "--out", tmp_path / "out")
+    assert_one_line_error(code, lines, "PANTOCOSIM_CACHE_MB", repr(value))
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_unusable_cache_root_is_one_warning_per_cache(tmp_path):
+    """A file where the cache root should be: the run ends as usual, with one warning line
+    for each cache it could not use, naming the path."""
+    (tmp_path / "xdg").mkdir()
+    (tmp_path / "xdg" / "pantocosim").write_text("not a folder")
+    (tmp_path / "s.toml").write_text(edited(SCENARIO, ("spans = 4", "spans = 3")))
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PANTOCOSIM_", "NUMBA_"))}
+    env.update(XDG_CACHE_HOME=str(tmp_path / "xdg"), MPLCONFIGDIR=str(tmp_path / "mpl"))
+    done = subprocess.run([sys.executable, "-m", "pantocosim.master.cli", "run", "s.toml",
+                           "--out", "out"], cwd=tmp_path, env=env, text=True,
+                          capture_output=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    warned = [line for line in done.stderr.splitlines() if line.strip()]
+    assert warned and all(line.startswith("pantocosim: warning: cache "
+                                          f"{tmp_path / 'xdg' / 'pantocosim'}/")
+                          for line in warned), done.stderr
+    assert len(warned) == len({line.split()[3] for line in warned})   # one per cache
+    assert (tmp_path / "out").is_dir()

@@ -226,3 +226,51 @@ def test_an_empty_or_relative_xdg_cache_home_means_the_home_cache(value, monkeyp
     assert disk_cache.folder() == tmp_path / ".cache" / "pantocosim" / "setup"
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert disk_cache.folder() == tmp_path / "xdg" / "pantocosim" / "setup"
+
+
+@pytest.fixture
+def fresh_warnings(monkeypatch):
+    from pantocosim.core import user_cache
+
+    monkeypatch.setattr(user_cache, "_warned", set())
+
+
+def test_a_file_where_the_cache_folder_should_be(cache, fresh_warnings):
+    cache.write_text("not a folder")
+    compute, calls = counting(lambda: {"x": np.ones(3)})
+    with pytest.warns(UserWarning, match="a file where the cache folder should be") as seen:
+        for _ in range(2):
+            assert disk_cache.cached("demo", (1,), compute)["x"].tolist() == [1.0] * 3
+    assert len(calls) == 2 and len(seen) == 1 and cache.read_text() == "not a folder"
+    assert str(cache) in str(seen[0].message)
+
+
+def test_a_read_only_or_full_cache_runs_without_it(cache, fresh_warnings, monkeypatch):
+    import errno
+    import os
+
+    compute, calls = counting(lambda: {"x": np.ones(3)})
+    disk_cache.cached("kept", (1,), compute)                     # one entry already there
+
+    def refuse(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+    for name in ("savez",):
+        monkeypatch.setattr(disk_cache.np, name, refuse)
+    monkeypatch.setattr(disk_cache.Path, "unlink", refuse)
+    monkeypatch.setattr(disk_cache.os, "utime", refuse)
+    with pytest.warns(UserWarning, match="Read-only file system") as seen:
+        for i in range(3):
+            assert disk_cache.cached("demo", (i,), compute)["x"].tolist() == [1.0] * 3
+    assert len(seen) == 1 and str(cache) in str(seen[0].message)
+    assert disk_cache.cached("kept", (1,), compute)["x"].tolist() == [1.0] * 3   # still read
+    assert len(calls) == 4
+
+
+@pytest.mark.parametrize("value", ["lots", "-5", "nan", "12MB"])
+def test_a_bad_size_limit_is_one_line_naming_the_variable(cache, monkeypatch, value):
+    from pantocosim.core.errors import ParameterError
+
+    monkeypatch.setenv("PANTOCOSIM_CACHE_MB", value)
+    with pytest.raises(ParameterError, match=f"PANTOCOSIM_CACHE_MB = '{value}'") as refused:
+        disk_cache.cached("demo", (1,), lambda: {"x": np.ones(3)})
+    assert "\n" not in str(refused.value)

@@ -178,3 +178,35 @@ def test_a_parameter_outside_its_declared_range_is_refused_naming_it():
         assert err.value.field == name
         setattr(s, name, good)
         s.value(name)
+
+
+@pytest.mark.parametrize("preset", ["en50318-2mass", "dsa380-rigid"])
+def test_a_step_out_of_the_pantograph_range_is_discarded_and_undone(preset):
+    """A contact force the pantograph cannot take (1e12 N) is discarded and leaves the
+    FMU as it was before the step: the next valid step is taken, from the same state, and
+    gives what it gives without the refused one (docs/third-party.md)."""
+    from pantocosim.fmi import pantograph_slave
+
+    cls = slave_class(type("P", (pantograph_slave.PantographSlave,), {"preset": preset}), 2)
+
+    def started():
+        s = cls(instance_name=preset)
+        s.setup_experiment(0.0)
+        s.enter_initialization_mode()
+        s.exit_initialization_mode()
+        assert s._error is None, s._error
+        s.contact_force = 120.0
+        assert s.do_step(0.0, 1e-3)
+        return s
+
+    s, reference = started(), started()
+    before = (s.contact_height, s.contact_velocity)
+    s.contact_force = 1e12
+    assert not s.do_step(1e-3, 1e-3)
+    assert (s.contact_height, s.contact_velocity) == before
+    for slave in (s, reference):
+        slave.contact_force = 125.0
+        assert slave.do_step(1e-3, 1e-3), slave._error
+    assert s._error is None
+    assert (s.contact_height, s.contact_velocity) == (reference.contact_height,
+                                                      reference.contact_velocity)

@@ -213,3 +213,35 @@ def test_cases_through_the_fmus(tmp_path, reference):
     assert (tmp_path / "dist" / "fmus" / "catenary.fmu").exists()
     assert row["mean_n"] == pytest.approx(reference["mean_n"], rel=2e-3)
     assert row["std_n"] == pytest.approx(reference["std_n"], rel=2e-2)
+
+
+@pytest.mark.parametrize("moment", ["workers starting", "cases running"])
+def test_ctrl_c_of_a_sweep_of_short_cases_is_one_line(tmp_path, moment):
+    """A terminal's Ctrl-C reaches the whole process group (the command and its Dask
+    workers): whether the workers are still starting or running cases, the sweep stops with
+    status 130, its one line, and nothing on stderr (no worker traceback or notice)."""
+    f = write_sweep(tmp_path, (200.0, 210.0, 220.0, 230.0, 240.0, 250.0, 260.0, 270.0))
+    out = tmp_path / "out"
+    proc = subprocess.Popen(CLI + ["sweep", str(f), "--workers", "2", "--out", str(out),
+                                   "--quiet"], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.time() + 400
+        while time.time() < deadline and proc.poll() is None:
+            if moment == "workers starting" and (out / "cases.json").exists():
+                time.sleep(1.0)                      # the worker processes are importing
+                break
+            if moment == "cases running" and list(out.glob("cases/*/case.json")):
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, "the sweep ended before the Ctrl-C"
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 130, stdout + stderr
+    assert stderr.strip() == "", stderr
+    lines = [line for line in stdout.splitlines() if line.startswith("interrupted")]
+    assert len(lines) == 1 and "run the sweep again to resume" in lines[0], stdout

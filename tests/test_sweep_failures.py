@@ -151,3 +151,19 @@ def test_the_clients_reconnect_tracebacks_are_dropped():
     assert not quiet.filter(record(logging.ERROR, ConnectionRefusedError(111, "refused")))
     assert quiet.filter(record(logging.ERROR, ValueError("a bug")))      # kept
     assert quiet.filter(record(logging.WARNING, None))
+
+
+def test_a_refused_case_names_its_own_folder(tmp_path):
+    """A case the run refuses (a speed above 0.7 of the wave speed) names the scenario file
+    in its case folder, which it keeps, not the staging folder it ran in."""
+    (tmp_path / "three.toml").write_text(SCENARIO)
+    (tmp_path / "fast-sweep.toml").write_text(
+        'name = "fast"\nscenario = "three.toml"\n[axes]\nspeed_kmh = [900.0]\n')
+    (case,) = load_sweep(str(tmp_path / "fast-sweep.toml")).cases
+    out = tmp_path / "out"
+    record = run_case(task_of(case, out))
+    folder = case_folder(out, case.key)
+    assert record["status"] == "failed", record
+    assert record["error"].startswith(f"{folder / 'scenario.toml'}: speed_kmh = 900.0"), record
+    assert ".partial" not in record["error"]
+    assert (folder / "scenario.toml").is_file()

@@ -101,14 +101,18 @@ def _written(name: str, source: str) -> Path | None:
     """The path of the module ``name`` holding ``source`` (written once, atomically)."""
     for folder in _folders():
         path = folder / f"{name}.py"
+        part = folder / f".{name}.{os.getpid()}.tmp"
         try:
             if not path.exists():
                 folder.mkdir(parents=True, exist_ok=True)
-                part = folder / f".{name}.{os.getpid()}.tmp"
                 part.write_text(source)
                 os.replace(part, path)
             return path
-        except OSError:
+        except OSError:                  # read-only, full, a file in the way: the next one
+            try:
+                part.unlink(missing_ok=True)
+            except OSError:
+                pass
             continue
     return None
 
@@ -121,16 +125,21 @@ def solver(w: int):
     ``local(LT, R, x, lo, hi, rtol)`` (in place, x zero outside [lo, hi])."""
     if not 1 <= w <= MAX_WIDTH:
         return None
-    flush_module = __name__.rsplit(".", 1)[0] + ".banded"
-    source = _source(w, flush_module)
-    digest = hashlib.sha1(source.encode()).hexdigest()[:12]
+    package = __name__.rsplit(".", 1)[0]
+    source = _source(w, package + ".banded")
+    # the file's name also depends on the name it is loaded under: numba's machine code of
+    # one module refers to the others by that name
+    digest = hashlib.sha1(f"{package}.band_window\n{source}".encode()).hexdigest()[:12]
     name = f"band_window_w{w}_{digest}"
     path = _written(name, source)
     if path is not None:
+        # a module of the package: numba keeps its machine code in the package's kernel
+        # cache (core/kernel_cache.py), which a damaged entry never stops
+        module = f"{package}.{name}"
         try:
-            return _imported(name, path)
+            return _imported(module, path)
         except Exception:  # noqa: BLE001 - an unreadable file: compile in memory instead
-            sys.modules.pop(name, None)
+            sys.modules.pop(module, None)
     namespace: dict = {}
     exec(compile(source.replace("cache=True", "cache=False"), name, "exec"), namespace)
     return SimpleNamespace(**namespace)

@@ -6,7 +6,9 @@ dtype, shape and bytes; numbers and strings by repr) together with the model pac
 stamp (:mod:`.stamp`), so a changed input or a changed package misses. An entry is an ``.npz``
 file written whole under a temporary name and moved in place: processes that fill one entry
 at once leave one valid entry. An entry that does not load, or whose stored key is not its
-own, is computed again with a warning, never trusted.
+own, is computed again with a warning, never trusted. A folder that cannot be written
+(read-only, full, a file in its place) is read where it can be and otherwise skipped, with one
+warning line: the cache never stops a run.
 
 Settings (environment, so that worker processes and FMUs inherit them):
 ``PANTOCOSIM_NO_CACHE=1`` (the command line's ``--no-cache``) computes everything;
@@ -19,13 +21,14 @@ from __future__ import annotations
 
 import hashlib
 import os
-import warnings
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from .errors import ParameterError
 from .stamp import process_stamp
+from .user_cache import cache_warning, describe
 
 DEFAULT_LIMIT_MB = 512
 _KEY_FIELD = "__key__"
@@ -70,38 +73,69 @@ def key(kind: str, parts) -> str:
     return h.hexdigest()
 
 
+REMEDY = "make it a writable folder, free space, set PANTOCOSIM_CACHE_DIR, or --no-cache"
+
+
 def _load(path: Path, expected: str) -> dict[str, np.ndarray] | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             if str(data[_KEY_FIELD]) != expected:
                 raise ValueError("the entry's stored key is another one")
             out = {k: data[k] for k in data.files if k != _KEY_FIELD}
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         return None
     except Exception as exc:  # noqa: BLE001 - a corrupt or foreign entry is computed again
-        warnings.warn(f"cache entry {path} is unusable ({type(exc).__name__}: {exc}): "
-                      "computing it again", stacklevel=3)
+        cache_warning(path, f"entry unusable ({describe(exc)})",
+                      "it is computed again and rewritten")
         return None
-    os.utime(path)                                   # recently used: evicted last
+    try:
+        os.utime(path)                               # recently used: evicted last
+    except OSError:
+        pass                                         # a read-only cache is still read
     return out
 
 
 def _store(path: Path, expected: str, arrays: dict[str, np.ndarray]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
     part = path.with_name(f".{path.stem}.{os.getpid()}.{id(arrays)}.tmp.npz")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         np.savez(part, **{_KEY_FIELD: np.array(expected)}, **arrays)
         os.replace(part, path)
     except OSError as exc:                           # a full or read-only disk: no cache
-        warnings.warn(f"cache entry {path} not written ({exc})", stacklevel=3)
-        part.unlink(missing_ok=True)
+        cache_warning(path.parent, f"set-up results not kept ({describe(exc)})", REMEDY)
+        _remove(part)
         return
     _evict(path.parent)
 
 
+def _remove(path: Path) -> None:
+    """Remove ``path`` if it is there and can be (a read-only cache keeps it)."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
 def limit_bytes() -> float:
     """The size the cache folder is kept under (``PANTOCOSIM_CACHE_MB``)."""
-    return float(os.environ.get("PANTOCOSIM_CACHE_MB", DEFAULT_LIMIT_MB)) * 2**20
+    given = os.environ.get("PANTOCOSIM_CACHE_MB", "").strip()
+    if not given:
+        return DEFAULT_LIMIT_MB * 2.0**20
+    try:
+        mb = float(given)
+    except ValueError:
+        mb = float("nan")
+    if not mb >= 0.0:
+        raise ParameterError("PANTOCOSIM_CACHE_MB", given,
+                             "not a size: give megabytes, a number >= 0 (default "
+                             f"{DEFAULT_LIMIT_MB})", source="environment variable")
+    return mb * 2**20
+
+
+def check_settings() -> None:
+    """Refuse a bad ``PANTOCOSIM_CACHE_MB`` (ParameterError naming it) before any work."""
+    if enabled():
+        limit_bytes()
 
 
 def _evict(root: Path) -> None:
@@ -117,7 +151,7 @@ def _evict(root: Path) -> None:
     for _, size, f in sorted(entries):
         if total <= limit:
             break
-        f.unlink(missing_ok=True)
+        _remove(f)
         total -= size
 
 
@@ -126,12 +160,17 @@ def cached(kind: str, parts, compute: Callable[[], dict[str, np.ndarray]]
     """``compute()`` (named arrays), or its entry kept for ``kind`` and ``parts``."""
     if not enabled():
         return compute()
+    limit = limit_bytes()                            # a bad setting is refused at once
     k = key(kind, parts)
-    path = folder() / f"{kind}-{k[:32]}.npz"
+    root = folder()
+    if root.exists() and not root.is_dir():
+        cache_warning(root, "a file where the cache folder should be", REMEDY)
+        return compute()
+    path = root / f"{kind}-{k[:32]}.npz"
     found = _load(path, k)
     if found is not None:
         return found
     arrays = {name: np.asarray(a) for name, a in compute().items()}
-    if sum(a.nbytes for a in arrays.values()) <= limit_bytes() / 2:
+    if sum(a.nbytes for a in arrays.values()) <= limit / 2:
         _store(path, k, arrays)          # a larger entry would push out every other one
     return arrays

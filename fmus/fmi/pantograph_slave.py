@@ -196,8 +196,9 @@ class PantographSlave(IntegratorSlave):
             self.log(f"contact_force = {F!r}: must be finite and >= 0", Status.discard)
             return False
         n = int(self.n_substeps)
-        # a closed-form step (linear model) cannot fail half-way: no state to save
-        saved = None if (n == 1 and integ.closed_form) else integ.get_state()
+        # a step outside the heights the model represents is discarded and undone (a
+        # closed-form step too): the state before it is kept
+        saved = integ.get_state()
         try:
             u = F
             if self.force_extrapolation:
@@ -215,10 +216,7 @@ class PantographSlave(IntegratorSlave):
                 iters += integ.step(h, buf).iterations
             problem = self._outside_range(current_time, step_size)
             if problem:
-                if saved is not None:
-                    integ.set_state(saved)
-                else:  # a closed-form step kept no state: only a rollback recovers
-                    self._error = f"{problem}; roll back with fmi2SetFMUstate"
+                integ.set_state(saved)
                 self.log(problem, Status.discard)
                 return False
             self._force_prev = F
@@ -227,8 +225,7 @@ class PantographSlave(IntegratorSlave):
             self._update_outputs()
             return True
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            if saved is not None:
-                integ.set_state(saved)
+            integ.set_state(saved)
             self.log(f"doStep(t = {current_time:.6g}, h = {step_size:.3g}) failed: {exc}",
                      Status.discard)
             return False

@@ -24,6 +24,7 @@ from pantocosim.master.campaign.assessment import load_criteria
 from pantocosim.master.campaign.spec import Sweep
 from pantocosim.master.campaign.table import ResultsTable, columns, rows_of
 from pantocosim.master.campaign.worker import CASE_FILE, run_case
+from pantocosim.master.interrupt import children_deaf_to_ctrl_c
 from pantocosim.master.output_folder import writing
 
 #: seconds to wait for ``--workers N`` workers to join a given scheduler
@@ -193,10 +194,49 @@ def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):
     # Dask's statistical profiler keeps an hour of per-second profiles in each worker: off,
     # so worker memory stays flat over a campaign (docs/campaigns.md), unless asked for
     profile = os.environ.get(PROFILE_ENV, "false").lower() in ("1", "true", "yes")
-    with dask.config.set({"distributed.worker.profile.enabled": profile}):
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address="127.0.0.1:8787")
-    return Client(cluster), cluster
+    _quiet_resource_tracker()
+    cluster = None
+    try:
+        with children_deaf_to_ctrl_c(), dask.config.set(
+                {"distributed.worker.profile.enabled": profile}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   host="127.0.0.1", dashboard_address="127.0.0.1:8787")
+        return Client(cluster), cluster
+    except BaseException:          # a Ctrl-C of the start: stop what was started
+        if cluster is not None:
+            _close_quietly(None, cluster)
+        raise
+
+
+#: the -W option that keeps multiprocessing's resource tracker from warning
+_TRACKER_QUIET = "ignore:resource_tracker:UserWarning"
+
+
+def _quiet_resource_tracker() -> None:
+    """Worker processes the nanny kills mid-case (a stopped sweep) leave their semaphores to
+    multiprocessing's resource tracker, which removes them and warns at exit: the tracker,
+    started with this interpreter's -W options, is started without that warning."""
+    if _TRACKER_QUIET not in sys.warnoptions:
+        sys.warnoptions.append(_TRACKER_QUIET)
+
+
+def _close_quietly(client, cluster) -> None:
+    """Close the client and our cluster; the nanny's notices of workers it had to kill
+    (cases stopped mid-way) are not shown."""
+    nanny = logging.getLogger("distributed.nanny")
+    level = nanny.level
+    nanny.setLevel(logging.ERROR)
+    try:
+        if client is not None and cluster is not None:
+            client.run(_quiet_cancellations, True)     # workers stopped mid-case: no notices
+        if client is not None:
+            client.close(timeout=10)
+        if cluster is not None:
+            cluster.close()
+    except Exception:  # noqa: BLE001 - closing a client whose scheduler is gone
+        pass
+    finally:
+        nanny.setLevel(level)
 
 
 def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, outcome):
@@ -221,12 +261,7 @@ def _execute(todo, out, scheduler, workers, progress, echo, table, criteria, out
             for _, f in futures.values():
                 f.cancel()
     finally:
-        try:
-            client.close(timeout=10)
-            if cluster is not None:
-                cluster.close()
-        except Exception:  # noqa: BLE001 - closing a client whose scheduler is gone
-            pass
+        _close_quietly(client, cluster)
         logging.getLogger("distributed.client").removeFilter(quiet)
 
 
@@ -286,8 +321,12 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
     return records
 
 
-def _quiet_cancellations() -> None:
+def _quiet_cancellations(closing: bool = False) -> None:
+    """In a worker of our own: no warning for the tasks a stop cancels; when ``closing``, no
+    notice at all (a worker stopped mid-case reports a lost scheduler)."""
     logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)
+    if closing:
+        logging.getLogger("distributed").setLevel(logging.CRITICAL + 1)
 
 
 class SweepStopped(PantocosimError):

@@ -45,15 +45,17 @@ def run_case(task: dict) -> dict:
         record["summary"] = _essentials(summary)
         record["warnings"] = list(summary.get("warnings") or [])
         if summary.get("error"):
-            record.update(status="failed", error=summary["error"])
+            record.update(status="failed", error=_in_case_folder(summary["error"], stage,
+                                                                 folder))
         elif record["warnings"]:
             record["status"] = "warned"   # ran, but its numbers are doubtful
     except OutputError as exc:   # cannot write: stop the sweep, keep the folder as it was
         return _fatal(record, stage, exc)
     except PantocosimError as exc:
-        record.update(status="failed", error=str(exc))
+        record.update(status="failed", error=_in_case_folder(str(exc), stage, folder))
     except Exception as exc:  # noqa: BLE001 - any failure of one case is recorded
-        record.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+        record.update(status="failed", error=_in_case_folder(f"{type(exc).__name__}: {exc}",
+                                                             stage, folder))
         try:
             (stage.path / "error.txt").write_text(traceback.format_exc())
         except (OSError, AttributeError):
@@ -81,6 +83,14 @@ def run_case(task: dict) -> dict:
 #: the files a case writes into its folder (``case.json`` apart)
 CASE_FILES = ("scenario.toml", "catenary.toml", "error.txt", "timeseries.csv", "summary.json",
               "contact_force.png", "spectrum.png", "support_uplift.png")
+
+
+def _in_case_folder(message: str, stage, folder: Path) -> str:
+    """``message`` naming the case folder where it names the staging folder (which is gone
+    once the case's files are moved in)."""
+    if stage is None:
+        return message
+    return message.replace(str(stage.path), str(folder))
 
 
 def _write_inputs(task: dict, into: Path, named: Path) -> None:

@@ -52,6 +52,48 @@ def read_ssd(ssp: str | Path) -> dict:
     return {"parameters": params, "stop_time": stop, "parameter_sets": sets}
 
 
+def refuse(module: str, exc: Exception):
+    """Stop a recipe on bad input: one line, exit status 2."""
+    print(f"{module}: error: {' '.join(str(exc).split())}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def check_fmu(module: str, fmu: str | Path, field: str) -> None:
+    """Refuse (:func:`refuse`) an FMU file that cannot run here or is not what its model
+    description says (:func:`pantocosim.master.fmu_check.check_binary_fmu`)."""
+    from pantocosim.core.errors import ParameterError
+    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
+
+    try:
+        read_fmu(Path(fmu), field, None)
+        check_binary_fmu(Path(fmu), field)
+    except ParameterError as exc:
+        refuse(module, exc)
+
+
+def check_ssp_fmus(module: str, ssp: str | Path) -> None:
+    """:func:`check_fmu` on every FMU of the SSP file ``ssp``."""
+    import tempfile
+
+    from pantocosim.core.errors import ParameterError
+    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
+
+    try:
+        with zipfile.ZipFile(ssp) as z:
+            root = ET.fromstring(z.read("SystemStructure.ssd"))
+            with tempfile.TemporaryDirectory(prefix="pantocosim_ssp_check_") as tmp:
+                for comp in root.iter(f"{{{NS['ssd']}}}Component"):
+                    fmu = Path(tmp) / Path(comp.get("source")).name
+                    fmu.write_bytes(z.read(comp.get("source")))
+                    try:
+                        read_fmu(fmu, f"component {comp.get('name')!r}", str(ssp))
+                        check_binary_fmu(fmu, f"component {comp.get('name')!r}", str(ssp))
+                    except ParameterError as exc:
+                        refuse(module, str(exc).replace(str(fmu), comp.get("source")))
+    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
+        refuse(module, f"--ssp = '{ssp}': not a readable SSP file ({exc})")
+
+
 def _typed(kind: str, text: str):
     if kind == "Real":
         return float(text)
@@ -110,14 +152,25 @@ def read_csv(path: str | Path) -> dict:
 
 # ------------------------------------------------------------------------- parent side
 def failed(module: str, proc: subprocess.CompletedProcess):
-    """Stop a recipe whose co-simulation child failed: its output on stderr, then one line
-    with the first refusal an FMU logged (its first sentence), if any."""
-    sys.stderr.write(proc.stdout[-6000:] + proc.stderr[-6000:])
-    said = [line for line in (proc.stdout + proc.stderr).splitlines()
+    """Stop a recipe whose co-simulation child failed with one line: the first refusal an FMU
+    logged (its first sentence), else the child's last error line; the child's whole output
+    is kept in a log file the line names."""
+    import tempfile
+
+    text = proc.stdout + proc.stderr
+    said = [line for line in text.splitlines()
             if line.startswith(("[DISCARD]", "[ERROR]", "[FATAL]"))]
-    reason = f": {REFUSED} {said[0].split('. ')[0]}" if said else ""
+    errors = [line.strip() for line in proc.stderr.splitlines()
+              if line.strip() and not line.startswith((" ", "Traceback", "During handling"))]
+    if said:
+        reason = f": {REFUSED} {said[0].split('. ')[0]}"
+    else:
+        reason = f": {errors[-1]}" if errors else ""
+    with tempfile.NamedTemporaryFile("w", prefix=f"{module.rsplit('.', 1)[-1]}-",
+                                     suffix=".log", delete=False) as log:
+        log.write(text)
     raise SystemExit(f"{module}: the co-simulation failed (exit code {proc.returncode})"
-                     f"{reason}")
+                     f"{reason} (its output: {log.name})")
 
 
 #: what precedes an FMU's refusal in the line of :func:`failed`
@@ -172,6 +225,7 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     ``out``, ``n_sup`` (support uplift columns written, at most the FMU's MAX_SUPPORTS) and ``tool``."""
     from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
 
+    check_ssp_fmus(f"{tool} recipe", a.ssp)
     ssd = read_ssd(a.ssp)
     cat = ssd["parameters"]["catenary"]
     support_x = catenary_layout(cat)

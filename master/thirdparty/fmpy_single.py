@@ -77,6 +77,7 @@ def main(argv=None) -> int:
 
     from pantocosim.master.standalone import force_expression
 
+    run_common.check_fmu(MODULE, a.fmu, "--fmu")
     force = force_expression(a.force)
     n = int(round(a.stop / a.step))
     t = np.arange(n + 1) * a.step
