@@ -418,6 +418,33 @@ def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
         assert np.max(np.abs(nat - py)) <= 1e-9 * np.max(np.abs(py)), scheme
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("model", ["linear", "modal"])
+def test_native_catenary_implicit_equals_the_monolithic_run(model, fmus, tmp_path):
+    """The implicit coupling of the native catenary FMU with the Python pantograph FMU
+    reproduces the monolithic run of the same catenary model to the bar the Python FMUs meet
+    (tests/test_fmu_cosim.py: 1e-6 of the mean force, tight coupling tolerance)."""
+    from pantocosim.master.cosim import run_cosim
+    from pantocosim.master.fmu_check import FmuPlan
+    from pantocosim.master.native_models import export_catenary
+    from pantocosim.master.run import prepare, run_monolithic
+    from pantocosim.master.scenario import load_scenario
+
+    required("gcc", "gcc")
+    short = Path(__file__).parent / "data" / "short-en50318.toml"
+    sc = dataclasses.replace(load_scenario(str(short)), catenary_model=model)
+    prep = prepare(sc)
+    mono = run_monolithic(prep, None, progress=False).columns["contact_force_1"]
+    native = export_catenary(prep, tmp_path / "catenary.fmu", model, win64=False)
+    res = run_cosim(prep, None, "implicit",
+                    plan=FmuPlan(native, [fmus[p.model] for p in sc.pantographs], [None]),
+                    progress=False)
+    assert res.error is None, res.error
+    F = res.columns["contact_force_1"]
+    assert len(F) == len(mono) == prep.n_steps + 1
+    assert np.max(np.abs(F - mono)) < 1e-6 * mono.mean()
+
+
 # ---------------------------------------------------------------------- FMI 3.0
 def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_path):
     from fmpy import extract, read_model_description
