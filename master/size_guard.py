@@ -1,12 +1,12 @@
 """Size guard of the command line: before a model is built or a run starts, estimate its
 DOFs, memory and time, and refuse beyond a limit with the estimate and the option that lifts
 the limit (``--max-dofs``, ``--max-steps``). The catenary's estimate and DOF limit are
-:mod:`pantocosim.core.size_guard`'s (the FMUs apply them too); the step limit is here.
+:mod:`pantocosim.catenary.size_guard`'s (the FMUs apply them too); the step limit is here.
 """
 
 from __future__ import annotations
 
-from pantocosim.core.size_guard import (MAX_DOFS, check_catenary_size,  # noqa: F401
+from pantocosim.catenary.size_guard import (MAX_DOFS, check_catenary_size,  # noqa: F401
                                             culprit, describe)
 from pantocosim.core.errors import ParameterError
 

@@ -99,7 +99,7 @@ class CatenarySlave(IntegratorSlave):
         (DOFs), the support outputs, the train speed below the contact wire's wave speed."""
         import dataclasses
 
-        from pantocosim.core.size_guard import check_catenary_size, culprit
+        from pantocosim.catenary.size_guard import check_catenary_size, culprit
         from pantocosim.core.errors import ParameterError
 
         finer = 0 < esize < definition.element_size
