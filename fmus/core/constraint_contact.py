@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact_laws import register
+from .contact_registry import register
 from .errors import ConvergenceError
 from .params import check_number
 

@@ -24,7 +24,7 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from .contact_laws import ContactLaw
+from .contact_registry import ContactLaw
 from .model import Evaluation, SecondOrderModel
 
 

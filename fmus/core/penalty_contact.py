@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .contact_laws import register
+from .contact_registry import register
 from .params import check_number
 from .small_dense import gauss_jordan
 
