@@ -31,7 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
+from pantocosim.catenary.definition import load_catenary, with_spans
+from pantocosim.catenary.model import CatenaryModel
+from pantocosim.core.errors import PantocosimError, ParameterError
+from pantocosim.master.fmu_build import default_out, ensure_fmus
 
 CASES = {
     # name: (catenary, spans, pantograph, speed km/h, position m)
@@ -80,8 +84,6 @@ def select_cases(names=None) -> list[str]:
         return list(CASES) + list(FIGURES)
     for name in names:
         if name not in CASES and name not in FIGURES:
-            from pantocosim.core.errors import ParameterError
-
             raise ParameterError("--case", name, f"unknown bench case; one of "
                                  f"{', '.join([*CASES, *FIGURES])}")
     return list(dict.fromkeys(names))
@@ -140,8 +142,6 @@ def fmu_start(tmp: Path, printer=print) -> dict:
     """The catenary FMU's instantiate-to-first-step time in fmpy (its own process, a fresh
     extraction), with an empty set-up cache (cold) and again (warm); the FMU is built into
     ``dist/fmus`` first if missing or stale."""
-    from pantocosim.master.fmu_build import default_out, ensure_fmus
-
     fmu = default_out() / "catenary.fmu"
     ensure_fmus([fmu], default_out())
     env = dict(os.environ, PANTOCOSIM_CACHE_DIR=str(tmp / "fmu-start-cache"))
@@ -150,8 +150,6 @@ def fmu_start(tmp: Path, printer=print) -> dict:
         run = subprocess.run([sys.executable, "-c", FMU_START_PROBE, str(fmu)], env=env,
                              capture_output=True, text=True)
         if run.returncode != 0:
-            from pantocosim.core.errors import PantocosimError
-
             raise PantocosimError(f"fmu-start ({fmu}): {run.stderr.strip()[-500:]}")
         out[label] = {"instantiate_to_first_step_s": float(run.stdout.split()[-1])}
         printer(f"catenary FMU in fmpy, instantiate to first step, set-up cache {label}: "
@@ -279,8 +277,6 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None,
                           env=None if env is None else {**os.environ, **env})
     wall_process = time.perf_counter() - t0
     if proc.returncode != 0:
-        from pantocosim.core.errors import PantocosimError
-
         raise PantocosimError(f"{path.name} {coupling}: {proc.stderr.strip()[-500:]}")
     summary = json.loads(proc.stdout)
     summary["process_wall_s"] = wall_process
@@ -289,8 +285,6 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None,
 
 def factorised_newton_matrix(model, h: float = 1e-3, alpha: float = DEFAULT_ALPHA):
     """``solve`` of a catenary model's HHT Newton matrix at its static configuration."""
-    from pantocosim.core.hht import HHTSettings
-
     n = model.n_dofs
     ev = model.evaluate(0.0, model.q_static, np.zeros(n), np.zeros(n), None)
     return model.factorize(model.effective_matrix(
@@ -301,9 +295,6 @@ def floor_per_step(catenary: str, spans: int, repeats: int = 200, rounds: int = 
     """Seconds for one solve with a factorised catenary Newton matrix (HHT, 1 ms): the
     fastest of ``rounds`` rounds (as timeit does; a round at the start of a process can run
     before the processor has raised its clock)."""
-    from pantocosim.catenary.definition import load_catenary, with_spans
-    from pantocosim.catenary.model import CatenaryModel
-
     model = CatenaryModel(with_spans(load_catenary(catenary), spans), x0=(10.0,), speed=80.0)
     solve = factorised_newton_matrix(model)
     r = np.random.default_rng(0).standard_normal(model.n_dofs)

@@ -15,6 +15,7 @@ import sys
 
 from pantocosim import __version__
 from pantocosim.core.errors import Interrupted, PantocosimError
+from pantocosim.master.interrupt import remember_interrupts
 
 #: exit status of an interrupted command (128 + SIGINT, as shells report it)
 EXIT_INTERRUPTED = 130
@@ -64,7 +65,6 @@ def main(argv: list[str] | None = None) -> int:
         import os
 
         os.environ["PANTOCOSIM_NO_CACHE"] = "1"   # inherited by workers and FMUs
-    from pantocosim.master.interrupt import remember_interrupts
 
     try:
         with remember_interrupts():

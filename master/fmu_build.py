@@ -29,7 +29,11 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import pantocosim
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.stamp import UNBUNDLED, package_stamp
+from pantocosim.fmi.front import FRONTS
+from pantocosim.fmi.slave_base import STAMP_FILE, bundled_stamp
 from pantocosim.master.fmu_export import compile_export_library, install_export_library
 
 #: pantograph FMU name (the preset) -> slave class name
@@ -85,17 +89,12 @@ def default_out() -> Path:
 
 
 def model_package_dir() -> Path:
-    import pantocosim
-
     return Path(pantocosim.__file__).resolve().parent
 
 
 def stage_package(dest: Path) -> tuple[Path, Path]:
     """Copy the installed model package (without the subpackages FMUs do not use,
     :data:`~pantocosim.core.stamp.UNBUNDLED`) and write the build stamp."""
-    from pantocosim.core.stamp import UNBUNDLED, package_stamp
-    from pantocosim.fmi.slave_base import STAMP_FILE
-
     src = model_package_dir()
     pkg = dest / "pantocosim"
 
@@ -116,8 +115,6 @@ def slave_source(module: str, base_module: str, base_class: str, class_name: str
                  attributes: dict, fmi: int = 2) -> str:
     """The generated slave module: the core ``base_class`` with the front of FMI ``fmi``,
     setting class attributes (preset, start values)."""
-    from pantocosim.fmi.front import FRONTS
-
     body = "".join(f"    {k} = {v!r}\n" for k, v in attributes.items())
     front_module, front_class = FRONTS[fmi].split(":")
     imports = [f"from pantocosim.fmi.{base_module} import {base_class}",
@@ -220,9 +217,6 @@ def check_fmi(fmi) -> tuple:
 def is_stale(fmu: Path) -> bool:
     """True when the FMU bundles another version of the model package than the one installed
     (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
-    from pantocosim.core.stamp import package_stamp
-    from pantocosim.fmi.slave_base import bundled_stamp
-
     return bundled_stamp(fmu) != package_stamp()
 
 

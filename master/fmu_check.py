@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
+from pantocosim.pantograph.presets import PRESETS
 
 
 @dataclass
@@ -76,8 +78,6 @@ def read_fmu(path: Path, field: str, source: str | None):
 
 def pantograph_preset(md) -> str | None:
     """The preset of a pantocosim pantograph FMU (None: another FMU)."""
-    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
-
     return {cls: name for name, cls in PANTOGRAPH_FMUS.items()}.get(md.modelName)
 
 
@@ -91,9 +91,6 @@ def numbered(md, stem: str, causality: str) -> int:
 def check_fmus(sc, n_sup: int, cat_path: Path, pan_paths: list[Path]) -> FmuPlan:
     """Check the FMU files of scenario ``sc`` against its pantographs and its line of
     ``n_sup`` supports (see the module)."""
-    from pantocosim.master.fmu_build import CATENARY_CLASS
-    from pantocosim.pantograph.presets import PRESETS
-
     src = sc.source
     files = []
     for k, (spec, path) in enumerate(zip(sc.pantographs, pan_paths)):

@@ -26,7 +26,7 @@ import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
-from pantocosim.core.user_cache import cache_warning, describe
+from pantocosim.core.user_cache import cache_root, cache_warning, describe
 
 STATUS_NAMES = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
@@ -42,7 +42,6 @@ def cache_dir() -> Path:
     base = os.environ.get("PANTOCOSIM_FMU_CACHE")
     if base:
         return Path(base)
-    from pantocosim.core.user_cache import cache_root
 
     return cache_root() / "fmus"
 

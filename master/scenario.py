@@ -59,6 +59,7 @@ from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
 from pantocosim.core.schema import OPTIONAL, Field, Format, Section
+from pantocosim.catenary.definition import load_catenary
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 DEFAULT_SCENARIO = "dsa380-ave-300"
@@ -351,8 +352,6 @@ def require_port_contact(sc: Scenario, what: str) -> None:
 def scenario_catenary(sc: Scenario):
     """The catenary definition of ``sc`` (without its ``spans``); an unknown name is an error
     of the scenario's field ``catenary``."""
-    from pantocosim.catenary.definition import load_catenary
-
     try:
         return load_catenary(sc.catenary)
     except ParameterError as exc:

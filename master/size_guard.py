@@ -6,6 +6,8 @@ the limit (``--max-dofs``, ``--max-steps``). The catenary's estimate and DOF lim
 
 from __future__ import annotations
 
+import dataclasses
+
 from pantocosim.catenary.size_guard import (MAX_DOFS, check_catenary_size,  # noqa: F401
                                             culprit, describe)
 from pantocosim.core.errors import ParameterError
@@ -37,8 +39,8 @@ def check_cli_catenary(catenary: str, element_size: float | None,
                        max_dofs: int | None) -> int:
     """Size guard of a command that builds ``catenary`` (``static``, ``modes``), with its
     ``--element-size`` and ``--max-dofs``."""
-    import dataclasses
-
+    # deferred: `pantocosim --help` imports this module for its limits; the definition
+    # loader costs it 0.09 s (measured)
     from pantocosim.catenary.definition import load_catenary
 
     check_limit_option("--max-dofs", max_dofs)

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..core.params import Table, load_toml
+from ..core.params import Table, check_number, load_toml
 from ..core.schema import OPTIONAL, Field, Format, Section
 from .supports import SUPPORTS, Support, parse_support
 
@@ -308,8 +308,6 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
 
 
 def _positions(dr: Table, value, name: str, source: str) -> list[float]:
-    from ..core.params import check_number
-
     if not isinstance(value, list):
         raise ParameterError(name, value, "must be an array of numbers", source)
     out = [check_number(f"{name}[{i}]", x, source=source) for i, x in enumerate(value)]

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 
 from .contact_registry import ContactLaw
 from .model import Evaluation, SecondOrderModel
+from .errors import ConvergenceError
 
 
 #: relative round-off of the coordinates: a static Newton update below it has converged
@@ -221,8 +222,6 @@ class CoupledSystem(SecondOrderModel):
         when the Newton update is at the round-off of the coordinates
         (``STATIC_ROUNDOFF * max |q|``: the residual of a stiff contact or a long line cannot
         get smaller than its own round-off)."""
-        from pantocosim.core.errors import ConvergenceError
-
         q = np.array(q0, dtype=float)
         zero = np.zeros(self.n_dofs)
         for it in range(max_iter):

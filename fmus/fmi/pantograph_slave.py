@@ -38,6 +38,8 @@ from .front import Status
 from .given import track_sets
 from .pantograph_ports import FORCE_TIMING, LAW_INPUTS, SPEED_INPUT, VARIABLES
 from .slave_base import IntegratorSlave
+from ..core.errors import ParameterError
+from ..core.hht import HHTIntegrator, HHTSettings
 
 
 class PantographSlave(IntegratorSlave):
@@ -63,8 +65,6 @@ class PantographSlave(IntegratorSlave):
 
     # ------------------------------------------------------------------ lifecycle
     def _load_model(self):
-        from pantocosim.core.errors import ParameterError
-
         source = self.preset
         if self.parameter_file:
             p = Path(self.parameter_file)
@@ -102,8 +102,6 @@ class PantographSlave(IntegratorSlave):
         catenary's laws (start_mode 2) needs the laws and the train speed (a master that
         exchanges nothing in initialisation mode gives neither to a pantograph whose start
         values do not carry them); a given train speed must be speed_kmh's."""
-        from pantocosim.core.errors import ParameterError
-
         problems = []
         given = self._speed_input()
         if self.start_mode == 2 and "speed_kmh" not in self._given and given is None:

@@ -24,6 +24,8 @@ import sys
 import time
 from pathlib import Path
 
+from pantocosim.master.thirdparty import common as run_common
+
 MODULE = "pantocosim.master.thirdparty.cofmupy_json"
 OUTPUTS = [("catenary", "contact_force_out_1"), ("pantograph", "contact_height"),
            ("catenary", "wire_height_1")]
@@ -64,8 +66,6 @@ def child(config: str, step: float, stop: float, out: str, n_supports: int, x0: 
 
 def main(argv=None) -> int:
     import subprocess
-
-    from pantocosim.master.thirdparty import common as run_common
 
     p = run_common.ssp_parser(__doc__, "cofmupy")
     p.add_argument("--config", type=Path, default=None,

@@ -21,6 +21,10 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+from pantocosim.catenary.analysis import central_window
+from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
+from pantocosim.master.ssp import scenario_support_x
+from pantocosim.master.statistics import contact_statistics
 
 DEFAULT_SSP = Path("dist") / "fmus" / "dsa380-ave-300.ssp"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -106,8 +110,6 @@ def _typed(kind: str, text: str):
 
 def catenary_layout(cat_params: dict) -> np.ndarray:
     """Support positions of the catenary the SSP's catenary FMU builds."""
-    from pantocosim.master.ssp import scenario_support_x
-
     return scenario_support_x(cat_params)
 
 
@@ -251,7 +253,6 @@ def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
     the middle span of the line (the FMU's own default)."""
     if cat.get("window_end", 0.0) > cat.get("window_start", 0.0):
         return float(cat["window_start"]), float(cat["window_end"])
-    from pantocosim.catenary.analysis import central_window
 
     return central_window(support_x)
 
@@ -259,8 +260,6 @@ def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
 def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> dict:
     """EN 50317 statistics of the run in ``csv_path``; prints a table and a JSON line
     ``STATISTICS {...}`` and writes ``<csv>.json``."""
-    from pantocosim.master.statistics import contact_statistics
-
     c = read_csv(csv_path)
     n_sup = sum(1 for k in c if k.startswith("support_uplift_"))
     uplift = (np.column_stack([c[f"support_uplift_{j}"] for j in range(n_sup)])

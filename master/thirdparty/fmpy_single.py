@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 from pantocosim.master.thirdparty import common as run_common
+from pantocosim.master.standalone import force_expression
 
 MODULE = "pantocosim.master.thirdparty.fmpy_single"
 
