@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import os
+import platform
 import subprocess
 import sys
 import tempfile
@@ -30,11 +31,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.model import CatenaryModel
 from pantocosim.core.errors import PantocosimError, ParameterError
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.master.fmu_build import default_out, ensure_fmus
 
 CASES = {
@@ -436,8 +436,5 @@ def format_entry(name: str, coupling: str, entry: dict) -> str:
 
 
 def _machine() -> dict:
-    import os
-    import platform
-
     return {"python": platform.python_version(), "cpus": os.cpu_count(),
             "processor": platform.processor() or platform.machine()}

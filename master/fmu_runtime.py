@@ -16,6 +16,8 @@ import hashlib
 import os
 import shutil
 import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
 from ctypes import byref
 from pathlib import Path
 
@@ -250,9 +252,6 @@ APIS = {"2.0": Fmi2Api, "3.0": Fmi3Api}
 
 def fmi_version(fmu_path: str | Path) -> int:
     """The FMI major version of an FMU file (its model description's ``fmiVersion``)."""
-    import xml.etree.ElementTree as ET
-    import zipfile
-
     with zipfile.ZipFile(fmu_path) as z:
         return int(float(ET.fromstring(z.read("modelDescription.xml")).get("fmiVersion")))
 

@@ -27,6 +27,7 @@ naming the file, the dotted field and the value.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -107,8 +108,6 @@ DAMPING = Section("damping", [
 
 def _support_sections() -> tuple:
     """One section per support type: its fields and its module's description."""
-    import sys
-
     return tuple(Section(SUPPORT_TYPE.path, cls.FIELDS.fields,
                          title=f'Support `type = "{name}"`',
                          doc=" ".join((sys.modules[cls.__module__].__doc__ or "").split()))

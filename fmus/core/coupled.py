@@ -19,15 +19,15 @@ weighted by the integrator exactly as a force through an FMU port.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from .contact_registry import ContactLaw
-from .model import Evaluation, SecondOrderModel
 from .errors import ConvergenceError
-
+from .model import Evaluation, SecondOrderModel
 
 #: relative round-off of the coordinates: a static Newton update below it has converged
 STATIC_ROUNDOFF = 16.0 * np.finfo(float).eps
@@ -289,8 +289,6 @@ class RigidWire(SecondOrderModel):
                           stiffness=empty, structure_key=None)
 
     def contact_points(self, t):
-        from types import SimpleNamespace
-
         if self.catenary is None:
             heights = np.full(self.n_pantographs, float(self.height))
         else:

@@ -34,6 +34,7 @@ import operator
 import pickle
 import traceback
 import uuid
+import zipfile
 from pathlib import Path
 from typing import Any, Callable
 
@@ -93,8 +94,6 @@ def lossless(value, kind: str):
 def bundled_stamp(fmu: str | Path) -> str | None:
     """The package stamp an FMU file was built with (None: not a pantocosim FMU, or
     unreadable)."""
-    import zipfile
-
     try:
         with zipfile.ZipFile(fmu) as z:
             return z.read(f"resources/{STAMP_FILE}").decode().strip()

@@ -21,6 +21,9 @@ import os
 import time
 import traceback
 from pathlib import Path
+
+import psutil
+import tomli_w
 from pantocosim.core.errors import OutputError, PantocosimError
 from pantocosim.master.campaign.axes import COUPLINGS
 from pantocosim.master.cosim import run_cosim
@@ -99,8 +102,6 @@ def _in_case_folder(message: str, stage, folder: Path) -> str:
 def _write_inputs(task: dict, into: Path, named: Path) -> None:
     """``scenario.toml`` (and ``catenary.toml``) into ``into``, the scenario naming the
     catenary file in the folder ``named``."""
-    import tomli_w
-
     scenario = dict(task["scenario"])
     if task.get("catenary") is not None:
         with writing("file", into / "catenary.toml"):
@@ -154,8 +155,6 @@ def _essentials(summary: dict) -> dict:
 
 def _worker() -> dict:
     """Which worker ran the case and its resident memory now [MB]."""
-    import psutil
-
     try:
         from distributed import get_worker
 

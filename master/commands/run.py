@@ -97,8 +97,6 @@ def print_statistics(summary: dict) -> None:
 
 def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
     """The scenario with the command line's catenary model and cutoff (None: as given)."""
-    import dataclasses
-
     from pantocosim.core.errors import ParameterError
 
     changes = {}
