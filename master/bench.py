@@ -35,7 +35,11 @@ from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.model import CatenaryModel
 from pantocosim.core.errors import PantocosimError, ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
+from pantocosim.master.cosim import fmu_paths, fmu_subsystems
 from pantocosim.master.fmu_build import default_out, ensure_fmus
+from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
+from pantocosim.master.native_models import export_scenario
+from pantocosim.master.scenario import load_scenario
 
 CASES = {
     # name: (catenary, spans, pantograph, speed km/h, position m)
@@ -181,8 +185,6 @@ def python_fmu_loop(prep, steps: int, h: float) -> dict:
     """The doStep times of the Python catenary FMU (catenary_model of the scenario) with the
     Python pantograph FMU in fmpy, in the native loop's scheme: the master applies the
     penalty law to the heights and gives the force to both (explicit, zero-order hold)."""
-    from pantocosim.master.cosim import fmu_paths, fmu_subsystems
-
     instances: list = []
     csub, psubs = fmu_subsystems(prep, instances, fmu_paths(prep))
     k_h = prep.contact.stiffness
@@ -214,16 +216,11 @@ def native_loop(tmp: Path, printer=print) -> dict:
     import shutil
     import zipfile
 
-    from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
-    from pantocosim.master.native_models import export_scenario
     from pantocosim.master.run import prepare
-    from pantocosim.master.scenario import load_scenario
 
     scenario, seconds, models = NATIVE_LOOP
     cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
     if cc is None:
-        from pantocosim.core.errors import PantocosimError
-
         raise PantocosimError("native-loop: no C compiler on PATH (set CC)")
     host = tmp / "realtime_host"
     subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
