@@ -21,13 +21,16 @@ instantiation, the catenary's initial configuration inside the FMU) is reported 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -212,10 +215,6 @@ def native_loop(tmp: Path, printer=print) -> dict:
     a C loop (fmus/realtime/realtime_host.c, the master applies the penalty law): p50 / p99 /
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
-    import dataclasses
-    import shutil
-    import zipfile
-
     from pantocosim.master.run import prepare
 
     scenario, seconds, models = NATIVE_LOOP

@@ -19,6 +19,8 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tqdm import tqdm
+
 from pantocosim.core.errors import ParameterError, PantocosimError
 from pantocosim.master.campaign.assessment import load_criteria
 from pantocosim.master.campaign.spec import Sweep
@@ -282,7 +284,6 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
     """Records of the cases in the order they finish, each written to the table at once; a
     task that raised (its worker died, the task was cancelled) is recorded as lost."""
     from distributed import as_completed
-    from tqdm import tqdm
 
     enabled = sys.stderr.isatty() if progress is None else progress
     records = []
