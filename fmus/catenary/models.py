@@ -15,9 +15,6 @@ speed and the options; the FMU code of a model is its index in :data:`MODEL_NAME
 from __future__ import annotations
 
 from ..core.errors import ParameterError
-from .linear import LinearCatenary
-from .modal import ModalCatenary
-from .model import CatenaryModel
 
 #: default cutoff of the modal model [Hz]: the accuracy targets against the linear
 #: model on en50318-250, en50318-300 and dsa380-ave-300 (docs/modal-cutoff.md; the wire modes
@@ -26,15 +23,23 @@ from .model import CatenaryModel
 DEFAULT_MODAL_CUTOFF_HZ = 100.0
 
 
+# each factory imports its own model: a catenary FMU loads the one it builds (measured: the
+# FMU slaves import in 0.46 s so, 0.62 s with every catenary and pantograph model at the top)
 def _nonlinear(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .model import CatenaryModel
+
     return CatenaryModel(catenary, x0, speed, element_size=element_size)
 
 
 def _linear(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .linear import LinearCatenary
+
     return LinearCatenary(catenary, x0, speed, element_size=element_size)
 
 
 def _modal(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
+    from .modal import ModalCatenary
+
     cutoff = DEFAULT_MODAL_CUTOFF_HZ if modal_cutoff_hz is None else modal_cutoff_hz
     return ModalCatenary(catenary, x0, speed, element_size=element_size, cutoff_hz=cutoff)
 

@@ -8,9 +8,6 @@ from pathlib import Path
 from ..core.errors import ParameterError
 from ..core.params import Table, load_toml
 from .base import PantographModel, PantographOptions
-from .dsa380 import load_dsa380, read_parameters
-from .dsa380_flexible import load_dsa380_flexible, read_flexible
-from .lumped import load_chain, read_chain
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
@@ -55,11 +52,17 @@ def _file_options(path: Path, data: dict) -> PantographOptions:
 
 def _model_kind(data: dict):
     """(loader, reader of the working height) of a parameter file, told by its tables
-    (imported on demand: the flexible model brings numba kernels)."""
+    (imported on demand: a pantograph FMU loads the one model it runs; measured with the
+    catenary factories in :mod:`pantocosim.catenary.models`)."""
     if "chain" in data:
+        from .lumped import load_chain, read_chain
+
         return load_chain, lambda path: read_chain(path)[0].working_height
     if "rigid_model" in data:
+        from .dsa380_flexible import load_dsa380_flexible, read_flexible
+
         return load_dsa380_flexible, lambda path: read_flexible(path)[0].rigid.working_height
+    from .dsa380 import load_dsa380, read_parameters
 
     return load_dsa380, lambda path: read_parameters(path)[0].working_height
 
