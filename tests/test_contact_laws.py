@@ -93,7 +93,7 @@ def test_loss_of_contact_and_recontact():
 
 
 def test_a_failing_constraint_step_is_an_error_not_a_result(tmp_path, monkeypatch, capsys):
-    from pantocosim.core import constraint_contact as cc
+    from pantocosim.interaction import constraint_contact as cc
     from pantocosim.master.cli import main
 
     monkeypatch.setattr(cc.ConstraintContact, "from_fields",
