@@ -34,6 +34,7 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.model import CatenaryModel
 from pantocosim.core.errors import PantocosimError, ParameterError

@@ -16,7 +16,7 @@ import numpy as np
 from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.stepping import make_stepper
+from pantocosim.interaction.stepping import make_stepper
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import REQUIRED_PORTS
@@ -35,7 +35,7 @@ PANTOGRAPH_OPTIONS = ("static_force", "aero_c1", "aero_c2", "friction_force",
 
 # ---------------------------------------------------------------------- subsystems
 class ModelSubsystem:
-    """A model with the stepper it declares (:func:`~pantocosim.core.stepping.make_stepper`,
+    """A model with the stepper it declares (:func:`~pantocosim.interaction.stepping.make_stepper`,
     as its FMU takes it) behind the FMU port semantics (in-process)."""
 
     def __init__(self, model, q0, settings: HHTSettings, inputs0, outputs):

@@ -16,6 +16,7 @@ Each function returns ``{section name: array}`` for :func:`pantocosim.master.nat
 from __future__ import annotations
 
 import numpy as np
+
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator
 

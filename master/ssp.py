@@ -7,7 +7,7 @@ contact). Nothing in it belongs to one pantograph model: the two FMUs settle the
 between themselves (docs/third-party.md, "The static start handshake"): the catenary offers
 its start laws as outputs in initialisation mode (operating height and static contact height
 against the force, :mod:`pantocosim.catenary.operating_height`), the pantograph (start_mode 2)
-sets its actuation and start on them (:mod:`pantocosim.pantograph.static_start`), and the
+sets its actuation and start on them (:mod:`pantocosim.interaction.pantograph_start`), and the
 catenary settles its static state against the pantograph's height at t0. So replacing the
 pantograph FMU in the SSP by any other pantograph FMU is a file swap.
 
@@ -89,7 +89,7 @@ def scenario_start_values(scenario) -> dict:
     from pantocosim.master.run_checks import analysis_window
     from pantocosim.master.scenario import load_scenario
     from pantocosim.pantograph.presets import load_pantograph
-    from pantocosim.pantograph.static_start import static_start_on_laws
+    from pantocosim.interaction.pantograph_start import static_start_on_laws
 
     from pantocosim.master.scenario import require_port_contact
 

@@ -3,7 +3,7 @@
 Its variables (parameters, the ports of pantographs 1..4 ``_k``, the support uplifts
 ``_j``, the start laws) are declared in :mod:`pantocosim.fmi.catenary_ports`, which the FMU
 reference page of the documentation lists. The start's physics is the model's
-(:mod:`pantocosim.catenary.start`); this adapter reads the parameters and inputs, checks them
+(:mod:`pantocosim.interaction.catenary_start`); this adapter reads the parameters and inputs, checks them
 against their declared ranges and drives the integrator.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.catenary.start import (START_FORCE_TOL_N, settled_start, start_laws,
+from pantocosim.interaction.catenary_start import (START_FORCE_TOL_N, settled_start, start_laws,
                                        static_contact_heights)
 from pantocosim.core.hht import FactorReuse
-from pantocosim.core.stepping import make_stepper
+from pantocosim.interaction.stepping import make_stepper
 
 from .catenary_ports import MAX_PANTOGRAPHS, MAX_SUPPORTS, TIMING, VARIABLES, PortNames
 from .front import Status
@@ -166,7 +166,7 @@ class CatenarySlave(IntegratorSlave):
             raise exc.renamed(FIELD_NAMES) from None
 
     def _contact(self):
-        from pantocosim.core.penalty_contact import PenaltyContact
+        from pantocosim.interaction.penalty_contact import PenaltyContact
         from pantocosim.core.errors import ParameterError
 
         try:
@@ -177,7 +177,7 @@ class CatenarySlave(IntegratorSlave):
 
     def _laws(self, model):
         """The start laws (operating_height.ContactHeightLaws) of the current parameters
-        (:func:`~pantocosim.catenary.start.start_laws`; kept for them)."""
+        (:func:`~pantocosim.interaction.catenary_start.start_laws`; kept for them)."""
         window = (self.value("window_start"), self.value("window_end"))
         dt = self.value("averaging_step")
         alpha = self._run_settings().alpha
@@ -249,7 +249,7 @@ class CatenarySlave(IntegratorSlave):
 
     def _input_heights(self, n, F0):
         """Pantograph heights and velocities at t0: where pressing with a static force F
-        (:func:`~pantocosim.catenary.start.static_contact_heights`), else the inputs."""
+        (:func:`~pantocosim.interaction.catenary_start.static_contact_heights`), else the inputs."""
         model = self._build_model()
         if np.any(F0 > 0):
             pressing = static_contact_heights(model, self._contact().stiffness, F0)
@@ -265,9 +265,9 @@ class CatenarySlave(IntegratorSlave):
 
     def _start_penalty(self, model, contact, F0, heights):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
-        static start (:func:`~pantocosim.catenary.start.settled_start`: settled against the
+        static start (:func:`~pantocosim.interaction.catenary_start.settled_start`: settled against the
         heights where no static force is given)."""
-        from pantocosim.core.prescribed import PrescribedPantograph
+        from pantocosim.interaction.prescribed import PrescribedPantograph
 
         q0, self._late_height_tol = settled_start(model, contact, F0, heights[:, 0])
         standins = [PrescribedPantograph(z, v) for z, v in heights]

@@ -9,7 +9,7 @@ Ports (identical for all variants; declared with the parameters in
   (``operating_height``, ...; start_mode 2) and ``train_speed_kmh`` (where ``speed_kmh`` was
   not set). A start on the laws that lacks them or the speed is refused at
   fmi2ExitInitializationMode, naming what the master did not give. The start itself is the
-  model's (:func:`pantocosim.pantograph.static_start.start_state`).
+  model's (:func:`pantocosim.interaction.pantograph_start.start_state`).
 
 Timing of the force input: the value set before ``doStep(t, h)`` is the contact force at
 ``t + h``; the force at ``t`` is the one of the previous accepted step, kept in the FMU state
@@ -32,7 +32,7 @@ import numpy as np
 
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
-from pantocosim.pantograph.static_start import start_state
+from pantocosim.interaction.pantograph_start import start_state
 
 from .front import Status
 from .given import track_sets
@@ -136,7 +136,7 @@ class PantographSlave(IntegratorSlave):
 
     def _start(self, model):
         """(q0, F0): the start shape and the contact force at t0 of ``start_mode``
-        (:func:`~pantocosim.pantograph.static_start.start_state`)."""
+        (:func:`~pantocosim.interaction.pantograph_start.start_state`)."""
         if self.start_mode == 2:
             return start_state(model, 2, laws=self._laws())
         return start_state(model, self.start_mode, height=self.value("initial_height"),
@@ -161,7 +161,7 @@ class PantographSlave(IntegratorSlave):
     def initialise(self):
         from pantocosim.core.errors import ParameterError
         from pantocosim.core.hht import HHTSettings
-        from pantocosim.core.stepping import make_stepper
+        from pantocosim.interaction.stepping import make_stepper
 
         self.check_build_stamp()
         if self._error:

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import psutil
 import tomli_w
+
 from pantocosim.core.errors import OutputError, PantocosimError
 from pantocosim.master.campaign.axes import COUPLINGS
 from pantocosim.master.cosim import run_cosim

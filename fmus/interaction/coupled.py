@@ -2,8 +2,8 @@
 
 The catenary and any number of pantographs are assembled into one
 :class:`~pantocosim.core.model.SecondOrderModel` coupled by contact elements of the
-scenario's law (:mod:`pantocosim.core.contact_laws`: the penalty law
-:mod:`~pantocosim.core.penalty_contact`, or the rigid :mod:`~pantocosim.core.constraint_contact`
+scenario's law (:mod:`pantocosim.interaction.contact_laws`: the penalty law
+:mod:`~pantocosim.interaction.penalty_contact`, or the rigid :mod:`~pantocosim.interaction.constraint_contact`
 whose multipliers the Newton correction solves with the coordinates). The monolithic reference solver
 (``master/run.py``) advances it with the one HHT-alpha integrator, Newton-Raphson on all
 coordinates at once. Contact is lost and recovered through the penalty law; droppers
@@ -25,9 +25,9 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.errors import ConvergenceError
+from ..core.model import Evaluation, SecondOrderModel
 from .contact_registry import ContactLaw
-from .errors import ConvergenceError
-from .model import Evaluation, SecondOrderModel
 
 #: relative round-off of the coordinates: a static Newton update below it has converged
 STATIC_ROUNDOFF = 16.0 * np.finfo(float).eps
