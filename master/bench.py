@@ -43,6 +43,7 @@ from pantocosim.master.cosim import fmu_paths, fmu_subsystems
 from pantocosim.master.fmu_build import default_out, ensure_fmus
 from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
 from pantocosim.master.native_models import export_scenario
+from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
 
 CASES = {
@@ -216,8 +217,6 @@ def native_loop(tmp: Path, printer=print) -> dict:
     a C loop (fmus/realtime/realtime_host.c, the master applies the penalty law): p50 / p99 /
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
-    from pantocosim.master.run import prepare
-
     scenario, seconds, models = NATIVE_LOOP
     cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
     if cc is None:

@@ -14,6 +14,7 @@ from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
 from pantocosim.master import native_export
 from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
 from pantocosim.master.native_fmu import NativeModel, Variable, build_fmu, value_references
+from pantocosim.master.run_setup import scenario_pantograph
 
 CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "catenary.h"))
 MAX_SUPPORTS = 64
@@ -127,10 +128,6 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
                       win64: bool | None = None) -> Path:
     """The native FMU of the scenario's pantograph ``k`` (a constant-matrix model in the
     static start of the scenario, as the Python FMU starts in our master)."""
-    from pantocosim.core.hht import HHTSettings
-    from pantocosim.master import native_export
-    from pantocosim.master.run_setup import scenario_pantograph
-
     sc = prep.scenario
     spec = sc.pantographs[k]
     if spec.start != "static":

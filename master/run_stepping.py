@@ -12,7 +12,6 @@ import time as _time
 from pathlib import Path
 
 import numpy as np
-
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
 from pantocosim.core.stepper import CoupledStepper, warm_up
@@ -23,11 +22,10 @@ from pantocosim.master.pacing import StepClock
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run_results import RunResult, column_names
 from pantocosim.master.run_setup import Prepared
+from tqdm import tqdm
 
 
 def progress_bar(total: int, label: str, enabled: bool | None = None):
-    from tqdm import tqdm
-
     if enabled is None:
         enabled = sys.stderr.isatty()
     return tqdm(total=total, desc=label, unit="step", disable=not enabled, mininterval=0.5,

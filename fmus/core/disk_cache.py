@@ -42,7 +42,6 @@ def folder() -> Path:
     given = os.environ.get("PANTOCOSIM_CACHE_DIR")
     if given:
         return Path(given)
-    from .user_cache import cache_root
 
     return cache_root() / "setup"
 

@@ -29,17 +29,17 @@ import math
 from pathlib import Path
 
 import numpy as np
-
+from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
-from pantocosim.interaction.pantograph_start import start_state
 
+from ..core.errors import ParameterError
+from ..core.hht import HHTSettings
+from ..interaction.stepping import make_stepper
 from .front import Status
 from .given import track_sets
 from .pantograph_ports import FORCE_TIMING, LAW_INPUTS, SPEED_INPUT, VARIABLES
 from .slave_base import IntegratorSlave
-from ..core.errors import ParameterError
-from ..core.hht import HHTIntegrator, HHTSettings
 
 
 class PantographSlave(IntegratorSlave):
@@ -159,10 +159,6 @@ class PantographSlave(IntegratorSlave):
         self.contact_velocity = 0.0
 
     def initialise(self):
-        from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTSettings
-        from pantocosim.interaction.stepping import make_stepper
-
         self.check_build_stamp()
         if self._error:
             return
