@@ -90,7 +90,8 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
-    under the moving forces (its declared stepper, :func:`~pantocosim.core.stepping.structure_stepper`)."""
+    under the moving forces (its declared stepper,
+    :func:`~pantocosim.core.stepping.structure_stepper`)."""
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
     integ = structure_stepper(model, HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)

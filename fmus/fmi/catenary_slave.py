@@ -3,8 +3,8 @@
 Its variables (parameters, the ports of pantographs 1..4 ``_k``, the support uplifts
 ``_j``, the start laws) are declared in :mod:`pantocosim.fmi.catenary_ports`, which the FMU
 reference page of the documentation lists. The start's physics is the model's
-(:mod:`pantocosim.interaction.catenary_start`); this adapter reads the parameters and inputs, checks them
-against their declared ranges and drives the integrator.
+(:mod:`pantocosim.interaction.catenary_start`); this adapter reads the parameters and
+inputs, checks them against their declared ranges and drives the integrator.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
 ``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
@@ -237,7 +237,8 @@ class CatenarySlave(IntegratorSlave):
 
     def _input_heights(self, n, F0):
         """Pantograph heights and velocities at t0: where pressing with a static force F
-        (:func:`~pantocosim.interaction.catenary_start.static_contact_heights`), else the inputs."""
+        (:func:`~pantocosim.interaction.catenary_start.static_contact_heights`), else the
+        inputs."""
         model = self._build_model()
         if np.any(F0 > 0):
             pressing = static_contact_heights(model, self._contact().stiffness, F0)
@@ -253,8 +254,8 @@ class CatenarySlave(IntegratorSlave):
 
     def _start_penalty(self, model, contact, F0, heights):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
-        static start (:func:`~pantocosim.interaction.catenary_start.settled_start`: settled against the
-        heights where no static force is given)."""
+        static start (:func:`~pantocosim.interaction.catenary_start.settled_start`: settled
+        against the heights where no static force is given)."""
         q0, self._late_height_tol = settled_start(model, contact, F0, heights[:, 0])
         standins = [PrescribedPantograph(z, v) for z, v in heights]
         names = self._port_names
