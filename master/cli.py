@@ -15,6 +15,7 @@ import os
 import sys
 
 from pantocosim import __version__
+from pantocosim.core.disk_cache import check_settings
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.master.interrupt import remember_interrupts
 
@@ -67,8 +68,6 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with remember_interrupts():
-            from pantocosim.core.disk_cache import check_settings
-
             check_settings()                      # a bad cache setting before any work
             return int(args._run(args) or 0)
     except Interrupted as exc:

@@ -12,6 +12,7 @@ import time as _time
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTSettings

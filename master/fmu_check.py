@@ -16,6 +16,7 @@ Errors name the scenario file, the field (``pantographs[k].fmu``, ``pantographs`
 from __future__ import annotations
 
 import re
+import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -149,8 +150,6 @@ def check_binary_fmu(path: Path, field: str, source: str | None = None) -> None:
     platform named after its ``modelIdentifier``, that binary exports the FMI functions of
     that version, and (a PythonFMU export) its slave module defines that class. Raises
     ParameterError naming ``field``, the file and what is accepted."""
-    import xml.etree.ElementTree as ET
-
     with zipfile.ZipFile(path) as z:
         names = set(z.namelist())
         root = ET.fromstring(z.read("modelDescription.xml"))

@@ -18,6 +18,7 @@ import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
+import zlib
 from ctypes import byref
 from pathlib import Path
 
@@ -88,9 +89,6 @@ def extract_cached(fmu_path: str | Path) -> Path:
 def _damage(fmu_path: Path, folder: Path) -> str | None:
     """What differs between the extracted ``folder`` and the archive ``fmu_path`` (each
     archived file's presence, size and CRC-32), or None."""
-    import zipfile
-    import zlib
-
     with zipfile.ZipFile(fmu_path) as archive:
         for info in archive.infolist():
             if info.is_dir():

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.core.errors import Interrupted
 from pantocosim.master import plots as P
 from pantocosim.master.output_folder import writing

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from pantocosim.catenary.definition import with_spans
 from pantocosim.catenary.models import law_model, make_catenary
 from pantocosim.catenary.operating_height import mean_dynamic_wire_height

@@ -12,6 +12,8 @@ import time as _time
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
+
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
 from pantocosim.core.stepper import CoupledStepper, warm_up
@@ -22,7 +24,6 @@ from pantocosim.master.pacing import StepClock
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run_results import RunResult, column_names
 from pantocosim.master.run_setup import Prepared
-from tqdm import tqdm
 
 
 def progress_bar(total: int, label: str, enabled: bool | None = None):

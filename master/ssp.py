@@ -31,16 +31,25 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.model import CatenaryModel
 from pantocosim.catenary.models import model_code
+from pantocosim.catenary.operating_height import contact_height_laws
 from pantocosim.core.errors import OutputError, ParameterError
-from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT, PortNames
+from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import LAW_INPUTS, REQUIRED_PORTS, SPEED_INPUT
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
+from pantocosim.fmi.slave_base import bundled_stamp
+from pantocosim.interaction.pantograph_start import static_start_on_laws
+from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
 from pantocosim.master.fmu_check import check_binary_fmu
+from pantocosim.master.fmu_runtime import fmi_version
+from pantocosim.master.run_checks import analysis_window
+from pantocosim.master.scenario import load_scenario, require_port_contact
+from pantocosim.pantograph.presets import load_pantograph
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

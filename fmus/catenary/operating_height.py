@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from pantocosim.catenary.linear_droppers import LinearDroppers
 from pantocosim.core.affine_hht import AffineForm
 from pantocosim.core.banded import BandedCholesky

@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .stamp import process_stamp
-from .user_cache import cache_warning, describe
+from .user_cache import cache_root, cache_warning, describe
 
 DEFAULT_LIMIT_MB = 512
 _KEY_FIELD = "__key__"

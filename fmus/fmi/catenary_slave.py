@@ -25,6 +25,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.core.hht import FactorReuse, HHTSettings
 from pantocosim.interaction.catenary_start import (START_FORCE_TOL_N, settled_start, start_laws,
                                                    static_contact_heights)

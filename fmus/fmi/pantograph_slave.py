@@ -29,6 +29,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults

@@ -28,6 +28,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA
 
 #: the files the command writes into its output folder

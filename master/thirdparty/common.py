@@ -15,14 +15,18 @@ import csv
 import json
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+
 from pantocosim.catenary.analysis import central_window
+from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
+from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
 from pantocosim.master.ssp import scenario_support_x
 from pantocosim.master.statistics import contact_statistics
 
@@ -65,9 +69,6 @@ def refuse(module: str, exc: Exception):
 def check_fmu(module: str, fmu: str | Path, field: str) -> None:
     """Refuse (:func:`refuse`) an FMU file that cannot run here or is not what its model
     description says (:func:`pantocosim.master.fmu_check.check_binary_fmu`)."""
-    from pantocosim.core.errors import ParameterError
-    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
-
     try:
         read_fmu(Path(fmu), field, None)
         check_binary_fmu(Path(fmu), field)
@@ -77,11 +78,6 @@ def check_fmu(module: str, fmu: str | Path, field: str) -> None:
 
 def check_ssp_fmus(module: str, ssp: str | Path) -> None:
     """:func:`check_fmu` on every FMU of the SSP file ``ssp``."""
-    import tempfile
-
-    from pantocosim.core.errors import ParameterError
-    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
-
     try:
         with zipfile.ZipFile(ssp) as z:
             root = ET.fromstring(z.read("SystemStructure.ssd"))
@@ -157,8 +153,6 @@ def failed(module: str, proc: subprocess.CompletedProcess):
     """Stop a recipe whose co-simulation child failed with one line: the first refusal an FMU
     logged (its first sentence), else the child's last error line; the child's whole output
     is kept in a log file the line names."""
-    import tempfile
-
     text = proc.stdout + proc.stderr
     said = [line for line in text.splitlines()
             if line.startswith(("[DISCARD]", "[ERROR]", "[FATAL]"))]
@@ -225,8 +219,6 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     """What a recipe needs of the SSP named by its arguments: ``ssd`` (:func:`read_ssd`),
     ``cat`` (the catenary component's parameters), ``support_x``, ``stop``, ``window``,
     ``out``, ``n_sup`` (support uplift columns written, at most the FMU's MAX_SUPPORTS) and ``tool``."""
-    from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
-
     check_ssp_fmus(f"{tool} recipe", a.ssp)
     ssd = read_ssd(a.ssp)
     cat = ssd["parameters"]["catenary"]

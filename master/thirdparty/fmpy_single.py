@@ -76,8 +76,6 @@ def main(argv=None) -> int:
         child(fmu, sig, float(step), float(stop), out, float(speed), float(speed_kmh))
         return 0
 
-    from pantocosim.master.standalone import force_expression
-
     run_common.check_fmu(MODULE, a.fmu, "--fmu")
     force = force_expression(a.force)
     n = int(round(a.stop / a.step))

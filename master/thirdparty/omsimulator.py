@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+
 from pantocosim.master.thirdparty import common as run_common
 
 MODULE = "pantocosim.master.thirdparty.omsimulator"
