@@ -21,17 +21,30 @@ instantiation, the catenary's initial configuration inside the FMU) is reported 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
+import platform
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from pantocosim.core.hht import DEFAULT_ALPHA
+from pantocosim.catenary.definition import load_catenary, with_spans
+from pantocosim.catenary.model import CatenaryModel
+from pantocosim.core.errors import PantocosimError, ParameterError
+from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
+from pantocosim.master.cosim import fmu_paths, fmu_subsystems
+from pantocosim.master.fmu_build import default_out, ensure_fmus
+from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
+from pantocosim.master.native_models import export_scenario
+from pantocosim.master.run import prepare
+from pantocosim.master.scenario import load_scenario
 
 CASES = {
     # name: (catenary, spans, pantograph, speed km/h, position m)
@@ -80,8 +93,6 @@ def select_cases(names=None) -> list[str]:
         return list(CASES) + list(FIGURES)
     for name in names:
         if name not in CASES and name not in FIGURES:
-            from pantocosim.core.errors import ParameterError
-
             raise ParameterError("--case", name, f"unknown bench case; one of "
                                  f"{', '.join([*CASES, *FIGURES])}")
     return list(dict.fromkeys(names))
@@ -140,8 +151,6 @@ def fmu_start(tmp: Path, printer=print) -> dict:
     """The catenary FMU's instantiate-to-first-step time in fmpy (its own process, a fresh
     extraction), with an empty set-up cache (cold) and again (warm); the FMU is built into
     ``dist/fmus`` first if missing or stale."""
-    from pantocosim.master.fmu_build import default_out, ensure_fmus
-
     fmu = default_out() / "catenary.fmu"
     ensure_fmus([fmu], default_out())
     env = dict(os.environ, PANTOCOSIM_CACHE_DIR=str(tmp / "fmu-start-cache"))
@@ -150,8 +159,6 @@ def fmu_start(tmp: Path, printer=print) -> dict:
         run = subprocess.run([sys.executable, "-c", FMU_START_PROBE, str(fmu)], env=env,
                              capture_output=True, text=True)
         if run.returncode != 0:
-            from pantocosim.core.errors import PantocosimError
-
             raise PantocosimError(f"fmu-start ({fmu}): {run.stderr.strip()[-500:]}")
         out[label] = {"instantiate_to_first_step_s": float(run.stdout.split()[-1])}
         printer(f"catenary FMU in fmpy, instantiate to first step, set-up cache {label}: "
@@ -183,8 +190,6 @@ def python_fmu_loop(prep, steps: int, h: float) -> dict:
     """The doStep times of the Python catenary FMU (catenary_model of the scenario) with the
     Python pantograph FMU in fmpy, in the native loop's scheme: the master applies the
     penalty law to the heights and gives the force to both (explicit, zero-order hold)."""
-    from pantocosim.master.cosim import fmu_paths, fmu_subsystems
-
     instances: list = []
     csub, psubs = fmu_subsystems(prep, instances, fmu_paths(prep))
     k_h = prep.contact.stiffness
@@ -212,20 +217,9 @@ def native_loop(tmp: Path, printer=print) -> dict:
     a C loop (fmus/realtime/realtime_host.c, the master applies the penalty law): p50 / p99 /
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
-    import dataclasses
-    import shutil
-    import zipfile
-
-    from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
-    from pantocosim.master.native_models import export_scenario
-    from pantocosim.master.run import prepare
-    from pantocosim.master.scenario import load_scenario
-
     scenario, seconds, models = NATIVE_LOOP
     cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
     if cc is None:
-        from pantocosim.core.errors import PantocosimError
-
         raise PantocosimError("native-loop: no C compiler on PATH (set CC)")
     host = tmp / "realtime_host"
     subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
@@ -279,8 +273,6 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None,
                           env=None if env is None else {**os.environ, **env})
     wall_process = time.perf_counter() - t0
     if proc.returncode != 0:
-        from pantocosim.core.errors import PantocosimError
-
         raise PantocosimError(f"{path.name} {coupling}: {proc.stderr.strip()[-500:]}")
     summary = json.loads(proc.stdout)
     summary["process_wall_s"] = wall_process
@@ -289,8 +281,6 @@ def run_case(path: Path, coupling: str, out: Path, env: dict | None = None,
 
 def factorised_newton_matrix(model, h: float = 1e-3, alpha: float = DEFAULT_ALPHA):
     """``solve`` of a catenary model's HHT Newton matrix at its static configuration."""
-    from pantocosim.core.hht import HHTSettings
-
     n = model.n_dofs
     ev = model.evaluate(0.0, model.q_static, np.zeros(n), np.zeros(n), None)
     return model.factorize(model.effective_matrix(
@@ -301,9 +291,6 @@ def floor_per_step(catenary: str, spans: int, repeats: int = 200, rounds: int = 
     """Seconds for one solve with a factorised catenary Newton matrix (HHT, 1 ms): the
     fastest of ``rounds`` rounds (as timeit does; a round at the start of a process can run
     before the processor has raised its clock)."""
-    from pantocosim.catenary.definition import load_catenary, with_spans
-    from pantocosim.catenary.model import CatenaryModel
-
     model = CatenaryModel(with_spans(load_catenary(catenary), spans), x0=(10.0,), speed=80.0)
     solve = factorised_newton_matrix(model)
     r = np.random.default_rng(0).standard_normal(model.n_dofs)
@@ -445,8 +432,5 @@ def format_entry(name: str, coupling: str, entry: dict) -> str:
 
 
 def _machine() -> dict:
-    import os
-    import platform
-
     return {"python": platform.python_version(), "cpus": os.cpu_count(),
             "processor": platform.processor() or platform.machine()}

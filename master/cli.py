@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 from pantocosim import __version__
+from pantocosim.core.disk_cache import check_settings
 from pantocosim.core.errors import Interrupted, PantocosimError
+from pantocosim.master.interrupt import remember_interrupts
 
 #: exit status of an interrupted command (128 + SIGINT, as shells report it)
 EXIT_INTERRUPTED = 130
@@ -61,15 +64,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     prefix = f"pantocosim {args.command}"
     if getattr(args, "no_cache", False):
-        import os
-
         os.environ["PANTOCOSIM_NO_CACHE"] = "1"   # inherited by workers and FMUs
-    from pantocosim.master.interrupt import remember_interrupts
 
     try:
         with remember_interrupts():
-            from pantocosim.core.disk_cache import check_settings
-
             check_settings()                      # a bad cache setting before any work
             return int(args._run(args) or 0)
     except Interrupted as exc:
@@ -106,7 +104,6 @@ def console_main() -> None:
         code = main()
     except BrokenPipeError:
         # the reader of our output went away (``pantocosim static x | head``): stop quietly
-        import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         code = 141   # 128 + SIGPIPE, as shells report it
@@ -114,8 +111,6 @@ def console_main() -> None:
         print("pantocosim: interrupted (Ctrl-C)", file=sys.stderr)
         code = EXIT_INTERRUPTED
     if "fmpy.fmi2" in sys.modules or "fmpy.fmi3" in sys.modules:
-        import os
-
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

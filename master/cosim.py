@@ -16,16 +16,25 @@ import numpy as np
 from pantocosim.catenary.models import model_code
 from pantocosim.core.errors import Interrupted, PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.stepping import make_stepper
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import REQUIRED_PORTS
+from pantocosim.interaction.stepping import make_stepper
+from pantocosim.master import stability
 from pantocosim.master.coupling import Coupler, CouplingSettings, scheme_named
+from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus, fmi_out
+from pantocosim.master.fmu_check import check_fmus
+from pantocosim.master.fmu_runtime import FmuInstance
+from pantocosim.master.folder_lock import FolderLock
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
+from pantocosim.master.pacing import StepClock
 from pantocosim.master.recorder import Recorder
 from pantocosim.master.run_results import COSIM_COUNTERS, RunResult, column_names
 from pantocosim.master.run_setup import Prepared
 from pantocosim.master.run_stepping import progress_bar
+from pantocosim.master.scenario import require_port_contact, scenario_catenary
+from pantocosim.master.stability import Monitor
+from pantocosim.pantograph.presets import PRESETS
 
 #: pantograph options a pantocosim pantograph FMU takes as parameters: the master sets them
 #: from the scenario's model, so the FMU runs the same pantograph
@@ -35,7 +44,7 @@ PANTOGRAPH_OPTIONS = ("static_force", "aero_c1", "aero_c2", "friction_force",
 
 # ---------------------------------------------------------------------- subsystems
 class ModelSubsystem:
-    """A model with the stepper it declares (:func:`~pantocosim.core.stepping.make_stepper`,
+    """A model with the stepper it declares (:func:`~pantocosim.interaction.stepping.make_stepper`,
     as its FMU takes it) behind the FMU port semantics (in-process)."""
 
     def __init__(self, model, q0, settings: HHTSettings, inputs0, outputs):
@@ -169,8 +178,6 @@ def in_process_subsystems(prep: Prepared):
 
 def line_supports(scenario) -> int:
     """Number of supports of the scenario's line (its catenary, its ``spans``)."""
-    from pantocosim.master.scenario import scenario_catenary
-
     return (scenario.spans or scenario_catenary(scenario).n_spans) + 1
 
 
@@ -181,10 +188,6 @@ def fmu_paths(prep, build: bool = True):
     default ``dist/fmus/<model>.fmu`` of the working folder (a model given by a parameter
     file: ``dist/fmus/<PARAMETER_FILE_FMU>.fmu``, which gets the file; ``dist/fmus/fmi3/`` with
     ``[simulation] fmi = 3``); the default ones are built if missing or stale."""
-    from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus, fmi_out
-    from pantocosim.master.fmu_check import check_fmus
-    from pantocosim.pantograph.presets import PRESETS
-
     sc = prep.scenario if isinstance(prep, Prepared) else prep
     n_supports = len(prep.support_x) if isinstance(prep, Prepared) else line_supports(sc)
     base = Path(sc.source).resolve().parent
@@ -200,8 +203,6 @@ def fmu_paths(prep, build: bool = True):
         pans.append(p)
     cat = dist / "catenary.fmu"
     if build:
-        from pantocosim.master.folder_lock import FolderLock
-
         with FolderLock(default_out(), "dist/fmus", wait=True, required=False):   # one build at a time in that folder
             ensure_fmus(pans + [cat], dist, fmi=sc.fmi)
     return check_fmus(sc, n_supports, cat, pans)
@@ -210,8 +211,6 @@ def fmu_paths(prep, build: bool = True):
 def fmu_subsystems(prep: Prepared, instances: list, plan=None):
     """Instantiate and initialise the FMUs of the scenario (``plan``: checked FMU files,
     default :func:`fmu_paths`) in the static start."""
-    from pantocosim.master.fmu_runtime import FmuInstance
-
     sc = prep.scenario
     plan = plan or fmu_paths(prep)
     n_p = len(prep.pantographs)
@@ -279,11 +278,6 @@ def run_cosim(prep: Prepared, out_dir: Path | None, scheme: str = "jacobi",
     [N] of the implicit coupling defaults to :func:`coupling_tolerance`; with ``realtime``
     each communication step is paced to the wall clock (:mod:`pantocosim.master.pacing`);
     ``plan``: the checked FMU files (default :func:`fmu_paths`)."""
-    from pantocosim.master import stability
-    from pantocosim.master.pacing import StepClock
-
-    from pantocosim.master.scenario import require_port_contact
-
     sc = prep.scenario
     require_port_contact(sc, f"the {scheme} coupling")
     warnings = stability.check(prep, scheme)
@@ -307,8 +301,6 @@ def _run_cosim(prep, rec, scheme, settings, clock, plan, instances, progress, st
     """The set-up and time loop of :func:`run_cosim` (a Ctrl-C sets ``stop``: the loop ends
     after the step in flight; a diverging run stops with
     :class:`~pantocosim.master.stability.Diverged`)."""
-    from pantocosim.master.stability import Monitor
-
     sc = prep.scenario
     monitor = Monitor(prep)
     error = None

@@ -29,7 +29,11 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import pantocosim
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.stamp import UNBUNDLED, package_stamp
+from pantocosim.fmi.front import FRONTS
+from pantocosim.fmi.slave_base import STAMP_FILE, bundled_stamp
 from pantocosim.master.fmu_export import compile_export_library, install_export_library
 
 #: pantograph FMU name (the preset) -> slave class name
@@ -85,17 +89,12 @@ def default_out() -> Path:
 
 
 def model_package_dir() -> Path:
-    import pantocosim
-
     return Path(pantocosim.__file__).resolve().parent
 
 
 def stage_package(dest: Path) -> tuple[Path, Path]:
     """Copy the installed model package (without the subpackages FMUs do not use,
     :data:`~pantocosim.core.stamp.UNBUNDLED`) and write the build stamp."""
-    from pantocosim.core.stamp import UNBUNDLED, package_stamp
-    from pantocosim.fmi.slave_base import STAMP_FILE
-
     src = model_package_dir()
     pkg = dest / "pantocosim"
 
@@ -116,8 +115,6 @@ def slave_source(module: str, base_module: str, base_class: str, class_name: str
                  attributes: dict, fmi: int = 2) -> str:
     """The generated slave module: the core ``base_class`` with the front of FMI ``fmi``,
     setting class attributes (preset, start values)."""
-    from pantocosim.fmi.front import FRONTS
-
     body = "".join(f"    {k} = {v!r}\n" for k, v in attributes.items())
     front_module, front_class = FRONTS[fmi].split(":")
     imports = [f"from pantocosim.fmi.{base_module} import {base_class}",
@@ -220,9 +217,6 @@ def check_fmi(fmi) -> tuple:
 def is_stale(fmu: Path) -> bool:
     """True when the FMU bundles another version of the model package than the one installed
     (its build stamp differs): such an FMU refuses to initialise, so it is rebuilt."""
-    from pantocosim.core.stamp import package_stamp
-    from pantocosim.fmi.slave_base import bundled_stamp
-
     return bundled_stamp(fmu) != package_stamp()
 
 
@@ -235,49 +229,3 @@ def ensure_fmus(paths, out: Path | None = None, fmi: int = 2) -> None:
     if todo:
         print(f"building FMUs {', '.join(todo)} into {out}", file=sys.stderr, flush=True)
         build_fmus(out, only=todo, quiet=True, fmi=fmi)
-
-
-def build_all(out: Path | None = None, only=None, ssp: bool = True,
-              quiet: bool = False, fmi=FMI_VERSIONS) -> list[Path]:
-    """``pantocosim build-fmus``: for each FMI version of ``fmi`` (default both) the generic
-    FMUs, then (unless ``ssp`` is false or ``only`` names a subset) the default scenario's
-    FMUs, SSP file (and, FMI 2.0, CoFmuPy configuration), into :func:`fmi_out`."""
-    out = Path(out) if out is not None else default_out()
-    paths = []
-    for version in check_fmi(fmi):
-        folder = fmi_out(out, version)
-        paths += build_fmus(folder, only, quiet, fmi=version)
-        if ssp and not only:
-            from pantocosim.master.ssp import write_scenario_package
-
-            paths += write_scenario_package(folder, quiet=quiet, fmi=version)
-    return paths
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``build_fmus.py`` / ``python -m pantocosim.master.fmu_build``."""
-    import argparse
-
-    from pantocosim.core.errors import PantocosimError
-
-    parser = argparse.ArgumentParser(description="Build the pantocosim FMUs and the SSP file "
-                                     "of the default scenario.")
-    parser.add_argument("--out", type=Path, default=None, help="output folder (default "
-                        "dist/fmus of the working folder)")
-    parser.add_argument("--only", nargs="*", help="build only these FMUs (no SSP)")
-    parser.add_argument("--no-ssp", action="store_true", help="do not write the scenario FMUs "
-                        "and SSP file")
-    parser.add_argument("--fmi", type=int, nargs="*", default=list(FMI_VERSIONS),
-                        help="FMI versions to build (2, 3; default both: FMI 2.0 into --out, FMI "
-                        "3.0 into its fmi3/)")
-    args = parser.parse_args(argv)
-    try:
-        build_all(args.out, args.only, ssp=not args.no_ssp, fmi=args.fmi)
-    except PantocosimError as exc:
-        print(f"build-fmus: error: {exc}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

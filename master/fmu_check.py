@@ -16,11 +16,14 @@ Errors name the scenario file, the field (``pantographs[k].fmu``, ``pantographs`
 from __future__ import annotations
 
 import re
+import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
+from pantocosim.pantograph.presets import PRESETS
 
 
 @dataclass
@@ -76,8 +79,6 @@ def read_fmu(path: Path, field: str, source: str | None):
 
 def pantograph_preset(md) -> str | None:
     """The preset of a pantocosim pantograph FMU (None: another FMU)."""
-    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
-
     return {cls: name for name, cls in PANTOGRAPH_FMUS.items()}.get(md.modelName)
 
 
@@ -91,9 +92,6 @@ def numbered(md, stem: str, causality: str) -> int:
 def check_fmus(sc, n_sup: int, cat_path: Path, pan_paths: list[Path]) -> FmuPlan:
     """Check the FMU files of scenario ``sc`` against its pantographs and its line of
     ``n_sup`` supports (see the module)."""
-    from pantocosim.master.fmu_build import CATENARY_CLASS
-    from pantocosim.pantograph.presets import PRESETS
-
     src = sc.source
     files = []
     for k, (spec, path) in enumerate(zip(sc.pantographs, pan_paths)):
@@ -152,8 +150,6 @@ def check_binary_fmu(path: Path, field: str, source: str | None = None) -> None:
     platform named after its ``modelIdentifier``, that binary exports the FMI functions of
     that version, and (a PythonFMU export) its slave module defines that class. Raises
     ParameterError naming ``field``, the file and what is accepted."""
-    import xml.etree.ElementTree as ET
-
     with zipfile.ZipFile(path) as z:
         names = set(z.namelist())
         root = ET.fromstring(z.read("modelDescription.xml"))

@@ -16,6 +16,9 @@ import hashlib
 import os
 import shutil
 import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+import zlib
 from ctypes import byref
 from pathlib import Path
 
@@ -26,7 +29,7 @@ import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
-from pantocosim.core.user_cache import cache_warning, describe
+from pantocosim.core.user_cache import cache_root, cache_warning, describe
 
 STATUS_NAMES = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
@@ -42,7 +45,6 @@ def cache_dir() -> Path:
     base = os.environ.get("PANTOCOSIM_FMU_CACHE")
     if base:
         return Path(base)
-    from pantocosim.core.user_cache import cache_root
 
     return cache_root() / "fmus"
 
@@ -87,9 +89,6 @@ def extract_cached(fmu_path: str | Path) -> Path:
 def _damage(fmu_path: Path, folder: Path) -> str | None:
     """What differs between the extracted ``folder`` and the archive ``fmu_path`` (each
     archived file's presence, size and CRC-32), or None."""
-    import zipfile
-    import zlib
-
     with zipfile.ZipFile(fmu_path) as archive:
         for info in archive.infolist():
             if info.is_dir():
@@ -251,9 +250,6 @@ APIS = {"2.0": Fmi2Api, "3.0": Fmi3Api}
 
 def fmi_version(fmu_path: str | Path) -> int:
     """The FMI major version of an FMU file (its model description's ``fmiVersion``)."""
-    import xml.etree.ElementTree as ET
-    import zipfile
-
     with zipfile.ZipFile(fmu_path) as z:
         return int(float(ET.fromstring(z.read("modelDescription.xml")).get("fmiVersion")))
 

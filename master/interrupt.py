@@ -16,6 +16,8 @@ remembered, so that the next :func:`stop_on_interrupt` starts with its stop requ
 from __future__ import annotations
 
 import signal
+import subprocess
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -118,8 +120,6 @@ def children_deaf_to_ctrl_c():
             or not hasattr(signal, "pause")):
         yield
         return
-    import subprocess
-    import sys
 
     watcher = subprocess.Popen(
         [sys.executable, "-c", "import signal; signal.signal(signal.SIGINT, signal.SIG_DFL); "

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.hht import HHTIntegrator
 
 
 def _i32(x) -> np.ndarray:
@@ -101,8 +102,6 @@ def lumped_pantograph(model, settings, h: float, height: float, force: float,
     under the contact force ``force`` (the Python pantograph FMU's start_mode 0): M, C, K, B,
     the loads w, and the Python integrator's own start (q0, a0, f_rest0) and inverse step
     matrix S^-1 of its closed-form step (hht.py), so that C repeats its arithmetic."""
-    from pantocosim.core.hht import HHTIntegrator
-
     q0 = model.static_equilibrium(force, height)
     form = model.linear_form()
     if form is None:

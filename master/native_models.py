@@ -8,8 +8,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.hht import HHTSettings
+from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
+from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
+from pantocosim.master import native_export
+from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
 from pantocosim.master.native_fmu import NativeModel, Variable, build_fmu, value_references
-
+from pantocosim.master.run_setup import scenario_pantograph
 
 CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "catenary.h"))
 MAX_SUPPORTS = 64
@@ -35,8 +40,7 @@ def declared(table, name: str, vr: int, start=None, fixed: bool = False,
 def catenary_variables(sections: dict) -> list[Variable]:
     """The native catenary's variables: the Python catenary FMU's (fmus/fmi/catenary_ports.py),
     the export's values as fixed parameters."""
-    from pantocosim.fmi.catenary_ports import VARIABLES as table
-
+    table = CATENARY_VARIABLES
     vr = value_references(CATENARY.headers[0])
     sizes, sc = sections["sizes"], sections["scalars"]
     n_p = int(sizes[5])
@@ -76,9 +80,6 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
                     win64: bool | None = None) -> Path:
     """The native catenary FMU of a prepared scenario (:class:`~pantocosim.master.run.Prepared`
     whose catenary is the linear model)."""
-    from pantocosim.core.hht import HHTSettings
-    from pantocosim.master import native_export
-
     sc = prep.scenario
     if model_name not in ("linear", "modal"):
         raise ParameterError("--catenary-model", model_name, "native FMUs are written for the "
@@ -89,7 +90,6 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
               else native_export.modal_catenary)
     sections = export(prep.catenary, settings, sc.dt, prep.static_forces, prep.contact,
                       sc.catenary, int(sc.spans or 0), settings.rtol, cutoff=sc.modal_cutoff_hz)
-    from pantocosim.master.fmu_build import CATENARY_CLASS
 
     return build_fmu(out, CATENARY, "pantocosim_catenary_native", CATENARY_CLASS,
                      f"pantocosim {model_name} catenary '{sc.catenary}' at {sc.speed_kmh:g} km/h "
@@ -104,8 +104,7 @@ LUMPED = NativeModel(("lumped.c",), ("lumped_vars.h",))
 def pantograph_variables(sections: dict) -> list[Variable]:
     """The native pantograph's variables: the Python pantograph FMU's
     (fmus/fmi/pantograph_ports.py), the export's values as fixed parameters."""
-    from pantocosim.fmi.pantograph_ports import VARIABLES as table
-
+    table = PANTOGRAPH_VARIABLES
     vr = value_references(LUMPED.headers[0])
     sc = sections["scalars"]
     out = [declared(table, "contact_force", vr["CONTACT_FORCE"], sc[11])]
@@ -129,10 +128,6 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
                       win64: bool | None = None) -> Path:
     """The native FMU of the scenario's pantograph ``k`` (a constant-matrix model in the
     static start of the scenario, as the Python FMU starts in our master)."""
-    from pantocosim.core.hht import HHTSettings
-    from pantocosim.master import native_export
-    from pantocosim.master.run_setup import scenario_pantograph
-
     sc = prep.scenario
     spec = sc.pantographs[k]
     if spec.start != "static":
@@ -146,7 +141,6 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
     sections = native_export.lumped_pantograph(
         model, HHTSettings(alpha=sc.alpha), sc.dt, height, float(prep.static_forces[k]),
         spec.model)
-    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
 
     return build_fmu(out, LUMPED, "pantocosim_pantograph_native",
                      PANTOGRAPH_FMUS.get(spec.model, "Pantograph"),

@@ -18,6 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.cosim import run_cosim
+from pantocosim.master.fmu_build import default_out, ensure_fmus
+from pantocosim.master.fmu_runtime import FmuInstance
+from pantocosim.master.run import prepare
 
 REGRESSION_DIR = Path(__file__).resolve().parent / "regression"
 #: relative tolerances: statistics, and time series (max abs difference / signal scale)
@@ -35,8 +39,6 @@ class CaseResult:
 
 def _pantograph_case(preset: str, fmu: Path) -> CaseResult:
     """A pantograph FMU under F(t) = F0 + 30 sin(4 pi t) for 2 s (fmpy, 1 ms steps)."""
-    from pantocosim.master.fmu_runtime import FmuInstance
-
     inst = FmuInstance(fmu, f"regress_{preset}")
     try:
         F0 = 120.0
@@ -61,9 +63,6 @@ def _pantograph_case(preset: str, fmu: Path) -> CaseResult:
 
 def _coupled_case(scheme: str) -> CaseResult:
     """The short EN 50318-type scenario co-simulated through the FMUs."""
-    from pantocosim.master.cosim import run_cosim
-    from pantocosim.master.run import prepare
-
     prep = prepare(REGRESSION_DIR / "short-en50318.toml")
     res = run_cosim(prep, None, scheme=scheme, progress=False)
     if res.error is not None:
@@ -78,8 +77,6 @@ def _coupled_case(scheme: str) -> CaseResult:
 
 
 def cases() -> dict:
-    from pantocosim.master.fmu_build import default_out
-
     dist = default_out()
     out = {}
     for preset in ("dsa380-rigid", "dsa380-lumped3", "en50318-2mass"):
@@ -117,7 +114,6 @@ def run_regression(update: bool = False, reason: str | None = None,
     for name in only or []:
         if name not in known:
             raise ParameterError("--only", name, f"unknown case; one of {', '.join(known)}")
-    from pantocosim.master.fmu_build import default_out, ensure_fmus
 
     dist = default_out()
     names = ["dsa380-rigid", "dsa380-lumped3", "en50318-2mass", "catenary"]

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import Interrupted
+from pantocosim.master import plots as P
 from pantocosim.master.output_folder import writing
 from pantocosim.master.results import write_json
 from pantocosim.master.run_setup import Prepared
@@ -134,8 +135,6 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
         summary["files"] = {"timeseries": str(shown / "timeseries.csv"),
                             "summary": str(shown / "summary.json")}
         if plots and stats:
-            from pantocosim.master import plots as P   # matplotlib: only when plots are drawn
-
             n_p = len(prep.pantographs)
             labels = [f"pantograph {k}" for k in range(1, n_p + 1)]
             forces = [c[f"contact_force_{k}"] for k in range(1, n_p + 1)]

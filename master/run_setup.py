@@ -13,14 +13,16 @@ import numpy as np
 from pantocosim.catenary.definition import with_spans
 from pantocosim.catenary.models import law_model, make_catenary
 from pantocosim.catenary.operating_height import mean_dynamic_wire_height
-from pantocosim.core.coupled import CoupledSystem
 from pantocosim.core.errors import ConvergenceError, ParameterError
-from pantocosim.core.contact_laws import CONTACT_LAWS, ContactLaw, make_contact
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
-from pantocosim.master.run_checks import (analysis_window, check_passages, check_size,
-                                          check_speed, lowered_above_wire)
+from pantocosim.interaction.contact_laws import CONTACT_LAWS, ContactLaw, make_contact
+from pantocosim.interaction.coupled import CoupledSystem
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.master.run_checks import (analysis_window, check_passages, check_size, check_speed,
+                                          lowered_above_wire)
 from pantocosim.master.scenario import Scenario, load_scenario, scenario_catenary
 from pantocosim.master.size_guard import check_steps
+from pantocosim.pantograph.base import Ramp
+from pantocosim.pantograph.presets import load_pantograph
 
 
 @dataclass(frozen=True)
@@ -56,7 +58,7 @@ class Prepared:
     definition: object
     catenary: object            # a model of pantocosim.catenary.models (CatenaryModel...)
     pantographs: list           # PantographModel per pantograph
-    contact: ContactLaw         # the scenario's contact law (pantocosim.core.contact_laws)
+    contact: ContactLaw         # the scenario's contact law (pantocosim.interaction.contact_laws)
     window_m: tuple[float, float]
     duration: float
     n_steps: int
@@ -77,9 +79,6 @@ class Prepared:
 def scenario_pantograph(sc: Scenario, k: int):
     """The model of the scenario's pantograph ``k`` (its options, speed and ramp); errors
     name the scenario's field."""
-    from pantocosim.pantograph.base import Ramp
-    from pantocosim.pantograph.presets import load_pantograph
-
     p = sc.pantographs[k]
     overrides = dict(p.options)
     overrides["speed_kmh"] = sc.speed_kmh

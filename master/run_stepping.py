@@ -1,6 +1,6 @@
 """The monolithic reference run (``pantocosim run --coupling monolithic``): catenary,
 pantographs and penalty contacts advanced together by the stepper the catenary model declares
-(:func:`~pantocosim.core.stepping.make_stepper`: Newton-Raphson on the assembled system, or
+(:func:`~pantocosim.interaction.stepping.make_stepper`: Newton-Raphson on the assembled system, or
 the closed-form structure step condensed on the contact points), one row of the time series
 per step.
 """
@@ -12,11 +12,12 @@ import time as _time
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
 from pantocosim.core.stepper import CoupledStepper, warm_up
-from pantocosim.core.stepping import make_stepper
+from pantocosim.interaction.stepping import make_stepper
 from pantocosim.master import stability
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.pacing import StepClock
@@ -26,8 +27,6 @@ from pantocosim.master.run_setup import Prepared
 
 
 def progress_bar(total: int, label: str, enabled: bool | None = None):
-    from tqdm import tqdm
-
     if enabled is None:
         enabled = sys.stderr.isatty()
     return tqdm(total=total, desc=label, unit="step", disable=not enabled, mininterval=0.5,

@@ -54,11 +54,12 @@ from pathlib import Path
 
 from pantocosim.catenary.models import DEFAULT_MODAL_CUTOFF_HZ, MODEL_NAMES
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.contact_laws import CONTACT_LAWS, DEFAULT_LAW
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.interaction.contact_laws import CONTACT_LAWS, DEFAULT_LAW
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 from pantocosim.core.hht import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.core.params import Table, load_toml
 from pantocosim.core.schema import OPTIONAL, Field, Format, Section
+from pantocosim.catenary.definition import load_catenary
 
 SCENARIO_DIR = Path(__file__).resolve().parent / "scenarios"
 DEFAULT_SCENARIO = "dsa380-ave-300"
@@ -179,7 +180,7 @@ class Scenario:
     duration_s: float | None = None
     contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS
     contact_damping: float = 0.0
-    #: contact law (pantocosim.core.contact_laws.CONTACT_LAWS)
+    #: contact law (pantocosim.interaction.contact_laws.CONTACT_LAWS)
     contact_law: str = DEFAULT_LAW
     spans: int | None = None
     description: str = ""
@@ -351,8 +352,6 @@ def require_port_contact(sc: Scenario, what: str) -> None:
 def scenario_catenary(sc: Scenario):
     """The catenary definition of ``sc`` (without its ``spans``); an unknown name is an error
     of the scenario's field ``catenary``."""
-    from pantocosim.catenary.definition import load_catenary
-
     try:
         return load_catenary(sc.catenary)
     except ParameterError as exc:

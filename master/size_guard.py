@@ -1,12 +1,14 @@
 """Size guard of the command line: before a model is built or a run starts, estimate its
 DOFs, memory and time, and refuse beyond a limit with the estimate and the option that lifts
 the limit (``--max-dofs``, ``--max-steps``). The catenary's estimate and DOF limit are
-:mod:`pantocosim.core.size_guard`'s (the FMUs apply them too); the step limit is here.
+:mod:`pantocosim.catenary.size_guard`'s (the FMUs apply them too); the step limit is here.
 """
 
 from __future__ import annotations
 
-from pantocosim.core.size_guard import (MAX_DOFS, check_catenary_size,  # noqa: F401
+import dataclasses
+
+from pantocosim.catenary.size_guard import (MAX_DOFS, check_catenary_size,  # noqa: F401
                                             culprit, describe)
 from pantocosim.core.errors import ParameterError
 
@@ -37,8 +39,8 @@ def check_cli_catenary(catenary: str, element_size: float | None,
                        max_dofs: int | None) -> int:
     """Size guard of a command that builds ``catenary`` (``static``, ``modes``), with its
     ``--element-size`` and ``--max-dofs``."""
-    import dataclasses
-
+    # deferred: `pantocosim --help` imports this module for its limits; the definition
+    # loader costs it 0.09 s (measured)
     from pantocosim.catenary.definition import load_catenary
 
     check_limit_option("--max-dofs", max_dofs)

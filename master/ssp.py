@@ -7,7 +7,7 @@ contact). Nothing in it belongs to one pantograph model: the two FMUs settle the
 between themselves (docs/third-party.md, "The static start handshake"): the catenary offers
 its start laws as outputs in initialisation mode (operating height and static contact height
 against the force, :mod:`pantocosim.catenary.operating_height`), the pantograph (start_mode 2)
-sets its actuation and start on them (:mod:`pantocosim.pantograph.static_start`), and the
+sets its actuation and start on them (:mod:`pantocosim.interaction.pantograph_start`), and the
 catenary settles its static state against the pantograph's height at t0. So replacing the
 pantograph FMU in the SSP by any other pantograph FMU is a file swap.
 
@@ -25,19 +25,31 @@ from __future__ import annotations
 
 import json
 import math
+import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from pantocosim.catenary.definition import load_catenary, with_spans
+from pantocosim.catenary.model import CatenaryModel
 from pantocosim.catenary.models import model_code
+from pantocosim.catenary.operating_height import contact_height_laws
 from pantocosim.core.errors import OutputError, ParameterError
-from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT, PortNames
+from pantocosim.fmi.catenary_ports import MAX_SUPPORTS, SPEED_OUTPUT
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
+from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import LAW_INPUTS, REQUIRED_PORTS, SPEED_INPUT
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
+from pantocosim.fmi.slave_base import bundled_stamp
+from pantocosim.interaction.pantograph_start import static_start_on_laws
+from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
 from pantocosim.master.fmu_check import check_binary_fmu
+from pantocosim.master.fmu_runtime import fmi_version
+from pantocosim.master.run_checks import analysis_window
+from pantocosim.master.scenario import load_scenario, require_port_contact
+from pantocosim.pantograph.presets import load_pantograph
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -83,16 +95,6 @@ def scenario_start_values(scenario) -> dict:
     exchanges nothing in initialisation mode gives it). The catenary's pantograph_height_1
     start value is the scenario pantograph's start height (a master that passes no height at
     t0, fmpy's SSP support, starts from it)."""
-    from pantocosim.catenary.definition import load_catenary, with_spans
-    from pantocosim.catenary.model import CatenaryModel
-    from pantocosim.catenary.operating_height import contact_height_laws
-    from pantocosim.master.run_checks import analysis_window
-    from pantocosim.master.scenario import load_scenario
-    from pantocosim.pantograph.presets import load_pantograph
-    from pantocosim.pantograph.static_start import static_start_on_laws
-
-    from pantocosim.master.scenario import require_port_contact
-
     sc = load_scenario(scenario)
     require_port_contact(sc, "an SSP export")
     if len(sc.pantographs) != 1 or sc.pantographs[0].start != "static":
@@ -132,8 +134,6 @@ def scenario_start_values(scenario) -> dict:
 
 def fmu_start_values(values: dict, model: str) -> dict:
     """The start values baked into the scenario's FMU ``model``."""
-    from pantocosim.master.fmu_build import CATENARY_FMU
-
     if model == CATENARY_FMU:
         return dict(values["catenary"])
     out = dict(values["pantograph"], **values["laws"])
@@ -290,8 +290,6 @@ def write_ssp(dest: Path, name: str, pantograph_fmu: Path, catenary_fmu: Path,
     validated against the SSP 1.0 schema. A pantocosim pantograph FMU gets the scenario's
     pantograph parameters and every port; another one its required ports and the optional
     inputs it has, and no parameter."""
-    from pantocosim.fmi.slave_base import bundled_stamp
-
     stamps = {Path(f).name: bundled_stamp(f) for f in (pantograph_fmu, catenary_fmu)}
     ours = stamps[Path(pantograph_fmu).name] is not None
     if stamps[Path(catenary_fmu).name] is None or (ours and len(set(stamps.values())) != 1):
@@ -365,8 +363,6 @@ def write_scenario_package(out: Path, scenarios=DEFAULT_SCENARIOS,
     """For each scenario (preset name or file): its FMI ``fmi`` FMUs in ``out/<name>/``,
     ``out/<name>.ssp`` and (FMI 2.0: CoFmuPy takes FMI 2.0 only) ``out/<name>/cofmupy.json``
     (``name``: the scenario's)."""
-    from pantocosim.master.fmu_build import CATENARY_FMU, FMU_NAMES, build_fmus
-
     written = []
     for scenario in scenarios:
         values = scenario_start_values(scenario)
@@ -401,11 +397,6 @@ def write_pantograph_ssp(fmu: Path, scenario, dest: Path | None = None) -> tuple
     (path, the scenario's start values). ``dest`` defaults to ``<fmu stem>-<scenario>.ssp``
     beside the FMU. The FMU's required ports are checked before anything is built; the
     catenary FMU is built in the FMU's FMI version (2.0 or 3.0)."""
-    import tempfile
-
-    from pantocosim.master.fmu_build import CATENARY_FMU, build_fmus
-    from pantocosim.master.fmu_runtime import fmi_version
-
     fmu = Path(fmu)
     pantograph_connections(fmu)
     values = scenario_start_values(scenario)
@@ -431,8 +422,6 @@ def refuse_overwriting(dest: Path, inputs: dict) -> None:
 
 def scenario_support_x(values: dict) -> np.ndarray:
     """Support positions of the scenario's line."""
-    from pantocosim.catenary.definition import load_catenary, with_spans
-
     d = load_catenary(values["catenary_definition"])
     if int(values.get("spans", 0)):
         d = with_spans(d, int(values["spans"]))

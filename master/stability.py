@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0

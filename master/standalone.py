@@ -11,6 +11,8 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTIntegrator, HHTSettings
 from pantocosim.core.linear_model import LinearModel
 from pantocosim.pantograph.base import PantographModel
+from pantocosim.master.expression import compile_formula
+from pantocosim.master.interrupt import interrupted_at
 
 
 #: largest prescribed contact force [N]: a hundred times any pantograph's contact force
@@ -21,8 +23,6 @@ def force_expression(expr: str, field: str = "--force") -> Callable[[float], flo
     """The force law F(t) [N] of a formula in ``t`` such as ``120 + 30*sin(4*pi*t)``
     (:func:`pantocosim.master.expression.compile_formula`, within +/- :data:`MAX_FORCE_N`),
     checked at t = 0."""
-    from pantocosim.master.expression import compile_formula
-
     force = compile_formula(expr, field, "t", max_abs=MAX_FORCE_N, unit=" N")
     force(0.0)
     return force
@@ -92,7 +92,6 @@ def simulate_pantograph(model: PantographModel, force: Callable[[float], float],
             heights[i] = model.contact_height(integ.q)
             vels[i] = model.contact_velocity(integ.q, integ.v)
         if stop is not None and stop.requested and i < n - 1:   # Ctrl-C: keep steps 0..i
-            from pantocosim.master.interrupt import interrupted_at
 
             k = i + 1
             return StandaloneResult(time[:k], forces[:k], heights[:k], vels[:k], qs[:k],

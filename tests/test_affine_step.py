@@ -9,7 +9,7 @@ import pytest
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.linear import LinearCatenary
 from pantocosim.core.affine_hht import AffineHHT
-from pantocosim.core.penalty_contact import PenaltyContact
+from pantocosim.interaction.penalty_contact import PenaltyContact
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 
 V = 300 / 3.6
@@ -137,8 +137,8 @@ def test_a_saved_state_copies_its_products_only_when_they_would_be_overwritten(l
 
 @pytest.mark.parametrize("pantograph", ["en50318-2mass", "dsa380-rigid"])
 def test_condensed_monolithic_equals_the_assembled_newton_solution(pantograph):
-    from pantocosim.core.condensed import CondensedStepper
-    from pantocosim.core.stepping import AssembledStepper, make_stepper
+    from pantocosim.interaction.condensed import CondensedStepper
+    from pantocosim.interaction.stepping import AssembledStepper, make_stepper
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
     import dataclasses

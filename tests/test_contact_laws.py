@@ -44,7 +44,7 @@ def constraint_250():
 
 
 def test_registry_declares_both_laws():
-    from pantocosim.core.contact_laws import CONTACT_LAWS, make_contact
+    from pantocosim.interaction.contact_laws import CONTACT_LAWS, make_contact
 
     assert set(CONTACT_LAWS) >= {"penalty", "constraint"}
     pen, con = make_contact("penalty", 2e5, 3.0), make_contact("constraint", 5e4, 0.0)
@@ -93,7 +93,7 @@ def test_loss_of_contact_and_recontact():
 
 
 def test_a_failing_constraint_step_is_an_error_not_a_result(tmp_path, monkeypatch, capsys):
-    from pantocosim.core import constraint_contact as cc
+    from pantocosim.interaction import constraint_contact as cc
     from pantocosim.master.cli import main
 
     monkeypatch.setattr(cc.ConstraintContact, "from_fields",
@@ -106,7 +106,7 @@ def test_a_failing_constraint_step_is_an_error_not_a_result(tmp_path, monkeypatc
 
 
 def test_commit_check_names_the_violation():
-    from pantocosim.core.constraint_contact import ConstraintContact, ConstraintInSystem
+    from pantocosim.interaction.constraint_contact import ConstraintContact, ConstraintInSystem
 
     class Sys:
         pantographs = [object()]

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pantocosim.core.coupled import CoupledSystem, RigidWire
-from pantocosim.core.penalty_contact import PenaltyContact
+from pantocosim.interaction.coupled import CoupledSystem, RigidWire
+from pantocosim.interaction.penalty_contact import PenaltyContact
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.master.cli import main

@@ -153,8 +153,8 @@ def test_bad_input_is_discarded_with_a_message_naming_the_parameter(fmus):
 def monolithic_short(steps, x0=30.0, pantograph="en50318-2mass", speed_kmh=300.0):
     """In-process monolithic run of a pantograph on the short catenary (static start at the
     static handshake of the SSP)."""
-    from pantocosim.core.penalty_contact import PenaltyContact
-    from pantocosim.core.coupled import CoupledSystem
+    from pantocosim.interaction.penalty_contact import PenaltyContact
+    from pantocosim.interaction.coupled import CoupledSystem
     from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
     from pantocosim.pantograph.presets import load_pantograph
 

@@ -68,7 +68,7 @@ def test_start_states_converge_to_round_off(tmp_path, k, ramp):
 @pytest.mark.parametrize("ramp", [False, True])
 def test_start_failure_names_the_start_the_residual_and_the_setting(tmp_path, capsys,
                                                                     monkeypatch, ramp):
-    from pantocosim.core.coupled import CoupledSystem
+    from pantocosim.interaction.coupled import CoupledSystem
 
     def fails(self, q0, t=0.0, tol=1e-10, max_iter=60):
         exc = ConvergenceError("static start did not converge", residual=6.574e-08)

@@ -103,7 +103,7 @@ def test_handshake_start_is_the_monolithic_static_start():
     from pantocosim.catenary.operating_height import contact_height_laws
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
-    from pantocosim.pantograph.static_start import static_start_on_laws
+    from pantocosim.interaction.pantograph_start import static_start_on_laws
 
     for model in ("en50318-2mass", "dsa380-rigid"):
         sc = load_scenario(SHORT)

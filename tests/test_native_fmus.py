@@ -121,7 +121,7 @@ def python_catenary(prep, steps):
     """The Python catenary FMU's stepper and outputs under the host's forcing: rows of t,
     wire height and velocity, support uplifts."""
     from pantocosim.core.hht import HHTSettings
-    from pantocosim.core.stepping import make_stepper
+    from pantocosim.interaction.stepping import make_stepper
 
     sc, model = prep.scenario, prep.catenary
     F0 = prep.static_forces

@@ -57,7 +57,7 @@ def prepared(tmp_path_factory):
 
 
 def with_contact(prep, k, c, dt):
-    from pantocosim.core.penalty_contact import PenaltyContact
+    from pantocosim.interaction.penalty_contact import PenaltyContact
 
     sc = dataclasses.replace(prep.scenario, contact_stiffness=k, contact_damping=c, dt=dt)
     return dataclasses.replace(prep, scenario=sc, contact=PenaltyContact(k, c))

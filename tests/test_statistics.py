@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pantocosim.core.errors import ParameterError
-from pantocosim.core.penalty_contact import PenaltyContact
+from pantocosim.interaction.penalty_contact import PenaltyContact
 from pantocosim.master.statistics import (contact_statistics, force_spectrum, lowpass,
                                           window_mask)
 

@@ -15,11 +15,12 @@ from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.models import make_catenary
 from pantocosim.core import stepper as contract
 from pantocosim.core.affine_hht import AffineHHT
-from pantocosim.core.condensed import CondensedStepper
+from pantocosim.interaction.condensed import CondensedStepper
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
-from pantocosim.core.penalty_contact import PenaltyContact
-from pantocosim.core.stepping import AssembledStepper, ForcedStepper, make_stepper
+from pantocosim.interaction.penalty_contact import PenaltyContact
+from pantocosim.core.stepping import ForcedStepper
+from pantocosim.interaction.stepping import AssembledStepper, make_stepper
 from pantocosim.pantograph.presets import load_pantograph
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"

@@ -167,14 +167,14 @@ def test_failing_case_is_recorded(tmp_path):
 
 
 def test_unexpected_exception_is_recorded_with_traceback(tmp_path, monkeypatch):
-    from pantocosim.master import run as run_module
+    from pantocosim.master.campaign import worker
     from pantocosim.master.campaign.execute import task_of
     from pantocosim.master.campaign.worker import run_case
 
     def boom(*a, **k):
         raise ZeroDivisionError("boom")
 
-    monkeypatch.setattr(run_module, "prepare", boom)
+    monkeypatch.setattr(worker, "prepare", boom)
     sw = load_sweep(sweep_file(tmp_path, "[axes]\ncatenary.contact_wire.tension = [21000.0]\n"))
     record = run_case(task_of(sw.cases[0], tmp_path))
     assert record["status"] == "failed" and record["error"] == "ZeroDivisionError: boom"

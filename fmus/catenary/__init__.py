@@ -9,9 +9,9 @@
 - :mod:`.statics`: static equilibrium and the initial-configuration problem (3.1.3)
 - :mod:`.model`: :class:`CatenaryModel`, the model the HHT-alpha integrator drives
 - :mod:`.contact_point`: contact-wire points under the pantographs (3.12)-(3.13)
+
+The package itself imports none of them: import a name from its module
+(``from pantocosim.catenary.model import CatenaryModel``), so that a light module (the size
+guard, the definition) does not load the model.
 """
 
-from .definition import CatenaryDefinition, load_catenary, preset_names
-from .model import CatenaryModel
-
-__all__ = ["CatenaryDefinition", "CatenaryModel", "load_catenary", "preset_names"]

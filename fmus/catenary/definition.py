@@ -27,13 +27,14 @@ naming the file, the dotted field and the value.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..core.errors import ParameterError
-from ..core.params import Table, load_toml
+from ..core.params import Table, check_number, load_toml
 from ..core.schema import OPTIONAL, Field, Format, Section
 from .supports import SUPPORTS, Support, parse_support
 
@@ -107,8 +108,6 @@ DAMPING = Section("damping", [
 
 def _support_sections() -> tuple:
     """One section per support type: its fields and its module's description."""
-    import sys
-
     return tuple(Section(SUPPORT_TYPE.path, cls.FIELDS.fields,
                          title=f'Support `type = "{name}"`',
                          doc=" ".join((sys.modules[cls.__module__].__doc__ or "").split()))
@@ -308,8 +307,6 @@ def parse_definition(data: dict, source: str) -> CatenaryDefinition:
 
 
 def _positions(dr: Table, value, name: str, source: str) -> list[float]:
-    from ..core.params import check_number
-
     if not isinstance(value, list):
         raise ParameterError(name, value, "must be an array of numbers", source)
     out = [check_number(f"{name}[{i}]", x, source=source) for i, x in enumerate(value)]

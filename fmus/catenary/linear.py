@@ -20,6 +20,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..core.affine_hht import AffineForm
 from ..core.banded import BandedCholesky
 from ..core.errors import ConvergenceError
 from ..core.lowrank import ColumnCache, LowRankSolve
@@ -128,8 +129,6 @@ class LinearCatenary(CatenaryModel):
         """The model as an :class:`~pantocosim.core.affine_hht.AffineForm`: its HHT steps
         are then taken in closed form (:mod:`pantocosim.core.affine_hht`), the same solution
         as Newton-Raphson on :meth:`evaluate`."""
-        from ..core.affine_hht import AffineForm
-
         S = self.structure
 
         def forces(t, q, v, F):

@@ -38,6 +38,7 @@ from .modal_basis import modes_below
 from .modal_residual import InterfaceFlexibility
 from .modal_step import ModalSolve
 from .model import CatenaryModel
+from ..core.disk_cache import cached
 
 #: coefficient sets (time steps) whose shared Woodbury pieces are kept
 KEPT_BASES = 4
@@ -47,8 +48,6 @@ def kept_modes_below(lin: LinearCatenary, cutoff_hz: float, bands):
     """:func:`~.modal_basis.modes_below` of the linear model's (K0, M) ``bands``, kept in the
     set-up cache (:mod:`pantocosim.core.disk_cache`) under the bands and the cutoff: the band
     eigensolution is most of the modal model's set-up."""
-    from ..core.disk_cache import cached
-
     def compute():
         f, phi = modes_below(lin.K0, lin.M, cutoff_hz, bands=bands)
         return {"frequencies": f, "Phi": phi}

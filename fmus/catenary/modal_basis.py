@@ -17,8 +17,9 @@ import ctypes
 
 import numpy as np
 import scipy.linalg as sla
-from numba import njit
 import scipy.sparse as sp
+from numba import njit
+from scipy.linalg import cython_lapack
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
 #: eigenvalues closer than this (relative) are iterated together as a cluster
@@ -31,8 +32,6 @@ ITERATIONS = 3
 def _lapack(name: str, nargs: int):
     """A LAPACK routine of scipy's bundled library that scipy.linalg.lapack does not wrap
     (all arguments by reference, Fortran convention)."""
-    from scipy.linalg import cython_lapack
-
     cap = cython_lapack.__pyx_capi__[name]
     get_name = ctypes.pythonapi.PyCapsule_GetName
     get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]

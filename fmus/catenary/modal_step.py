@@ -1,5 +1,5 @@
 """HHT-alpha steps of the modal catenary in closed form (the interface of
-:class:`~pantocosim.core.affine_hht.AffineHHT`, so :mod:`pantocosim.core.condensed` and the
+:class:`~pantocosim.core.affine_hht.AffineHHT`, so :mod:`pantocosim.interaction.condensed` and the
 catenary FMU take them like the linear model's).
 
 With y_{n+1} = y_p + Delta (the Newmark predictors y_p, v_p of (3.16)-(3.17)), the HHT

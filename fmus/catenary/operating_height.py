@@ -17,7 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pantocosim.catenary.linear_droppers import LinearDroppers
+from pantocosim.core.affine_hht import AffineForm
+from pantocosim.core.banded import BandedCholesky
+from pantocosim.core.disk_cache import cached
+from pantocosim.core.errors import ConvergenceError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
+from pantocosim.core.lowrank import ColumnCache
+from pantocosim.core.stepping import structure_stepper
 
 
 class LinearisedCatenary:
@@ -44,10 +51,6 @@ class LinearisedCatenary:
 
     def _factor(self, c_a: float, c_v: float, c_f: float):
         """The kept banded Cholesky factor of c_a M + c_f (c_v C + K0)."""
-        from pantocosim.core.banded import BandedCholesky
-        from pantocosim.core.errors import ConvergenceError
-        from pantocosim.core.lowrank import ColumnCache
-
         key = (c_a, c_v, c_f)
         if key not in self._factors:
             data = c_a * self.M.data + c_f * (c_v * self.C.data + self.K0.data)
@@ -64,9 +67,6 @@ class LinearisedCatenary:
 
     def affine_form(self):
         """The model as an AffineForm: no unilateral elements (every dropper stays in K0)."""
-        from pantocosim.catenary.linear_droppers import LinearDroppers
-        from pantocosim.core.affine_hht import AffineForm
-
         cat, st = self.cat, self.cat.structure
         self._taut = LinearDroppers(st, np.zeros(0, np.int64), cat.x_static, cat.beta_r)
         return AffineForm(n=self.n_dofs, M_band=st.lower_band(st.M_data),
@@ -80,8 +80,6 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
     """Mean contact-wire height under each moving constant force over the window [m]; kept
     in the set-up cache (:mod:`pantocosim.core.disk_cache`) under the linearised model's
     matrices, its static configuration, the moving points and every argument."""
-    from pantocosim.core.disk_cache import cached
-
     model = LinearisedCatenary(catenary)
     forces = np.asarray(forces, dtype=float)
     parts = (type(catenary).__name__, model.M, model.K0, model.C, model.q_static,
@@ -93,11 +91,10 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
-    under the moving forces (its declared stepper, :func:`~pantocosim.core.stepping.make_stepper`)."""
-    from pantocosim.core.stepping import make_stepper
-
+    under the moving forces (its declared stepper,
+    :func:`~pantocosim.core.stepping.structure_stepper`)."""
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
-    integ = make_stepper(model, HHTSettings(alpha=alpha))
+    integ = structure_stepper(model, HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)
     n = len(forces)
     total = np.zeros(n)

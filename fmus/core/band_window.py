@@ -28,6 +28,8 @@ from functools import lru_cache
 from pathlib import Path
 from types import SimpleNamespace
 
+from pantocosim.core.user_cache import cache_root
+
 #: widest band given a kernel of its own (more scalars than registers only costs spills,
 #: but the template grows with the square of the width); wider bands use
 #: :func:`~.banded.band_solve`
@@ -90,7 +92,6 @@ def _folders():
     """Where generated kernels may be kept, first choice first."""
     if os.environ.get(FOLDER_VARIABLE):
         yield Path(os.environ[FOLDER_VARIABLE])
-    from .user_cache import cache_root
 
     yield cache_root() / "kernels"
     user = getattr(os, "getuid", lambda: "user")()

@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .stamp import process_stamp
-from .user_cache import cache_warning, describe
+from .user_cache import cache_root, cache_warning, describe
 
 DEFAULT_LIMIT_MB = 512
 _KEY_FIELD = "__key__"
@@ -42,7 +42,6 @@ def folder() -> Path:
     given = os.environ.get("PANTOCOSIM_CACHE_DIR")
     if given:
         return Path(given)
-    from .user_cache import cache_root
 
     return cache_root() / "setup"
 

@@ -28,6 +28,7 @@ import tempfile
 from pathlib import Path
 
 from numba.core import caching, config
+from numba.core.compiler import CompileResult
 
 from .user_cache import cache_root, cache_warning, describe
 
@@ -145,8 +146,6 @@ def _guarded_load(load):
 
 def _check_is_of(found, py_func) -> None:
     """Raise if a loaded kernel is another function's (a foreign ``.nbc`` under this name)."""
-    from numba.core.compiler import CompileResult
-
     if isinstance(found, CompileResult) and found.fndesc.qualname != py_func.__qualname__:
         raise ValueError(f"the entry holds {found.fndesc.qualname}, not "
                          f"{py_func.__qualname__}")

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -121,8 +122,6 @@ class SecondOrderModel:
 
 
 def _dense_lu(S: np.ndarray):
-    import scipy.linalg as sla
-
     lu_piv = sla.lu_factor(S, check_finite=False)
 
     def solve(rhs):

@@ -11,6 +11,8 @@ import tomllib
 from pathlib import Path
 from typing import Any, Iterable
 
+import numpy as np
+
 from .errors import ParameterError
 
 
@@ -141,8 +143,6 @@ def check_number(name: str, value: Any, *, source: str | None = None, positive: 
     """Return ``value`` as a finite float or raise a :class:`ParameterError` naming it."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         try:
-            import numpy as np
-
             if isinstance(value, np.generic):
                 value = value.item()
             else:

@@ -7,6 +7,8 @@ import functools
 import hashlib
 from pathlib import Path
 
+import pantocosim
+
 #: files that make up the model (a change of any of them changes the stamp)
 STAMPED_SUFFIXES = (".py", ".toml", ".c", ".h")
 #: subpackages that are not part of the FMUs' model: the master (the FMUs are driven by one),
@@ -20,8 +22,6 @@ def package_stamp(package_dir: str | Path | None = None) -> str:
     """SHA-256 over the model package's source and data files (relative path + content),
     without the :data:`UNBUNDLED` subpackages."""
     if package_dir is None:
-        import pantocosim
-
         package_dir = Path(pantocosim.__file__).resolve().parent
     root = Path(package_dir)
     h = hashlib.sha256()

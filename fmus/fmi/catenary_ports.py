@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from pantocosim.catenary.models import MODEL_NAMES
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
-from pantocosim.core.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 
 from .slave_base import MAX_SUBSTEPS
 from .variables import (Choices, Described, Each, Interval, Positive, VariableTable, parameter,

@@ -3,8 +3,8 @@
 Its variables (parameters, the ports of pantographs 1..4 ``_k``, the support uplifts
 ``_j``, the start laws) are declared in :mod:`pantocosim.fmi.catenary_ports`, which the FMU
 reference page of the documentation lists. The start's physics is the model's
-(:mod:`pantocosim.catenary.start`); this adapter reads the parameters and inputs, checks them
-against their declared ranges and drives the integrator.
+(:mod:`pantocosim.interaction.catenary_start`); this adapter reads the parameters and
+inputs, checks them against their declared ranges and drives the integrator.
 
 Timing (both modes): the input values set before ``doStep(t, h)`` are the values at
 ``t + h``; the values at ``t`` are the previous accepted step's, kept in the FMU state. In
@@ -20,16 +20,23 @@ height first delivered after t0 that is off the settled one is refused). With
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
 import numpy as np
 
-from pantocosim.catenary.start import (START_FORCE_TOL_N, settled_start, start_laws,
-                                       static_contact_heights)
-from pantocosim.core.hht import FactorReuse
-from pantocosim.core.stepping import make_stepper
+from pantocosim.core.hht import FactorReuse, HHTSettings
+from pantocosim.interaction.catenary_start import (START_FORCE_TOL_N, settled_start, start_laws,
+                                                   static_contact_heights)
+from pantocosim.interaction.stepping import make_stepper
 
+from ..catenary.definition import load_catenary, with_spans
+from ..catenary.models import make_catenary, model_name
+from ..catenary.size_guard import check_catenary_size, culprit
+from ..core.errors import ParameterError
+from ..interaction.penalty_contact import PenaltyContact
+from ..interaction.prescribed import PrescribedPantograph
 from .catenary_ports import MAX_PANTOGRAPHS, MAX_SUPPORTS, TIMING, VARIABLES, PortNames
 from .front import Status
 from .given import track_sets
@@ -80,9 +87,6 @@ class CatenarySlave(IntegratorSlave):
     # ------------------------------------------------------------------ lifecycle
 
     def _catenary_source(self):
-        from pantocosim.catenary.definition import load_catenary
-        from pantocosim.core.errors import ParameterError
-
         name = str(self.catenary_definition).strip()
         if not name:
             raise ParameterError("catenary_definition", self.catenary_definition,
@@ -97,11 +101,6 @@ class CatenarySlave(IntegratorSlave):
     def _check_line(self, definition, spans: int, esize: float, speed: float) -> None:
         """What the FMU can represent, checked before anything is built: the model's size
         (DOFs), the support outputs, the train speed below the contact wire's wave speed."""
-        import dataclasses
-
-        from pantocosim.core.size_guard import check_catenary_size, culprit
-        from pantocosim.core.errors import ParameterError
-
         finer = 0 < esize < definition.element_size
         if esize > 0:
             definition = dataclasses.replace(definition, element_size=esize)
@@ -125,10 +124,6 @@ class CatenarySlave(IntegratorSlave):
 
     def _build_model(self):
         """The catenary model of the current parameters (checked; cached)."""
-        from pantocosim.catenary.definition import with_spans
-        from pantocosim.catenary.models import make_catenary, model_name
-        from pantocosim.core.errors import ParameterError
-
         n = self.value("n_pantographs")
         speed = self.value("speed_kmh") / 3.6
         esize = self.value("element_size")
@@ -156,9 +151,6 @@ class CatenarySlave(IntegratorSlave):
     def _run_settings(self):
         """The HHT settings of runs (:meth:`HHTSettings.for_runs`, which checks hht_alpha and
         newton_rtol)."""
-        from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTSettings
-
         try:
             return HHTSettings.for_runs(self.finite("hht_alpha", self.hht_alpha),
                                         self.finite("newton_rtol", self.newton_rtol))
@@ -166,9 +158,6 @@ class CatenarySlave(IntegratorSlave):
             raise exc.renamed(FIELD_NAMES) from None
 
     def _contact(self):
-        from pantocosim.core.penalty_contact import PenaltyContact
-        from pantocosim.core.errors import ParameterError
-
         try:
             return PenaltyContact(self.finite("contact_stiffness", self.contact_stiffness),
                                   self.finite("contact_damping", self.contact_damping))
@@ -177,7 +166,7 @@ class CatenarySlave(IntegratorSlave):
 
     def _laws(self, model):
         """The start laws (operating_height.ContactHeightLaws) of the current parameters
-        (:func:`~pantocosim.catenary.start.start_laws`; kept for them)."""
+        (:func:`~pantocosim.interaction.catenary_start.start_laws`; kept for them)."""
         window = (self.value("window_start"), self.value("window_end"))
         dt = self.value("averaging_step")
         alpha = self._run_settings().alpha
@@ -249,7 +238,8 @@ class CatenarySlave(IntegratorSlave):
 
     def _input_heights(self, n, F0):
         """Pantograph heights and velocities at t0: where pressing with a static force F
-        (:func:`~pantocosim.catenary.start.static_contact_heights`), else the inputs."""
+        (:func:`~pantocosim.interaction.catenary_start.static_contact_heights`), else the
+        inputs."""
         model = self._build_model()
         if np.any(F0 > 0):
             pressing = static_contact_heights(model, self._contact().stiffness, F0)
@@ -265,10 +255,8 @@ class CatenarySlave(IntegratorSlave):
 
     def _start_penalty(self, model, contact, F0, heights):
         """Mode 1: the catenary and its pantograph stand-ins at ``heights`` [(z, v)] in the
-        static start (:func:`~pantocosim.catenary.start.settled_start`: settled against the
-        heights where no static force is given)."""
-        from pantocosim.core.prescribed import PrescribedPantograph
-
+        static start (:func:`~pantocosim.interaction.catenary_start.settled_start`: settled
+        against the heights where no static force is given)."""
         q0, self._late_height_tol = settled_start(model, contact, F0, heights[:, 0])
         standins = [PrescribedPantograph(z, v) for z, v in heights]
         names = self._port_names

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA
 from pantocosim.pantograph.base import Ramp
-from pantocosim.pantograph.static_start import START_MODES
+from pantocosim.interaction.pantograph_start import START_MODES
 
 from .catenary_ports import LAW_NAMES, LAW_OUTPUTS, SPEED_OUTPUT
 from .slave_base import MAX_SUBSTEPS

@@ -9,7 +9,7 @@ Ports (identical for all variants; declared with the parameters in
   (``operating_height``, ...; start_mode 2) and ``train_speed_kmh`` (where ``speed_kmh`` was
   not set). A start on the laws that lacks them or the speed is refused at
   fmi2ExitInitializationMode, naming what the master did not give. The start itself is the
-  model's (:func:`pantocosim.pantograph.static_start.start_state`).
+  model's (:func:`pantocosim.interaction.pantograph_start.start_state`).
 
 Timing of the force input: the value set before ``doStep(t, h)`` is the contact force at
 ``t + h``; the force at ``t`` is the one of the previous accepted step, kept in the FMU state
@@ -30,10 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
+from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph, preset_defaults
-from pantocosim.pantograph.static_start import start_state
 
+from ..core.errors import ParameterError
+from ..core.hht import HHTSettings
+from ..interaction.stepping import make_stepper
 from .front import Status
 from .given import track_sets
 from .pantograph_ports import FORCE_TIMING, LAW_INPUTS, SPEED_INPUT, VARIABLES
@@ -63,8 +66,6 @@ class PantographSlave(IntegratorSlave):
 
     # ------------------------------------------------------------------ lifecycle
     def _load_model(self):
-        from pantocosim.core.errors import ParameterError
-
         source = self.preset
         if self.parameter_file:
             p = Path(self.parameter_file)
@@ -102,8 +103,6 @@ class PantographSlave(IntegratorSlave):
         catenary's laws (start_mode 2) needs the laws and the train speed (a master that
         exchanges nothing in initialisation mode gives neither to a pantograph whose start
         values do not carry them); a given train speed must be speed_kmh's."""
-        from pantocosim.core.errors import ParameterError
-
         problems = []
         given = self._speed_input()
         if self.start_mode == 2 and "speed_kmh" not in self._given and given is None:
@@ -138,7 +137,7 @@ class PantographSlave(IntegratorSlave):
 
     def _start(self, model):
         """(q0, F0): the start shape and the contact force at t0 of ``start_mode``
-        (:func:`~pantocosim.pantograph.static_start.start_state`)."""
+        (:func:`~pantocosim.interaction.pantograph_start.start_state`)."""
         if self.start_mode == 2:
             return start_state(model, 2, laws=self._laws())
         return start_state(model, self.start_mode, height=self.value("initial_height"),
@@ -161,10 +160,6 @@ class PantographSlave(IntegratorSlave):
         self.contact_velocity = 0.0
 
     def initialise(self):
-        from pantocosim.core.errors import ParameterError
-        from pantocosim.core.hht import HHTSettings
-        from pantocosim.core.stepping import make_stepper
-
         self.check_build_stamp()
         if self._error:
             return

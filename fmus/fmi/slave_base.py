@@ -34,12 +34,16 @@ import operator
 import pickle
 import traceback
 import uuid
+import zipfile
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+import pantocosim
 from pantocosim.core.stamp import package_stamp
 
+from ..core.errors import PantocosimError, ParameterError
+from ..core.hht import HHTIntegrator
 from .front import Status
 from .variables import VariableTable
 
@@ -90,8 +94,6 @@ def lossless(value, kind: str):
 def bundled_stamp(fmu: str | Path) -> str | None:
     """The package stamp an FMU file was built with (None: not a pantocosim FMU, or
     unreadable)."""
-    import zipfile
-
     try:
         with zipfile.ZipFile(fmu) as z:
             return z.read(f"resources/{STAMP_FILE}").decode().strip()
@@ -482,7 +484,6 @@ class GuardedSlave:
             fn()
             return True
         except Exception as exc:  # noqa: BLE001 - nothing may escape a callback
-            from pantocosim.core.errors import PantocosimError
 
             if isinstance(exc, PantocosimError):
                 self.fail(f"{what}: {exc}")
@@ -500,8 +501,6 @@ class GuardedSlave:
         built = stamp_file.read_text().strip()
         here = package_stamp()
         if built != here:
-            import pantocosim
-
             self.fail(f"this FMU was built with pantocosim {built} but the process imported "
                       f"pantocosim {here} from {Path(pantocosim.__file__).parent}: rebuild the "
                       f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
@@ -514,8 +513,6 @@ class GuardedSlave:
     def finite(name: str, value: float) -> float:
         x = float(value)
         if not math.isfinite(x):
-            from pantocosim.core.errors import ParameterError
-
             raise ParameterError(name, value, "must be finite")
         return x
 
@@ -703,8 +700,6 @@ class IntegratorSlave(GuardedSlave):
 
     @staticmethod
     def _picklable_state(state: dict) -> dict:
-        from pantocosim.core.hht import HHTIntegrator
-
         out = dict(state)
         if out.get("_integ_state") is not None:
             out["_integ_state"] = HHTIntegrator.picklable_state(out["_integ_state"])

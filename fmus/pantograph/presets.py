@@ -52,7 +52,8 @@ def _file_options(path: Path, data: dict) -> PantographOptions:
 
 def _model_kind(data: dict):
     """(loader, reader of the working height) of a parameter file, told by its tables
-    (imported on demand: the flexible model brings numba kernels)."""
+    (imported on demand: a pantograph FMU loads the one model it runs; measured with the
+    catenary factories in :mod:`pantocosim.catenary.models`)."""
     if "chain" in data:
         from .lumped import load_chain, read_chain
 

@@ -2,7 +2,7 @@
  * The linear catenary as a native model (pcs_model.h): the closed-form HHT-alpha step of
  * pantocosim.core.affine_hht with exact dropper slackening (pantocosim.catenary.linear,
  * linear_droppers), the contact points of contact_point.py (3.11)-(3.13) and the penalty law
- * of core/penalty_contact.py (contact_mode 1), on the constants the Python model computed at
+ * of interaction/penalty_contact.py (contact_mode 1), on the constants the Python model computed at
  * export (resources/model.pcsdata, pcs_data.h).
  *
  * A step (3.16): with the Newmark predictors q_p, v_p and q_{n+1} = q_p + Delta,

@@ -605,7 +605,7 @@ static void screen_slack(PcsModel *m)
 }
 
 /* contact_mode 1: the penalty forces F of the pantographs at zp, vp with the wire at t + h
-   affine in F, z_w = z_free + G F, v_w = v_free + H F (core/condensed.py) */
+   affine in F, z_w = z_free + G F, v_w = v_free + H F (interaction/condensed.py) */
 static int contact_forces(PcsModel *m, const double *zp, const double *vp, double *F)
 {
     struct Modal *md = m->modal;

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from pantocosim.core.errors import ParameterError
-from pantocosim.master.coupling import SCHEME_NAMES
+from pantocosim.master.coupling import ACCELERATORS, SCHEME_NAMES
 
 #: couplings a case can run with: the monolithic solve or a co-simulation scheme (its
 #: aliases too, as in ``pantocosim run``) -> the name it runs under
@@ -125,8 +125,6 @@ def make_axis(name: str) -> Axis:
     if name == "coupling":
         return RunOption(name, COUPLINGS)
     if name == "accelerator":
-        from pantocosim.master.coupling import ACCELERATORS
-
         return RunOption(name, ACCELERATORS)
     if name == "pantograph":
         return PantographModel(name)

@@ -19,6 +19,8 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tqdm import tqdm
+
 from pantocosim.core.errors import ParameterError, PantocosimError
 from pantocosim.master.campaign.assessment import load_criteria
 from pantocosim.master.campaign.spec import Sweep
@@ -26,6 +28,10 @@ from pantocosim.master.campaign.table import ResultsTable, columns, rows_of
 from pantocosim.master.campaign.worker import CASE_FILE, run_case
 from pantocosim.master.interrupt import children_deaf_to_ctrl_c
 from pantocosim.master.output_folder import writing
+from pantocosim.master.campaign.axes import COUPLINGS
+from pantocosim.master.fmu_build import default_out, ensure_fmus
+from pantocosim.master.folder_lock import FolderLock
+from pantocosim.master.interrupt import raise_if_swallowed
 
 #: seconds to wait for ``--workers N`` workers to join a given scheduler
 WAIT_FOR_WORKERS_S = 120.0
@@ -147,9 +153,6 @@ def _prebuild_fmus(cases) -> None:
     """Build the FMUs of the co-simulated cases once, here, before workers need them, and
     point each case's pantographs at their FMU by absolute path (the catenary FMU is found
     in ``dist/fmus`` of the worker's working folder: start workers in this folder)."""
-    from pantocosim.master.campaign.axes import COUPLINGS
-    from pantocosim.master.fmu_build import default_out, ensure_fmus
-
     cosim = [c for c in cases if COUPLINGS[c.run["coupling"]] != "monolithic"]
     if not cosim:
         return
@@ -160,7 +163,6 @@ def _prebuild_fmus(cases) -> None:
             if not p.get("fmu"):
                 p["fmu"] = str((dist / f"{Path(p['model']).stem}.fmu").resolve())
                 wanted.add(dist / f"{Path(p['model']).stem}.fmu")
-    from pantocosim.master.folder_lock import FolderLock
 
     with FolderLock(dist, "dist/fmus", wait=True, required=False):   # one build at a time in that folder
         ensure_fmus(sorted(wanted), dist)
@@ -282,9 +284,6 @@ def _collect(futures, submitted, out, progress, table, criteria, outcome) -> lis
     """Records of the cases in the order they finish, each written to the table at once; a
     task that raised (its worker died, the task was cancelled) is recorded as lost."""
     from distributed import as_completed
-    from tqdm import tqdm
-
-    from pantocosim.master.interrupt import raise_if_swallowed
 
     enabled = sys.stderr.isatty() if progress is None else progress
     records = []

@@ -37,12 +37,16 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pantocosim.catenary.definition import load_catenary, parse_definition
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.params import Table, load_toml
 from pantocosim.core.schema import OPTIONAL, Field, Format, Section
 from pantocosim.master.campaign import axes as _axes_module
+from pantocosim.master.campaign.assessment import load_criteria
 from pantocosim.master.campaign.axes import COUPLINGS, CaseInputs, make_axis
 from pantocosim.master.coupling import ACCELERATORS
+from pantocosim.master.scenario import SCENARIO_DIR, parse_scenario, scenario_names
+from pantocosim.pantograph.presets import preset_path
 
 SWEEP_DIR = Path(__file__).resolve().parent.parent / "sweeps"
 COMBINE = ("product", "zip")
@@ -138,7 +142,6 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
     run = _run_options(t.sub("run", required=False))
     combine = ROOT.read(t, "combine")
     criteria = ROOT.read(t, "criteria")
-    from pantocosim.master.campaign.assessment import load_criteria
 
     try:
         load_criteria(criteria, base=path.parent)
@@ -174,8 +177,6 @@ def load_sweep(name_or_path: str | Path) -> Sweep:
 
 # ---------------------------------------------------------------------------- parts
 def _base_scenario(name: str, sweep_file: Path, source: str) -> Path:
-    from pantocosim.master.scenario import SCENARIO_DIR, scenario_names
-
     for cand in (sweep_file.parent / name, Path(name), SCENARIO_DIR / f"{name}.toml"):
         if cand.is_file():
             return cand.resolve()
@@ -236,8 +237,6 @@ def _base_inputs(path: Path, run: dict) -> CaseInputs:
     """The base scenario's table with every file path made absolute: catenary and pantograph
     files as ``pantocosim run`` reads them (relative to the scenario file), FMUs as the
     co-simulation finds them (master/cosim.py ``fmu_paths``)."""
-    from pantocosim.master.scenario import parse_scenario
-
     data = load_toml(path)
     sc = parse_scenario(copy.deepcopy(data), str(path), path.stem, base=path.parent)
     data.setdefault("name", path.stem)
@@ -268,8 +267,6 @@ def _apply(inputs: CaseInputs, name: str, value, field_name: str, source: str) -
 
 
 def _load_catenary(inputs: CaseInputs, field_name: str, source: str) -> None:
-    from pantocosim.catenary.definition import load_catenary
-
     name = inputs.scenario.get("catenary")
     try:
         d = load_catenary(str(name))
@@ -283,10 +280,6 @@ def _check_case(inputs: CaseInputs, source: str, field_name: str, value, where: 
                 checked: set | None = None) -> None:
     """Validate the case's scenario, catenary and pantograph files as a run would (files
     named in ``checked`` were found valid before)."""
-    from pantocosim.catenary.definition import load_catenary, parse_definition
-    from pantocosim.master.scenario import parse_scenario
-    from pantocosim.pantograph.presets import preset_path
-
     checked = set() if checked is None else checked
     try:
         parse_scenario(copy.deepcopy(inputs.scenario), where)
@@ -336,12 +329,8 @@ class _CaseBuilder:
         key = (kind, name)
         if key not in self.files:
             if kind == "catenary":
-                from pantocosim.catenary.definition import load_catenary
-
                 self.files[key] = load_catenary(name).raw
             else:
-                from pantocosim.pantograph.presets import preset_path
-
                 self.files[key] = load_toml(preset_path(name))
         return self.files[key]
 

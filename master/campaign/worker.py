@@ -22,15 +22,22 @@ import time
 import traceback
 from pathlib import Path
 
+import psutil
+import tomli_w
+
+from pantocosim.core.errors import OutputError, PantocosimError
+from pantocosim.master.campaign.axes import COUPLINGS
+from pantocosim.master.cosim import run_cosim
+from pantocosim.master.output_folder import OutputFolder, writing
+from pantocosim.master.run import finish, prepare, run_monolithic
+from pantocosim.master.scenario import load_scenario
+
 CASE_FILE = "case.json"
 
 
 def run_case(task: dict) -> dict:
     """Run one case (``task`` from :func:`pantocosim.master.campaign.execute.task_of`) and
     return its record (also written to ``case.json`` in its folder)."""
-    from pantocosim.core.errors import OutputError, PantocosimError
-    from pantocosim.master.output_folder import OutputFolder, writing
-
     folder = Path(task["folder"])
     started = time.time()
     t0, cpu0 = time.perf_counter(), time.process_time()
@@ -96,10 +103,6 @@ def _in_case_folder(message: str, stage, folder: Path) -> str:
 def _write_inputs(task: dict, into: Path, named: Path) -> None:
     """``scenario.toml`` (and ``catenary.toml``) into ``into``, the scenario naming the
     catenary file in the folder ``named``."""
-    import tomli_w
-
-    from pantocosim.master.output_folder import writing
-
     scenario = dict(task["scenario"])
     if task.get("catenary") is not None:
         with writing("file", into / "catenary.toml"):
@@ -119,10 +122,6 @@ def _fatal(record: dict, stage, exc: Exception) -> dict:
 
 
 def _run(folder: Path, run: dict, times: dict, report_dir: Path | None = None) -> dict:
-    from pantocosim.master.campaign.axes import COUPLINGS
-    from pantocosim.master.run import finish, prepare, run_monolithic
-    from pantocosim.master.scenario import load_scenario
-
     t = time.perf_counter()
     prep = prepare(load_scenario(folder / "scenario.toml"), force=run["force"])
     times["prepare_time_s"] = time.perf_counter() - t
@@ -131,12 +130,9 @@ def _run(folder: Path, run: dict, times: dict, report_dir: Path | None = None) -
     if scheme == "monolithic":
         result = run_monolithic(prep, folder, progress=False)
     else:
-        from pantocosim.master.cosim import run_cosim
-
         result = run_cosim(prep, folder, scheme=scheme, accelerator=run["accelerator"],
                            progress=False)
     times["run_time_s"] = time.perf_counter() - t
-    from pantocosim.core.errors import OutputError
 
     if isinstance(result.error, OutputError):   # a full disk while the run wrote
         raise result.error
@@ -160,8 +156,6 @@ def _essentials(summary: dict) -> dict:
 
 def _worker() -> dict:
     """Which worker ran the case and its resident memory now [MB]."""
-    import psutil
-
     try:
         from distributed import get_worker
 

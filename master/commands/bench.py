@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 
 def add_parser(sub):
@@ -33,7 +34,5 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(res, indent=2))
     if args.out:
-        from pathlib import Path
-
         Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
     return 0

@@ -3,6 +3,9 @@ native C FMUs (no Python inside; docs/tutorials/hil.md)."""
 
 from __future__ import annotations
 
+import dataclasses
+from pathlib import Path
+
 
 def add_parser(sub):
     p = sub.add_parser("export-native", help="write native C FMUs of a scenario (HIL rigs, "
@@ -31,9 +34,6 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    import dataclasses
-    from pathlib import Path
-
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
     from pantocosim.master.native_models import export_scenario

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from pantocosim.master.commands.run import add_size_options
+
 
 def add_parser(sub):
     p = sub.add_parser("modes", help="natural frequencies of a catenary",
@@ -15,8 +17,6 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--element-size", type=float, default=None,
                    help="override the definition's target element size [m]")
-    from pantocosim.master.commands.run import add_size_options
-
     add_size_options(p, steps=False)
     return p
 

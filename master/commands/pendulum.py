@@ -24,7 +24,10 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA
 
@@ -131,10 +134,6 @@ def run(args) -> int:
 
 def _simulate(cases, args, out: Path, spec):
     """Run the cases and write the figures and pendulum_summary.json into ``out``."""
-    from dataclasses import replace
-
-    import numpy as np
-
     from pantocosim.core.errors import ConvergenceError
     from pantocosim.master.output_folder import writing
     from pantocosim.multibody.double_pendulum import CASES, simulate_case

@@ -6,6 +6,9 @@ import dataclasses
 import json
 from pathlib import Path
 
+from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
+from pantocosim.master.size_guard import MAX_DOFS, MAX_STEPS, check_limit_option
+
 
 def add_cache_option(p) -> None:
     """``--no-cache``: compute the set-up (the moving-load run behind the operating heights)
@@ -15,8 +18,6 @@ def add_cache_option(p) -> None:
 
 
 def add_parser(sub):
-    from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
-
     p = sub.add_parser("run", help="simulate a scenario and print EN 50317 statistics",
                        description="Simulate SCENARIO (preset name or TOML file; default "
                        "dsa380-ave-300) and write the time series (CSV), a JSON summary with "
@@ -54,8 +55,6 @@ def add_parser(sub):
 def add_size_options(p, steps: bool = True) -> None:
     """``--max-dofs`` (and ``--max-steps``): lift the size guard's limits
     (:mod:`pantocosim.master.size_guard`)."""
-    from pantocosim.master.size_guard import MAX_DOFS, MAX_STEPS
-
     p.add_argument("--max-dofs", type=int, default=None, metavar="N",
                    help=f"build catenary models of up to N DOFs (default {MAX_DOFS:,})")
     if steps:
@@ -98,8 +97,6 @@ def print_statistics(summary: dict) -> None:
 
 def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
     """The scenario with the command line's catenary model and cutoff (None: as given)."""
-    import dataclasses
-
     from pantocosim.core.errors import ParameterError
 
     changes = {}
@@ -118,8 +115,6 @@ def run(args) -> int:
     from pantocosim.master.output_folder import OutputFolder
     from pantocosim.master.run import RESULT_FILES, finish
     from pantocosim.master.scenario import load_scenario
-    from pantocosim.master.size_guard import check_limit_option
-
     check_limit_option("--max-dofs", args.max_dofs)
     check_limit_option("--max-steps", args.max_steps)
     scenario = with_model(load_scenario(args.scenario), args.catenary_model,

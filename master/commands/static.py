@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 
+from pantocosim.master.commands.run import add_size_options
+
 
 def add_parser(sub):
     p = sub.add_parser("static", help="static configuration of a catenary",
@@ -20,8 +22,6 @@ def add_parser(sub):
     p.add_argument("--plot", metavar="FILE.png", help="side view and elasticity plot")
     p.add_argument("--element-size", type=float, default=None,
                    help="override the definition's target element size [m]")
-    from pantocosim.master.commands.run import add_size_options
-
     add_size_options(p, steps=False)
     return p
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from pantocosim.master.validation import standard_names
+
 
 def add_parser(sub):
-    from pantocosim.master.validation import standard_names
-
     p = sub.add_parser("validate", help="run a standard's reference case against its ranges",
                        description="Run the reference scenario of STANDARD at every speed "
                        "whose acceptance ranges the project holds (master/validation/"

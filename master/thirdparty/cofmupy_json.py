@@ -20,9 +20,14 @@ catenary's layout and the window for the statistics.
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
+
+from pantocosim.master.thirdparty import common as run_common
 
 MODULE = "pantocosim.master.thirdparty.cofmupy_json"
 OUTPUTS = [("catenary", "contact_force_out_1"), ("pantograph", "contact_height"),
@@ -34,7 +39,6 @@ def child(config: str, step: float, stop: float, out: str, n_supports: int, x0: 
     """Runs in CoFmuPy's venv: imports neither pantocosim nor anything beyond CoFmuPy."""
     import csv
 
-    import numpy as np
     import scipy.sparse.linalg  # noqa: F401  (before any FMU is loaded)
     from cofmupy import Coordinator
 
@@ -63,10 +67,6 @@ def child(config: str, step: float, stop: float, out: str, n_supports: int, x0: 
 
 
 def main(argv=None) -> int:
-    import subprocess
-
-    from pantocosim.master.thirdparty import common as run_common
-
     p = run_common.ssp_parser(__doc__, "cofmupy")
     p.add_argument("--config", type=Path, default=None,
                    help="CoFmuPy configuration (default: <ssp folder>/<ssp name>/cofmupy.json)")

@@ -15,12 +15,20 @@ import csv
 import json
 import subprocess
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+
+from pantocosim.catenary.analysis import central_window
+from pantocosim.core.errors import ParameterError
+from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
+from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
+from pantocosim.master.ssp import scenario_support_x
+from pantocosim.master.statistics import contact_statistics
 
 DEFAULT_SSP = Path("dist") / "fmus" / "dsa380-ave-300.ssp"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -61,9 +69,6 @@ def refuse(module: str, exc: Exception):
 def check_fmu(module: str, fmu: str | Path, field: str) -> None:
     """Refuse (:func:`refuse`) an FMU file that cannot run here or is not what its model
     description says (:func:`pantocosim.master.fmu_check.check_binary_fmu`)."""
-    from pantocosim.core.errors import ParameterError
-    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
-
     try:
         read_fmu(Path(fmu), field, None)
         check_binary_fmu(Path(fmu), field)
@@ -73,11 +78,6 @@ def check_fmu(module: str, fmu: str | Path, field: str) -> None:
 
 def check_ssp_fmus(module: str, ssp: str | Path) -> None:
     """:func:`check_fmu` on every FMU of the SSP file ``ssp``."""
-    import tempfile
-
-    from pantocosim.core.errors import ParameterError
-    from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
-
     try:
         with zipfile.ZipFile(ssp) as z:
             root = ET.fromstring(z.read("SystemStructure.ssd"))
@@ -106,8 +106,6 @@ def _typed(kind: str, text: str):
 
 def catenary_layout(cat_params: dict) -> np.ndarray:
     """Support positions of the catenary the SSP's catenary FMU builds."""
-    from pantocosim.master.ssp import scenario_support_x
-
     return scenario_support_x(cat_params)
 
 
@@ -155,8 +153,6 @@ def failed(module: str, proc: subprocess.CompletedProcess):
     """Stop a recipe whose co-simulation child failed with one line: the first refusal an FMU
     logged (its first sentence), else the child's last error line; the child's whole output
     is kept in a log file the line names."""
-    import tempfile
-
     text = proc.stdout + proc.stderr
     said = [line for line in text.splitlines()
             if line.startswith(("[DISCARD]", "[ERROR]", "[FATAL]"))]
@@ -223,8 +219,6 @@ def ssp_run(a: argparse.Namespace, tool: str) -> SimpleNamespace:
     """What a recipe needs of the SSP named by its arguments: ``ssd`` (:func:`read_ssd`),
     ``cat`` (the catenary component's parameters), ``support_x``, ``stop``, ``window``,
     ``out``, ``n_sup`` (support uplift columns written, at most the FMU's MAX_SUPPORTS) and ``tool``."""
-    from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
-
     check_ssp_fmus(f"{tool} recipe", a.ssp)
     ssd = read_ssd(a.ssp)
     cat = ssd["parameters"]["catenary"]
@@ -251,7 +245,6 @@ def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
     the middle span of the line (the FMU's own default)."""
     if cat.get("window_end", 0.0) > cat.get("window_start", 0.0):
         return float(cat["window_start"]), float(cat["window_end"])
-    from pantocosim.catenary.analysis import central_window
 
     return central_window(support_x)
 
@@ -259,8 +252,6 @@ def ssp_window(cat: dict, support_x: np.ndarray) -> tuple[float, float]:
 def report(master: str, csv_path: Path, window, support_x, wall, extra=None) -> dict:
     """EN 50317 statistics of the run in ``csv_path``; prints a table and a JSON line
     ``STATISTICS {...}`` and writes ``<csv>.json``."""
-    from pantocosim.master.statistics import contact_statistics
-
     c = read_csv(csv_path)
     n_sup = sum(1 for k in c if k.startswith("support_uplift_"))
     uplift = (np.column_stack([c[f"support_uplift_{j}"] for j in range(n_sup)])

@@ -23,7 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from pantocosim.master.thirdparty import common as run_common
+from pantocosim.master.standalone import force_expression
 
 MODULE = "pantocosim.master.thirdparty.fmpy_single"
 
@@ -32,7 +35,6 @@ DEFAULT_FMU = Path("dist") / "fmus" / "en50318-2mass.fmu"
 
 def child(fmu: str, signal_file: str, step: float, stop: float, out: str, speed: float,
           speed_kmh: float) -> None:
-    import numpy as np
     import scipy.sparse.linalg  # noqa: F401  (B5: before any FMU is loaded)
     from fmpy import simulate_fmu
 
@@ -73,9 +75,6 @@ def main(argv=None) -> int:
         fmu, sig, step, stop, out, speed, speed_kmh = a.child_args
         child(fmu, sig, float(step), float(stop), out, float(speed), float(speed_kmh))
         return 0
-    import numpy as np
-
-    from pantocosim.master.standalone import force_expression
 
     run_common.check_fmu(MODULE, a.fmu, "--fmu")
     force = force_expression(a.force)

@@ -25,6 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 from pantocosim.master.thirdparty import common as run_common
 
 MODULE = "pantocosim.master.thirdparty.omsimulator"
@@ -42,8 +44,6 @@ def executable(given: str | None) -> str:
 def result_columns(path: Path) -> dict:
     """{port (``component.variable``): values} of an OMSimulator CSV result, one row per time
     (the last one written)."""
-    import numpy as np
-
     with open(path) as fh:
         names = [c.strip() for c in fh.readline().split(",")]
     data = np.genfromtxt(path, delimiter=",", skip_header=1, ndmin=2)
@@ -57,8 +57,6 @@ def result_columns(path: Path) -> dict:
 
 def child(ssp: str, step: float, stop: float, out: str, n_supports: int, x0: float,
           speed: float, exe: str) -> None:
-    import numpy as np
-
     with tempfile.TemporaryDirectory(prefix="pantocosim_oms_") as tmp:
         result = Path(tmp) / "result.csv"
         t_wall = time.perf_counter()

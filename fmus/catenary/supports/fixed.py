@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ...core.schema import Section
-from . import Site, Support, register
+from .registry import Site, Support, register
 
 
 @register("fixed")

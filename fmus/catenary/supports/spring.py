@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from ...core.schema import Field, Section
 from ..parts import Anchor
-from . import Site, Support, register
+from .registry import Site, Support, register
 
 
 @register("spring")

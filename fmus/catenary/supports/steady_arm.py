@@ -12,7 +12,7 @@ import numpy as np
 from ...core.errors import ParameterError
 from ...core.schema import Field, Section
 from ..parts import Anchor
-from . import Site, Support, register
+from .registry import Site, Support, register
 
 DEFAULT_EA = 2.0e7       # N, a stiff arm
 

@@ -14,6 +14,7 @@ It uses the standard library only: it runs before the model package is chosen
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 import traceback
@@ -61,8 +62,6 @@ def check_guid(resources: Path, guid: str, fmi: int = 2) -> None:
 def import_slave_module(name: str, resources: Path):
     """The FMU's slave module, from its own resources (an older copy of the same name, from
     another file, is replaced)."""
-    import importlib
-
     own = resources / f"{name}.py"
     loaded = sys.modules.get(name)
     if loaded is not None:

@@ -17,39 +17,14 @@ A law declares what the solvers need to know of it (:class:`ContactLaw`):
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+# registration: one import per law
+from . import constraint_contact, penalty_contact  # noqa: F401
+from .contact_registry import CONTACT_LAWS, DEFAULT_LAW, ContactLaw, register
 
-#: contact laws by their scenario name
-CONTACT_LAWS: dict[str, type] = {}
-#: the law of a scenario that names none
-DEFAULT_LAW = "penalty"
-
-
-class ContactLaw(Protocol):
-    name: str
-    compliance: float
-    condensable: bool
-    across_ports: bool
-    fields: tuple
-
-    def bind(self, system) -> Any:
-        """The law's part in an assembled :class:`~.coupled.CoupledSystem`."""
-
-
-def register(name: str):
-    """Class decorator: make a law available as ``law = "<name>"``."""
-    def deco(cls):
-        cls.name = name
-        CONTACT_LAWS[name] = cls
-        return cls
-    return deco
+__all__ = ["CONTACT_LAWS", "DEFAULT_LAW", "ContactLaw", "make_contact", "register"]
 
 
 def make_contact(law: str, stiffness: float, damping: float):
     """The law ``law`` with the scenario's ``[contact]`` values (each law takes those it uses,
     :meth:`from_fields`)."""
     return CONTACT_LAWS[law].from_fields(stiffness=stiffness, damping=damping)
-
-
-# registration: one import per law
-from . import constraint_contact, penalty_contact  # noqa: E402,F401

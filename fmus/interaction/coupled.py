@@ -2,11 +2,11 @@
 
 The catenary and any number of pantographs are assembled into one
 :class:`~pantocosim.core.model.SecondOrderModel` coupled by contact elements of the
-scenario's law (:mod:`pantocosim.core.contact_laws`: the penalty law
-:mod:`~pantocosim.core.penalty_contact`, or the rigid :mod:`~pantocosim.core.constraint_contact`
-whose multipliers the Newton correction solves with the coordinates). The monolithic reference solver
-(``master/run.py``) advances it with the one HHT-alpha integrator, Newton-Raphson on all
-coordinates at once. Contact is lost and recovered through the penalty law; droppers
+scenario's law (:mod:`pantocosim.interaction.contact_laws`: the penalty law
+:mod:`~pantocosim.interaction.penalty_contact`, or the rigid
+:mod:`~pantocosim.interaction.constraint_contact` whose multipliers the Newton correction
+solves with the coordinates). The monolithic reference solver (``master/run_stepping.py``)
+advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once. Contact is lost and recovered through the penalty law; droppers
 slacken inside the catenary model.
 
 DOF layout: ``[catenary | pantograph 1 | pantograph 2 | ...]``.
@@ -19,14 +19,15 @@ weighted by the integrator exactly as a force through an FMU port.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from .contact_laws import ContactLaw
-from .model import Evaluation, SecondOrderModel
-
+from ..core.errors import ConvergenceError
+from ..core.model import Evaluation, SecondOrderModel
+from .contact_registry import ContactLaw
 
 #: relative round-off of the coordinates: a static Newton update below it has converged
 STATIC_ROUNDOFF = 16.0 * np.finfo(float).eps
@@ -221,8 +222,6 @@ class CoupledSystem(SecondOrderModel):
         when the Newton update is at the round-off of the coordinates
         (``STATIC_ROUNDOFF * max |q|``: the residual of a stiff contact or a long line cannot
         get smaller than its own round-off)."""
-        from pantocosim.core.errors import ConvergenceError
-
         q = np.array(q0, dtype=float)
         zero = np.zeros(self.n_dofs)
         for it in range(max_iter):
@@ -290,8 +289,6 @@ class RigidWire(SecondOrderModel):
                           stiffness=empty, structure_key=None)
 
     def contact_points(self, t):
-        from types import SimpleNamespace
-
         if self.catenary is None:
             heights = np.full(self.n_pantographs, float(self.height))
         else:

@@ -16,10 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .contact_laws import register
-from .params import check_number
-from .small_dense import gauss_jordan
-
+from ..core.params import check_number
+from ..core.small_dense import gauss_jordan
+from .contact_registry import register
 
 #: penalty stiffness k_H of the contact [N/m] (thesis 3.2)
 DEFAULT_CONTACT_STIFFNESS = 50_000.0

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from pantocosim.core.penalty_contact import PenaltyContact
-from pantocosim.core.coupled import CoupledSystem, RigidWire
 from pantocosim.core.errors import ParameterError
-
+from pantocosim.interaction.coupled import CoupledSystem, RigidWire
+from pantocosim.interaction.penalty_contact import PenaltyContact
 
 #: residual tolerance of the static start [N]
 STATIC_TOL_N = 1e-7

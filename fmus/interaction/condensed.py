@@ -21,10 +21,10 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
-from .hht import HHTIntegrator
-from .model import Evaluation, SecondOrderModel
+from ..core.hht import HHTIntegrator
+from ..core.model import Evaluation, SecondOrderModel
+from ..core.stepper import StepReport, StructureStep
 from .penalty_contact import condensed_forces
-from .stepper import StepReport, StructureStep
 
 
 @njit(cache=True)

@@ -3,8 +3,8 @@ prescribed (set from outside before each step).
 
 Used by the catenary FMU's built-in penalty option (``contact_mode`` = 1): the FMU couples its
 catenary to one :class:`PrescribedPantograph` per pantograph through
-:class:`~pantocosim.core.coupled.CoupledSystem` and
-:class:`~pantocosim.core.penalty_contact.PenaltyContact`, so the penalty force is solved
+:class:`~pantocosim.interaction.coupled.CoupledSystem` and
+:class:`~pantocosim.interaction.penalty_contact.PenaltyContact`, so the penalty force is solved
 implicitly with the wire inside the catenary's HHT step, the pantograph's height and
 velocity being the values at the end of the step.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .model import Evaluation, SecondOrderModel
+from ..core.model import Evaluation, SecondOrderModel
 
 _EMPTY = np.zeros(0)
 

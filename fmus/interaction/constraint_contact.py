@@ -40,9 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact_laws import register
-from .errors import ConvergenceError
-from .params import check_number
+from ..core.errors import ConvergenceError
+from ..core.params import check_number
+from .contact_registry import register
 
 #: scale kappa [N/m] of the complementarity function before the first Newton matrix gives
 #: the step's own stiffness at the contact point (it changes no converged result)

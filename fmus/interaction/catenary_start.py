@@ -14,15 +14,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from pantocosim.core.coupled import CoupledSystem
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA
-from pantocosim.core.prescribed import PrescribedPantograph
+from pantocosim.interaction.coupled import CoupledSystem
+from pantocosim.interaction.prescribed import PrescribedPantograph
 
-from .analysis import central_window
-from .models import law_model
-from .operating_height import (MAX_LAW_STEPS, ContactHeightLaws, contact_height_laws,
-                               law_run_steps, passage_duration, static_height_law)
+from ..catenary.analysis import central_window
+from ..catenary.models import law_model
+from ..catenary.operating_height import (MAX_LAW_STEPS, ContactHeightLaws, contact_height_laws,
+                                         law_run_steps, passage_duration, static_height_law)
 
 #: a pantograph height first delivered after t0 may differ from the height the start was
 #: settled against by at most the height of this static contact force [N] (a pantograph that

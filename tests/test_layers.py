@@ -1,0 +1,257 @@
+"""The floors of the package hold: dependencies point downwards, no import cycle, imports at
+module top (docs/architecture.md, "Layers and imports").
+
+Every module of ``fmus/`` (the package ``pantocosim``) and ``master/`` (``pantocosim.master``)
+is parsed with ``ast``; the module graph counts every import, at module top or inside a
+function, so that a cycle cannot hide behind a deferred import.
+"""
+from __future__ import annotations
+
+import ast
+import pathlib
+from collections import defaultdict
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+# floor of each subpackage ("" is the package's own __init__: its version and the kernel
+# cache); a module may import its own floor and the floors below.
+# catenary, pantograph and multibody are siblings: none imports another.
+FLOORS = {"": 0, "core": 0, "catenary": 1, "pantograph": 1, "multibody": 1,
+          "interaction": 2, "fmi": 3, "master": 4}
+SIBLING_IMPORTS: set[tuple[str, str]] = set()   # (from floor, to floor) documented exceptions
+
+# intra-package imports allowed inside a function: (module, imported module) -> why.
+# `pantocosim --help` imports every command module and the size guard's limits: its import
+# time is 0.27-0.37 s with these deferred, 2.3 s with every command's body at module top.
+DEFERRED = {
+    ("pantocosim.catenary.size_guard", "pantocosim.catenary.mesh"):
+        "--help shows MAX_DOFS; the mesh costs it 0.16 s",
+    ("pantocosim.master.size_guard", "pantocosim.catenary.definition"):
+        "--help shows the limits; the definition loader costs it 0.09 s",
+}
+# a model registry's factory imports the one model it builds: the FMU slaves import in 0.46 s
+# so, in 0.62 s with every catenary and pantograph model at module top
+for _model in ("model", "linear", "modal"):
+    DEFERRED["pantocosim.catenary.models", f"pantocosim.catenary.{_model}"] = "registry"
+for _model in ("dsa380", "dsa380_flexible", "lumped"):
+    DEFERRED["pantocosim.pantograph.presets", f"pantocosim.pantograph.{_model}"] = "registry"
+#: packages whose functions other than ``add_parser`` may import what they run: a CLI
+#: command's body (its module is imported by `pantocosim --help`, its body only when run)
+DEFERRED_BODIES = ("pantocosim.master.commands.",)
+
+# third-party modules whose import is deferred into the function that needs it: heavy to
+# import (matplotlib, scipy.signal, dask/distributed, pyarrow: 0.3-2 s each, that
+# `pantocosim --help`, an FMU's instantiate or a worker would pay for nothing) or optional
+# (fmpy's FMU-side modules, the third-party masters' libraries); docs/architecture.md
+HEAVY = {"matplotlib", "scipy.signal", "dask", "distributed", "fmpy", "libcosimpy", "ecospy",
+         "pyarrow", "cofmupy"}
+#: other deferred third-party imports: (module prefix, function) -> why
+THIRD_PARTY_DEFERRED = {
+    ("pantocosim.master.thirdparty.", "child"):
+        "a third-party master's child process: numpy and scipy.sparse.linalg before any FMU "
+        "loads (docs/pythonfmu-notes.md, B5); CoFmuPy's child runs in that tool's own venv",
+    ("pantocosim.master.run_results", "finish"):
+        "`resource` exists on POSIX only",
+    ("pantocosim.master.stability", "departures"):
+        "scipy.special (0.14 s) serves only a finished run's departures",
+}
+
+
+def module_name(path: pathlib.Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    parts = ["pantocosim", *parts[1:]] if parts[0] == "fmus" else ["pantocosim", *parts]
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def modules() -> dict[str, pathlib.Path]:
+    files = [*ROOT.glob("fmus/**/*.py"), *ROOT.glob("master/**/*.py")]
+    return {module_name(p): p for p in files}
+
+
+def deferred_imports(tree: ast.AST) -> dict[int, str]:
+    """{id of an import node inside a function: the outermost function's name}."""
+    found = {}
+    for top in ast.walk(tree):
+        if isinstance(top, ast.ClassDef) or top is tree:
+            for f in ast.iter_child_nodes(top):
+                if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    found.update({id(n): f.name for n in ast.walk(f)
+                                  if isinstance(n, (ast.Import, ast.ImportFrom))})
+    return found
+
+
+def imports(name: str, path: pathlib.Path, known: dict) -> list[tuple[str, str | None, int]]:
+    """(imported package module, the function it is imported in or None, line) of every
+    import in a module."""
+    tree = ast.parse(path.read_text())
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    deferred = deferred_imports(tree)
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module
+            # a name that is a submodule depends on that module only (the package is being
+            # initialised already); any other name depends on the module it comes from
+            candidates = [f"{target}.{a.name}" if f"{target}.{a.name}" in known else target
+                          for a in node.names]
+        elif isinstance(node, ast.Import):
+            candidates = [a.name for a in node.names]
+        else:
+            continue
+        for c in dict.fromkeys(candidates):
+            if c in known and c != name:
+                found.append((c, deferred.get(id(node)), node.lineno))
+    return found
+
+
+def floor(name: str) -> str:
+    parts = name.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def graph() -> tuple[dict, dict]:
+    known = modules()
+    edges = defaultdict(set)
+    lines = {}
+    for name, path in known.items():
+        for target, _, line in imports(name, path, known):
+            edges[name].add(target)
+            lines[name, target] = line
+    return known, edges, lines
+
+
+def strongly_connected(nodes, edges) -> list[list[str]]:
+    """Tarjan's strongly connected components with more than one module (iterative)."""
+    index, low, on_stack, stack, found = {}, {}, set(), [], []
+    counter = 0
+    for root in nodes:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(edges[root])))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            v, it = work[-1]
+            for w in it:
+                if w not in index:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(edges[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    component = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.append(w)
+                        if w == v:
+                            break
+                    if len(component) > 1:
+                        found.append(sorted(component))
+    return found
+
+
+def against_floors(edges) -> list[tuple[str, str]]:
+    """(importer, imported) of every upward or sideways import."""
+    wrong = []
+    for source in sorted(edges):
+        for target in sorted(edges[source]):
+            a, b = floor(source), floor(target)
+            up = FLOORS[b] > FLOORS[a]
+            sideways = (FLOORS[a] == FLOORS[b] and a != b and "" not in (a, b)
+                        and (a, b) not in SIBLING_IMPORTS)
+            if up or sideways:
+                wrong.append((source, target))
+    return wrong
+
+
+def test_dependencies_point_downwards():
+    known, edges, lines = graph()
+    wrong = [f"{known[a].relative_to(ROOT)}:{lines[a, b]} {a} -> {b}"
+             for a, b in against_floors(edges)]
+    assert not wrong, "imports against the floors:\n" + "\n".join(wrong)
+
+
+def test_floor_check_finds_upward_and_sideways_imports():
+    edges = {"pantocosim.core.x": {"pantocosim.catenary.mesh", "pantocosim.core.y"},
+             "pantocosim.catenary.a": {"pantocosim.pantograph.b", "pantocosim.core.x"},
+             "pantocosim.pantograph.b": {"pantocosim.interaction.coupled"},
+             "pantocosim.fmi.c": {"pantocosim.interaction.coupled", "pantocosim"}}
+    assert against_floors(edges) == [
+        ("pantocosim.catenary.a", "pantocosim.pantograph.b"),
+        ("pantocosim.core.x", "pantocosim.catenary.mesh"),
+        ("pantocosim.pantograph.b", "pantocosim.interaction.coupled")]
+
+
+def test_no_import_cycle():
+    known, edges, _ = graph()
+    cycles = strongly_connected(sorted(known), edges)
+    assert not cycles, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in cycles)
+
+
+def test_cycle_finder_finds_a_cycle():
+    edges = defaultdict(set, {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}})
+    assert strongly_connected(["a", "b", "c", "d"], edges) == [["a", "b", "c"]]
+
+
+def test_intra_package_imports_at_module_top():
+    known = modules()
+    wrong = []
+    for name, path in sorted(known.items()):
+        body = name.startswith(DEFERRED_BODIES)
+        for target, inside, line in imports(name, path, known):
+            if inside and (name, target) not in DEFERRED and not (body and inside != "add_parser"):
+                wrong.append(f"{path.relative_to(ROOT)}:{line} {target}")
+    assert not wrong, "package imports inside a function:\n" + "\n".join(wrong)
+
+
+def test_deferred_allow_list_is_current():
+    known = modules()
+    used = {(name, target) for name, path in known.items()
+            for target, inside, _ in imports(name, path, known) if inside}
+    assert not set(DEFERRED) - used, set(DEFERRED) - used
+
+
+def is_heavy(module: str) -> bool:
+    return any(module == h or module.startswith(h + ".") for h in HEAVY)
+
+
+def test_deferred_third_party_imports_are_heavy_ones():
+    wrong = []
+    for name, path in sorted(modules().items()):
+        tree = ast.parse(path.read_text())
+        nodes = {id(n): n for n in ast.walk(tree)}
+        for node_id, function in deferred_imports(tree).items():
+            n = nodes[node_id]
+            if isinstance(n, ast.ImportFrom) and not n.level:
+                if n.module.split(".")[0] == "pantocosim":
+                    continue
+                heavy = is_heavy(n.module) or all(is_heavy(f"{n.module}.{a.name}")
+                                                  for a in n.names)
+            elif isinstance(n, ast.Import):
+                heavy = all(is_heavy(a.name) or a.name.split(".")[0] == "pantocosim"
+                            for a in n.names)
+            else:
+                continue
+            allowed = any(name.startswith(prefix) and function == f
+                          for prefix, f in THIRD_PARTY_DEFERRED)
+            if not heavy and not allowed:
+                wrong.append(f"{path.relative_to(ROOT)}:{n.lineno} {ast.unparse(n)}")
+    assert not wrong, "light imports inside a function:\n" + "\n".join(wrong)
