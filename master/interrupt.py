@@ -62,10 +62,20 @@ def remember_interrupts():
         return
     _unseen = False
     previous = signal.signal(signal.SIGINT, _raise_and_remember)
+    previous_hook = sys.unraisablehook
+
+    def quiet_swallowed(unraisable):
+        """A Ctrl-C raised where Python cannot propagate it (a garbage-collector callback) is
+        remembered (:func:`raise_if_swallowed`), not printed."""
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            previous_hook(unraisable)
+
+    sys.unraisablehook = quiet_swallowed
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = previous_hook
         _unseen = False
 
 

@@ -28,6 +28,8 @@ DEFERRED = {
         "--help shows MAX_DOFS; the mesh costs it 0.16 s",
     ("pantocosim.master.size_guard", "pantocosim.catenary.definition"):
         "--help shows the limits; the definition loader costs it 0.09 s",
+    ("pantocosim.master.thirdparty.cofmupy_json", "pantocosim.master.thirdparty.common"):
+        "the module also runs as CoFmuPy's child, in that tool's venv without pantocosim",
 }
 # a model registry's factory imports the one model it builds: the FMU slaves import in 0.46 s
 # so, in 0.62 s with every catenary and pantograph model at module top

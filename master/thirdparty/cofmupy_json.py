@@ -27,8 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from pantocosim.master.thirdparty import common as run_common
-
 MODULE = "pantocosim.master.thirdparty.cofmupy_json"
 OUTPUTS = [("catenary", "contact_force_out_1"), ("pantograph", "contact_height"),
            ("catenary", "wire_height_1")]
@@ -67,6 +65,9 @@ def child(config: str, step: float, stop: float, out: str, n_supports: int, x0: 
 
 
 def main(argv=None) -> int:
+    # not at module top: this file also runs as CoFmuPy's child, in that tool's own venv
+    from pantocosim.master.thirdparty import common as run_common
+
     p = run_common.ssp_parser(__doc__, "cofmupy")
     p.add_argument("--config", type=Path, default=None,
                    help="CoFmuPy configuration (default: <ssp folder>/<ssp name>/cofmupy.json)")
