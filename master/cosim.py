@@ -19,19 +19,19 @@ from pantocosim.core.hht import HHTSettings
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.catenary_ports import PortNames
 from pantocosim.fmi.pantograph_ports import REQUIRED_PORTS
-from pantocosim.interaction.stepping import make_stepper
+from pantocosim.interaction.stepper_factory import make_stepper
 from pantocosim.master import stability
 from pantocosim.master.coupling import Coupler, CouplingSettings, scheme_named
-from pantocosim.master.fmu_build import PARAMETER_FILE_FMU, default_out, ensure_fmus, fmi_out
-from pantocosim.master.fmu_check import check_fmus
-from pantocosim.master.fmu_runtime import FmuInstance
+from pantocosim.master.fmu.build import PARAMETER_FILE_FMU, default_out, ensure_fmus, fmi_out
+from pantocosim.master.fmu.check import check_fmus
+from pantocosim.master.fmu.runtime import FmuInstance
 from pantocosim.master.folder_lock import FolderLock
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.pacing import StepClock
-from pantocosim.master.recorder import Recorder
-from pantocosim.master.run_results import COSIM_COUNTERS, RunResult, column_names
-from pantocosim.master.run_setup import Prepared
-from pantocosim.master.run_stepping import progress_bar
+from pantocosim.master.results.recorder import Recorder
+from pantocosim.master.run.finish import COSIM_COUNTERS, RunResult, column_names
+from pantocosim.master.run.setup import Prepared
+from pantocosim.master.run.stepping import progress_bar
 from pantocosim.master.scenario import require_port_contact, scenario_catenary
 from pantocosim.master.stability import Monitor
 from pantocosim.pantograph.presets import PRESETS
@@ -44,7 +44,7 @@ PANTOGRAPH_OPTIONS = ("static_force", "aero_c1", "aero_c2", "friction_force",
 
 # ---------------------------------------------------------------------- subsystems
 class ModelSubsystem:
-    """A model with the stepper it declares (:func:`~pantocosim.interaction.stepping.make_stepper`,
+    """A model with the stepper it declares (:func:`~pantocosim.interaction.stepper_factory.make_stepper`,
     as its FMU takes it) behind the FMU port semantics (in-process)."""
 
     def __init__(self, model, q0, settings: HHTSettings, inputs0, outputs):
@@ -182,7 +182,7 @@ def line_supports(scenario) -> int:
 
 
 def fmu_paths(prep, build: bool = True):
-    """The checked FMU files of the scenario (:class:`~pantocosim.master.fmu_check.FmuPlan`)
+    """The checked FMU files of the scenario (:class:`~pantocosim.master.fmu.check.FmuPlan`)
     of ``prep`` (a :class:`Prepared` or a scenario):
     a pantograph's ``fmu`` (relative to the working folder, else to the scenario file), by
     default ``dist/fmus/<model>.fmu`` of the working folder (a model given by a parameter

@@ -19,8 +19,8 @@ import numpy as np
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.cosim import run_cosim
-from pantocosim.master.fmu_build import default_out, ensure_fmus
-from pantocosim.master.fmu_runtime import FmuInstance
+from pantocosim.master.fmu.build import default_out, ensure_fmus
+from pantocosim.master.fmu.runtime import FmuInstance
 from pantocosim.master.run import prepare
 
 REGRESSION_DIR = Path(__file__).resolve().parent / "regression"

@@ -323,7 +323,7 @@ def check(prep, coupling: str) -> list[str]:
 
 def departures(prep, statistics) -> list[str]:
     """Warnings of a finished run whose statistics (one
-    :class:`~pantocosim.master.statistics.ContactStatistics` per pantograph) depart grossly
+    :class:`~pantocosim.master.results.statistics.ContactStatistics` per pantograph) depart grossly
     from what its static start sets: a mean contact force off the mean uplift by more than
     :data:`MEAN_DEPARTURE` of it, or a loss of contact above the normal law of the run's mean
     and standard deviation by more than :data:`LOSS_EXCESS_POINTS`."""

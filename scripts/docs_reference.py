@@ -144,7 +144,7 @@ def _variables_table(variables, causalities: tuple, context=None) -> str:
 def fmu_page() -> str:
     from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY
     from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH
-    from pantocosim.master.fmu_build import PANTOGRAPH_FMUS
+    from pantocosim.master.fmu.build import PANTOGRAPH_FMUS
     from pantocosim.pantograph.presets import preset_defaults
 
     out = ["# FMU ports and parameters\n\n",

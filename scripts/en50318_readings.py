@@ -60,11 +60,11 @@ def scenario_file(reading: dict, speed: int) -> Path:
 
 # ---------------------------------------------------------------------------- filters
 def lowpass(kind: str, force: np.ndarray, dt: float) -> np.ndarray:
-    """The 0-20 Hz contact force: ``zero-phase`` (every run's, master/statistics.py),
+    """The 0-20 Hz contact force: ``zero-phase`` (every run's, master/results/statistics.py),
     ``causal`` (the same Butterworth once, forward) or ``ideal`` (FFT band)."""
     from scipy import signal
 
-    from pantocosim.master.statistics import lowpass as zero_phase
+    from pantocosim.master.results.statistics import lowpass as zero_phase
 
     if kind == "zero-phase":
         return zero_phase(force, dt, CUTOFF_HZ)
@@ -80,8 +80,8 @@ def lowpass(kind: str, force: np.ndarray, dt: float) -> np.ndarray:
 
 def statistics(run: dict, window: tuple[float, float], kind: str = "zero-phase") -> dict:
     """EN 50317 quantities of a cached run over ``window`` with the filter ``kind`` (with
-    ``zero-phase``: those of master/statistics.py)."""
-    from pantocosim.master.statistics import window_mask
+    ``zero-phase``: those of master/results/statistics.py)."""
+    from pantocosim.master.results.statistics import window_mask
 
     t, x, F = run["time"], run["x"], run["force"]
     f = lowpass(kind, F, float(np.median(np.diff(t))))
@@ -216,7 +216,7 @@ def spectrum(runs: dict, speed: int, page: Path | None) -> str:
     """The amplitude spectrum of the filtered contact force in the window for each named
     run, with the span, dropper and contact-mode frequencies; the sigma each frequency band
     carries and the peak after each support. Returns the two tables."""
-    from pantocosim.master.statistics import force_spectrum, window_mask
+    from pantocosim.master.results.statistics import force_spectrum, window_mask
 
     v = speed / 3.6
     heads, cells = ["reading", "support x [m]", "peak [N]", "at [m] after the support"], []

@@ -16,7 +16,7 @@ import time
 import numpy as np
 from _tables import markdown_table
 
-from pantocosim.master.bench import factorised_newton_matrix
+from pantocosim.master.benchmarks import factorised_newton_matrix
 from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
 

@@ -103,7 +103,7 @@ def write_report(rows, docs: Path) -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from pantocosim.master.statistics import lowpass
+    from pantocosim.master.results.statistics import lowpass
 
     (docs / "figures").mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(11, 4.5))

@@ -116,7 +116,7 @@ def merged(old: str, new: str, models: list[str]) -> str:
 
 
 def main(argv=None) -> int:
-    from pantocosim.master.fmu_dist import build_all
+    from pantocosim.master.fmu.dist import build_all
     from pantocosim.master.thirdparty.common import swap_pantograph
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

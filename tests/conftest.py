@@ -68,7 +68,7 @@ def once_per_run(tmp_path_factory, name: str, make) -> Path:
 @pytest.fixture(scope="session")
 def built(tmp_path_factory, run_caches):
     """The output folder of ``pantocosim build-fmus``."""
-    from pantocosim.master.fmu_dist import build_all
+    from pantocosim.master.fmu.dist import build_all
 
     return once_per_run(tmp_path_factory, "dist", lambda d: build_all(d / "fmus", quiet=True)) \
         / "fmus"

@@ -138,7 +138,7 @@ def test_a_saved_state_copies_its_products_only_when_they_would_be_overwritten(l
 @pytest.mark.parametrize("pantograph", ["en50318-2mass", "dsa380-rigid"])
 def test_condensed_monolithic_equals_the_assembled_newton_solution(pantograph):
     from pantocosim.interaction.condensed import CondensedStepper
-    from pantocosim.interaction.stepping import AssembledStepper, make_stepper
+    from pantocosim.interaction.stepper_factory import AssembledStepper, make_stepper
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
     import dataclasses

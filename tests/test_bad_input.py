@@ -181,7 +181,7 @@ def test_size_guard_estimate_and_override():
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.mesh import estimate_dofs
     from pantocosim.catenary.model import CatenaryModel
-    from pantocosim.master.size_guard import check_catenary_size
+    from pantocosim.master.size_limits import check_catenary_size
 
     for name, spans, size in (("en50318", 4, None), ("ave64", 3, 2.0)):
         d = with_spans(load_catenary(name), spans)
@@ -394,7 +394,7 @@ def test_fmu_that_would_give_a_wrong_result_is_refused(generic_fmus, case, names
     FMU: refused before anything runs (not run with a silently wrong result)."""
     import dataclasses
 
-    from pantocosim.master.fmu_check import check_fmus
+    from pantocosim.master.fmu.check import check_fmus
     from pantocosim.master.scenario import load_scenario
 
     sc = load_scenario(ROOT / "tests" / "data" / "short-en50318.toml")
@@ -464,13 +464,13 @@ def test_failing_run_leaves_earlier_results_intact(tmp_path, capsys, monkeypatch
     elif case == "size guard":
         text, extra = edited(text, ("spans = 4", "spans = 100000")), []
     elif case == "full disk (time series)":
-        import pantocosim.master.recorder as recorder
+        import pantocosim.master.results.recorder as recorder
 
         monkeypatch.setattr(recorder, "open", lambda p, mode: FullDisk(open(p, mode), 30_000),
                             raising=False)
         extra = []
     else:
-        import pantocosim.master.run_results as run_results
+        import pantocosim.master.run.finish as run_results
 
         def full(path, data):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))

@@ -3,7 +3,7 @@ docs/performance.md)."""
 
 import tomllib
 
-from pantocosim.master import bench
+from pantocosim.master import benchmarks as bench
 from pantocosim.master.scenario import load_scenario
 
 

@@ -8,7 +8,7 @@ import zipfile
 import pytest
 
 from pantocosim.core import user_cache
-from pantocosim.master.fmu_runtime import extract_cached
+from pantocosim.master.fmu.runtime import extract_cached
 
 FILES = {"modelDescription.xml": "<fmiModelDescription fmiVersion='2.0'/>\n" * 20,
          "resources/model.py": "x = 1\n" * 50}
@@ -70,7 +70,7 @@ print(len(rows), float(rows["contact_height"][-1]))
 
 @pytest.fixture(scope="module")
 def pantograph_fmu(tmp_path_factory):
-    from pantocosim.master.fmu_build import build_fmus
+    from pantocosim.master.fmu.build import build_fmus
 
     (fmu,) = build_fmus(tmp_path_factory.mktemp("fmus"), only=["en50318-2mass"], quiet=True)
     return fmu

@@ -252,7 +252,7 @@ def test_en50318_readings(tmp_path, short_ref):
     text = page.read_text()
     assert "c: preset-constraint" in text.split("<!-- readings:start -->")[1]
     assert (tmp_path / "figures" / "en50318-spectrum.png").stat().st_size > 10_000
-    # the zero-phase filter of a reading is that of every run (master/statistics.py)
+    # the zero-phase filter of a reading is that of every run (master/results/statistics.py)
     sys.path.insert(0, str(SCRIPTS))
     try:
         import en50318_readings as R
@@ -260,7 +260,7 @@ def test_en50318_readings(tmp_path, short_ref):
         sys.path.remove(str(SCRIPTS))
     import numpy as np
 
-    from pantocosim.master.statistics import contact_statistics
+    from pantocosim.master.results.statistics import contact_statistics
 
     t = np.arange(0.0, 2.0, 1e-3)
     F = 100 + 20 * np.sin(2 * np.pi * 3 * t) + 5 * np.sin(2 * np.pi * 40 * t)

@@ -1,6 +1,6 @@
-"""The FMUs' export libraries (fmus/fmi/native/) on their own: compiled with every warning
+"""The FMUs' export libraries (fmus/fmi/embedding/) on their own: compiled with every warning
 and GCC's static analyser, and run in the C hosts of tests/native and in a threaded Python
-host over a small slave (tests/native/slow_slave.py) instead of a built FMU: the runtime
+host over a small slave (tests/c_hosts/slow_slave.py) instead of a built FMU: the runtime
 probe reads any answer without overflow and within a time bound, names the interpreter it
 tried and what it lacked; no Python error outlives a call; an instance or FMU state freed on
 another thread waits for the call under way; a missing resources folder is named."""
@@ -19,12 +19,12 @@ import pytest
 from fmi_script import results
 from test_native_host import assert_clean_exit, clean_env, host  # noqa: F401  (fixture)
 
-from pantocosim.fmi.native import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS
-from pantocosim.master.fmu_export import compile_export_library, compiler
+from pantocosim.fmi.embedding import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS
+from pantocosim.master.fmu.embedding import compile_export_library, compiler
 
 ROOT = Path(__file__).resolve().parents[1]
-SLAVE = ROOT / "tests" / "native" / "slow_slave.py"
-FMI3_HOST = ROOT / "tests" / "native" / "fmi3_host.c"
+SLAVE = ROOT / "tests" / "c_hosts" / "slow_slave.py"
+FMI3_HOST = ROOT / "tests" / "c_hosts" / "fmi3_host.c"
 OK, WARNING, ERROR = 0, 1, 3
 
 

@@ -22,13 +22,13 @@ from fmi_script import Script, results
 from test_native_host import (CATENARY_RUN, DISCARD, ERROR, OK, PANTOGRAPH_RUN,
                               assert_clean_exit, host, run_host, run_twin, stepping_script)
 
-from pantocosim.master.results import read_csv
+from pantocosim.master.results.files import read_csv
 from pantocosim.master.run import prepare, run_monolithic
 
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "tests" / "native" / "fmi3_host.c"
+HOST_SOURCE = ROOT / "tests" / "c_hosts" / "fmi3_host.c"
 SHORT = Path(__file__).with_name("data") / "short-en50318.toml"
 NAMES = ["dsa380-rigid", "dsa380-flexible", "dsa380-lumped3", "en50318-2mass", "catenary"]
 #: FMI 3.0 type of each FMI 2.0 type of the ports

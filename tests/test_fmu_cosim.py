@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pantocosim.master.results import read_csv
+from pantocosim.master.results.files import read_csv
 from pantocosim.master.run import prepare, run_monolithic
 
 #: FMUs or long runs: outside `pytest -m "not slow"` (CI runs everything)
@@ -90,8 +90,8 @@ def test_master_reports_the_fmu_message(tmp_path):
     message naming the parameter, the master's FMU layer raises it as an FmuError, a later
     step is discarded, the process survives."""
     code = (
-        "from pantocosim.master.fmu_build import build_fmus\n"
-        "from pantocosim.master.fmu_runtime import FmuInstance, FmuError\n"
+        "from pantocosim.master.fmu.build import build_fmus\n"
+        "from pantocosim.master.fmu.runtime import FmuInstance, FmuError\n"
         "import os\n"
         f"p = build_fmus({str(tmp_path)!r}, only=['en50318-2mass'], quiet=True)[0]\n"
         "i = FmuInstance(p, 'pan')\n"
@@ -120,7 +120,7 @@ def test_real_vector_exchanges_values_through_fmi(fmus):
     """RealVector (the master's per-step exchange) writes and reads the FMU's variables as
     fmpy's setReal/getReal do."""
     code = (
-        "from pantocosim.master.fmu_runtime import FmuInstance\n"
+        "from pantocosim.master.fmu.runtime import FmuInstance\n"
         "import os\n"
         f"i = FmuInstance({str(fmus['en50318-2mass'])!r}, 'pan')\n"
         "i.initialize({'speed_kmh': 300.0})\n"
@@ -139,7 +139,7 @@ def test_real_vector_failure_is_an_fmu_error():
     status and the instance's name (an FMU stand-in: nothing is loaded)."""
     from types import SimpleNamespace
 
-    from pantocosim.master.fmu_runtime import Fmi2Api, FmuError, FmuInstance, RealVector
+    from pantocosim.master.fmu.runtime import Fmi2Api, FmuError, FmuInstance, RealVector
 
     class Refused(Exception):
         status = 3

@@ -13,8 +13,8 @@ pytestmark = pytest.mark.slow
 def test_linear_catenary_fmu_equals_the_in_process_linear_model(fmus):
     from pantocosim.catenary.definition import load_catenary, with_spans
     from pantocosim.catenary.linear import LinearCatenary
-    from pantocosim.core.stepping import ForcedStepper
-    from pantocosim.interaction.stepping import make_stepper
+    from pantocosim.core.structure_stepping import ForcedStepper
+    from pantocosim.interaction.stepper_factory import make_stepper
     from pantocosim.core.hht import HHTSettings
 
     x0, F0 = [30.0], [120.0]

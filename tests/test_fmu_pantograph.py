@@ -35,10 +35,10 @@ def test_the_staged_package_leaves_out_the_master_and_the_pendulum(tmp_path):
     """The package an FMU bundles: the models without the master and the multibody core
     (no FMU runs the pendulum) and the native FMUs' C sources, stamped as the installed package is stamped."""
     from pantocosim.core.stamp import UNBUNDLED, package_stamp
-    from pantocosim.master.fmu_build import model_package_dir, stage_package
+    from pantocosim.master.fmu.build import model_package_dir, stage_package
 
     pkg, stamp = stage_package(tmp_path)
-    assert set(UNBUNDLED) == {"master", "multibody", "realtime"}
+    assert set(UNBUNDLED) == {"master", "multibody", "native"}
     assert (model_package_dir() / "multibody").is_dir()
     assert not any((pkg / name).exists() for name in UNBUNDLED)
     assert (pkg / "pantograph").is_dir() and (pkg / "catenary").is_dir()
@@ -49,7 +49,7 @@ def test_every_fmu_bundles_the_models_only(fmus):
     """No FMU carries the master or the multibody core, and none is stale."""
     import zipfile
 
-    from pantocosim.master.fmu_build import is_stale
+    from pantocosim.master.fmu.build import is_stale
 
     for name, fmu in fmus.items():
         names = zipfile.ZipFile(fmu).namelist()

@@ -26,7 +26,7 @@ SIBLING_IMPORTS: set[tuple[str, str]] = set()   # (from floor, to floor) documen
 DEFERRED = {
     ("pantocosim.catenary.size_guard", "pantocosim.catenary.mesh"):
         "--help shows MAX_DOFS; the mesh costs it 0.16 s",
-    ("pantocosim.master.size_guard", "pantocosim.catenary.definition"):
+    ("pantocosim.master.size_limits", "pantocosim.catenary.definition"):
         "--help shows the limits; the definition loader costs it 0.09 s",
     ("pantocosim.master.thirdparty.cofmupy_json", "pantocosim.master.thirdparty.common"):
         "the module also runs as CoFmuPy's child, in that tool's venv without pantocosim",
@@ -52,7 +52,7 @@ THIRD_PARTY_DEFERRED = {
     ("pantocosim.master.thirdparty.", "child"):
         "a third-party master's child process: numpy and scipy.sparse.linalg before any FMU "
         "loads (docs/pythonfmu-notes.md, B5); CoFmuPy's child runs in that tool's own venv",
-    ("pantocosim.master.run_results", "finish"):
+    ("pantocosim.master.run.finish", "finish"):
         "`resource` exists on POSIX only",
     ("pantocosim.master.stability", "departures"):
         "scipy.special (0.14 s) serves only a finished run's departures",

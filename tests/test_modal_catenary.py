@@ -20,7 +20,7 @@ from pantocosim.catenary.linear import LinearCatenary
 from pantocosim.catenary.modal import ModalCatenary
 from pantocosim.catenary.modal_step import ModalHHT
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
-from pantocosim.core.stepper import structure_step
+from pantocosim.core.stepper_contract import structure_step
 
 V = 300 / 3.6
 H = 1e-3

@@ -1,4 +1,4 @@
-"""The native C FMUs of ``pantocosim export-native``: a C host (tests/native/realtime_host.c,
+"""The native C FMUs of ``pantocosim export-native``: a C host (tests/c_hosts/realtime_host.c,
 compiled here) runs them with no Python on PATH from another folder and gets the Python
 models' numbers; the win64 binaries under wine give the Linux numbers; the FMU's own
 sources/ build the same library; doStep allocates nothing; bad data and bad inputs get the
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "fmus" / "realtime" / "realtime_host.c"
+HOST_SOURCE = ROOT / "fmus" / "native" / "realtime_host.c"
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 STEPS, DT = 600, 0.001
 
@@ -43,7 +43,7 @@ def prepared():
 @pytest.fixture(scope="module")
 def exported(prepared, tmp_path_factory):
     """The scenario's native FMUs, unpacked: {name: folder}."""
-    from pantocosim.master.native_models import export_scenario
+    from pantocosim.master.native.models import export_scenario
 
     required("gcc", "gcc")
     out = tmp_path_factory.mktemp("native")
@@ -98,7 +98,7 @@ def test_modal_catenary_in_a_c_host_equals_the_python_model(host, tmp_path):
     """The native modal catenary (modes below the scenario's cutoff, static corrections at the
     droppers and the moving contact points) against the Python modal model's closed-form
     steps under the host's forcing."""
-    from pantocosim.master.native_models import export_catenary
+    from pantocosim.master.native.models import export_catenary
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -121,7 +121,7 @@ def python_catenary(prep, steps):
     """The Python catenary FMU's stepper and outputs under the host's forcing: rows of t,
     wire height and velocity, support uplifts."""
     from pantocosim.core.hht import HHTSettings
-    from pantocosim.interaction.stepping import make_stepper
+    from pantocosim.interaction.stepper_factory import make_stepper
 
     sc, model = prep.scenario, prep.catenary
     F0 = prep.static_forces
@@ -157,7 +157,7 @@ def pantograph_matches(prep, folder, host, tmp_path):
     """The native pantograph of ``prep``'s first pantograph in the C host against the Python
     pantograph FMU's stepper (the same model, start and closed-form step), to 1e-12."""
     from pantocosim.core.hht import HHTIntegrator, HHTSettings
-    from pantocosim.master.run_setup import scenario_pantograph
+    from pantocosim.master.run.setup import scenario_pantograph
 
     sc = prep.scenario
     got, counts = run_host(host, ["pantograph", folder, STEPS, DT], tmp_path)
@@ -185,7 +185,7 @@ def test_pantograph_in_a_c_host_equals_the_python_fmu_stepper(prepared, exported
 
 
 def test_three_mass_pantograph_in_a_c_host_equals_the_python_fmu_stepper(host, tmp_path):
-    from pantocosim.master.native_models import export_pantograph
+    from pantocosim.master.native.models import export_pantograph
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -361,7 +361,7 @@ def rewritten(folder: Path, tmp_path: Path, data: bytes) -> Path:
 
 
 def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tmp_path):
-    from pantocosim.master.native_data import pack_data, read_data
+    from pantocosim.master.native.data_file import pack_data, read_data
 
     cat = exported["catenary"]
     path = cat / "resources" / "model.pcsdata"
@@ -396,8 +396,8 @@ def test_native_catenary_in_our_master_gives_the_python_catenary_fmus_force(
     catenary FMU and the Python catenary FMU of the same model (linear, modal) give the same
     contact force to 1e-9."""
     from pantocosim.master.cosim import run_cosim
-    from pantocosim.master.fmu_check import FmuPlan
-    from pantocosim.master.native_models import export_catenary
+    from pantocosim.master.fmu.check import FmuPlan
+    from pantocosim.master.native.models import export_catenary
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -425,8 +425,8 @@ def test_native_catenary_implicit_equals_the_monolithic_run(model, fmus, tmp_pat
     reproduces the monolithic run of the same catenary model to the bar the Python FMUs meet
     (tests/test_fmu_cosim.py: 1e-6 of the mean force, tight coupling tolerance)."""
     from pantocosim.master.cosim import run_cosim
-    from pantocosim.master.fmu_check import FmuPlan
-    from pantocosim.master.native_models import export_catenary
+    from pantocosim.master.fmu.check import FmuPlan
+    from pantocosim.master.native.models import export_catenary
     from pantocosim.master.run import prepare, run_monolithic
     from pantocosim.master.scenario import load_scenario
 
@@ -451,7 +451,7 @@ def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_pa
     from fmpy.fmi3 import FMU3Slave
     from fmpy.validation import validate_fmu
 
-    from pantocosim.master.native_models import export_scenario
+    from pantocosim.master.native.models import export_scenario
 
     written, _ = export_scenario(prepared, tmp_path / "fmi3", fmi=3, win64=False)
     for path in written:
@@ -499,7 +499,7 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, 
     if model == "linear":
         cat = exported["catenary"]
     else:
-        from pantocosim.master.native_models import export_catenary
+        from pantocosim.master.native.models import export_catenary
         from pantocosim.master.run import prepare
 
         prepared = prepare(dataclasses.replace(prepared.scenario, catenary_model=model))

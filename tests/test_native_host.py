@@ -1,4 +1,4 @@
-"""The FMUs in a native host: a C program (tests/native/fmi2_host.c, compiled here with the
+"""The FMUs in a native host: a C program (tests/c_hosts/fmi2_host.c, compiled here with the
 system's C compiler) dlopens each FMU's linux64 binary and runs the FMI 2.0 call sequence in
 a clean environment (no LD_PRELOAD, no PYTHONPATH, no virtual environment on PATH, another
 working folder). Its outputs equal fmpy's; every refused call returns fmi2Error (fmi2Discard
@@ -15,7 +15,7 @@ import pytest
 from fmi_script import Script, results
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "tests" / "native" / "fmi2_host.c"
+HOST_SOURCE = ROOT / "tests" / "c_hosts" / "fmi2_host.c"
 TWIN = ROOT / "tests" / "fmi_script.py"
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 

@@ -418,7 +418,7 @@ def test_an_unstable_run_past_the_check_is_flagged(modal20, monkeypatch, scheme,
 
 
 def stats(mean, std, loss):
-    from pantocosim.master.statistics import ContactStatistics
+    from pantocosim.master.results.statistics import ContactStatistics
 
     return ContactStatistics(mean_n=mean, std_n=std, stat_max_n=mean + 3 * std,
                              stat_min_n=mean - 3 * std, max_n=0.0, min_n=0.0,

@@ -5,7 +5,7 @@ import pytest
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.interaction.penalty_contact import PenaltyContact
-from pantocosim.master.statistics import (contact_statistics, force_spectrum, lowpass,
+from pantocosim.master.results.statistics import (contact_statistics, force_spectrum, lowpass,
                                           window_mask)
 
 

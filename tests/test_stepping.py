@@ -13,14 +13,14 @@ import pytest
 
 from pantocosim.catenary.definition import load_catenary, with_spans
 from pantocosim.catenary.models import make_catenary
-from pantocosim.core import stepper as contract
+from pantocosim.core import stepper_contract as contract
 from pantocosim.core.affine_hht import AffineHHT
 from pantocosim.interaction.condensed import CondensedStepper
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 from pantocosim.interaction.penalty_contact import PenaltyContact
-from pantocosim.core.stepping import ForcedStepper
-from pantocosim.interaction.stepping import AssembledStepper, make_stepper
+from pantocosim.core.structure_stepping import ForcedStepper
+from pantocosim.interaction.stepper_factory import AssembledStepper, make_stepper
 from pantocosim.pantograph.presets import load_pantograph
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"

@@ -42,7 +42,7 @@ def files_under(folder):
 
 def test_a_case_that_cannot_write_leaves_nothing_and_says_which_file(tmp_path, sweep,
                                                                     monkeypatch):
-    import pantocosim.master.recorder as recorder
+    import pantocosim.master.results.recorder as recorder
 
     monkeypatch.setattr(recorder, "open", lambda p, mode: FullDisk(open(p, mode), 30_000),
                         raising=False)

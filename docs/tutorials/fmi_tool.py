@@ -6,7 +6,7 @@ third-party master (libcosim), and a pantograph FMU in a native C host.
 Works in DIR (default ``tutorial-fmi``): builds the FMUs into DIR/dist/fmus (or links the
 folder --fmus, FMUs built before by ``pantocosim build-fmus``), runs a short scenario with each
 coupling, writes the SSP file of a swapped pantograph and runs it in libcosim, and runs a
-pantograph FMU in the C host ``tests/native/fmi2_host.c``; writes ``summary.json``.
+pantograph FMU in the C host ``tests/c_hosts/fmi2_host.c``; writes ``summary.json``.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def native_host(fmu: Path, work: Path) -> list[float]:
     cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     exe = work / "fmi2_host"
     subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe),
-                    str(ROOT / "tests" / "native" / "fmi2_host.c"), "-ldl"], check=True)
+                    str(ROOT / "tests" / "c_hosts" / "fmi2_host.c"), "-ldl"], check=True)
     unpacked = work / fmu.stem
     with zipfile.ZipFile(fmu) as z:
         z.extractall(unpacked)

@@ -4,7 +4,7 @@
 
 Exports en50318-300's linear catenary and its 2-mass pantograph as native C FMUs
 (``pantocosim export-native``), unpacks them, compiles the C host
-``fmus/realtime/realtime_host.c`` with the system's C compiler and runs the coupled loop at
+``fmus/native/realtime_host.c`` with the system's C compiler and runs the coupled loop at
 1 kHz, first as fast as it goes, then paced to the wall clock; writes ``summary.json``.
 """
 
@@ -68,7 +68,7 @@ def main(argv=None) -> dict:
     # --8<-- [start:host]
     import pantocosim as package
 
-    source = Path(package.__file__).resolve().parent / "realtime" / "realtime_host.c"
+    source = Path(package.__file__).resolve().parent / "native" / "realtime_host.c"
     cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
     subprocess.run([cc, "-std=c99", "-O2", str(source), "-o", str(out / "realtime_host"),
                     "-ldl", "-lm"], check=True)

@@ -28,7 +28,7 @@ def python_loop(scenario: Path, n_steps: int) -> dict:
     from pantocosim.core.hht import HHTSettings
     from pantocosim.master.pacing import StepClock
     from pantocosim.master.run import prepare
-    from pantocosim.master.run_stepping import monolithic_stepper
+    from pantocosim.master.run.stepping import monolithic_stepper
     from pantocosim.master.scenario import load_scenario
 
     sc = load_scenario(scenario)

@@ -24,7 +24,7 @@ from pantocosim.core.disk_cache import cached
 from pantocosim.core.errors import ConvergenceError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.core.lowrank import ColumnCache
-from pantocosim.core.stepping import structure_stepper
+from pantocosim.core.structure_stepping import structure_stepper
 
 
 class LinearisedCatenary:
@@ -33,7 +33,7 @@ class LinearisedCatenary:
     (3.5)), as an :class:`~pantocosim.core.affine_hht.AffineForm` whose HHT steps are taken in
     closed form (one kept banded factorization, one solve a step)."""
 
-    #: stepped in closed form on :meth:`affine_form` (:mod:`pantocosim.core.stepper`)
+    #: stepped in closed form on :meth:`affine_form` (:mod:`pantocosim.core.stepper_contract`)
     stepping = "affine"
 
     def __init__(self, catenary):
@@ -92,7 +92,7 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
     under the moving forces (its declared stepper,
-    :func:`~pantocosim.core.stepping.structure_stepper`)."""
+    :func:`~pantocosim.core.structure_stepping.structure_stepper`)."""
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
     integ = structure_stepper(model, HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)

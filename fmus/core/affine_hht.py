@@ -40,7 +40,7 @@ from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
 from .state_label import new_label as _new_id
-from .stepper import register_structure_step
+from .stepper_contract import register_structure_step
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20

@@ -30,7 +30,7 @@ from .errors import ConvergenceError, ParameterError
 from .hht_defaults import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX  # noqa: F401
 from .model import SecondOrderModel
 from .state_label import new_label
-from .stepper import StepReport
+from .stepper_contract import StepReport
 
 
 class FactorReuse(Enum):

@@ -30,7 +30,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .stepper import NEWTON
+from .stepper_contract import NEWTON
 
 
 @dataclass

@@ -13,9 +13,9 @@ import pantocosim
 STAMPED_SUFFIXES = (".py", ".toml", ".c", ".h")
 #: subpackages that are not part of the FMUs' model: the master (the FMUs are driven by one),
 #: the multibody core (the double pendulum, which no FMU runs) and the native FMUs' C sources
-#: (``realtime``, compiled into the native FMUs by ``export-native``). FMUs do not bundle them
+#: (``native``, compiled into the native FMUs by ``export-native``). FMUs do not bundle them
 #: and the stamp does not cover them.
-UNBUNDLED = ("master", "multibody", "realtime")
+UNBUNDLED = ("master", "multibody", "native")
 
 
 def package_stamp(package_dir: str | Path | None = None) -> str:

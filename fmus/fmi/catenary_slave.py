@@ -29,7 +29,7 @@ import numpy as np
 from pantocosim.core.hht import FactorReuse, HHTSettings
 from pantocosim.interaction.catenary_start import (START_FORCE_TOL_N, settled_start, start_laws,
                                                    static_contact_heights)
-from pantocosim.interaction.stepping import make_stepper
+from pantocosim.interaction.stepper_factory import make_stepper
 
 from ..catenary.definition import load_catenary, with_spans
 from ..catenary.models import make_catenary, model_name

@@ -36,7 +36,7 @@ from pantocosim.pantograph.presets import load_pantograph, preset_defaults
 
 from ..core.errors import ParameterError
 from ..core.hht import HHTSettings
-from ..interaction.stepping import make_stepper
+from ..interaction.stepper_factory import make_stepper
 from .front import Status
 from .given import track_sets
 from .pantograph_ports import FORCE_TIMING, LAW_INPUTS, SPEED_INPUT, VARIABLES

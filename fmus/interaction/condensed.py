@@ -23,7 +23,7 @@ from numba import njit
 
 from ..core.hht import HHTIntegrator
 from ..core.model import Evaluation, SecondOrderModel
-from ..core.stepper import StepReport, StructureStep
+from ..core.stepper_contract import StepReport, StructureStep
 from .penalty_contact import condensed_forces
 
 

@@ -29,7 +29,7 @@ from pantocosim.master.campaign.worker import CASE_FILE, run_case
 from pantocosim.master.interrupt import children_deaf_to_ctrl_c
 from pantocosim.master.output_folder import writing
 from pantocosim.master.campaign.axes import COUPLINGS
-from pantocosim.master.fmu_build import default_out, ensure_fmus
+from pantocosim.master.fmu.build import default_out, ensure_fmus
 from pantocosim.master.folder_lock import FolderLock
 from pantocosim.master.interrupt import raise_if_swallowed
 

@@ -27,7 +27,7 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from pantocosim.master.bench import bench
+    from pantocosim.master.benchmarks import bench
 
     res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print,
                 cases=args.case)

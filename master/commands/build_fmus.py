@@ -24,8 +24,8 @@ def add_parser(sub):
 
 def run(args) -> int:
     from pantocosim.core.errors import OutputError
-    from pantocosim.master.fmu_build import FMI_VERSIONS, check_names, default_out
-    from pantocosim.master.fmu_dist import build_all
+    from pantocosim.master.fmu.build import FMI_VERSIONS, check_names, default_out
+    from pantocosim.master.fmu.dist import build_all
     from pantocosim.master.output_folder import reason
 
     check_names(args.only)

@@ -36,7 +36,7 @@ def add_parser(sub):
 def run(args) -> int:
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
-    from pantocosim.master.native_models import export_scenario
+    from pantocosim.master.native.models import export_scenario
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 

@@ -28,7 +28,7 @@ def run(args) -> int:
 
     if args.count < 1:
         raise ParameterError("--count", args.count, "must be >= 1")
-    from pantocosim.master.size_guard import check_cli_catenary
+    from pantocosim.master.size_limits import check_cli_catenary
 
     if args.element_size is not None:
         check_number("--element-size", args.element_size, positive=True)

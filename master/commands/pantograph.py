@@ -33,7 +33,7 @@ def check_times(duration: float, dt: float, alpha: float, max_steps: int | None,
     """The number of steps of ``--duration`` in steps of ``--dt`` (checked)."""
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
-    from pantocosim.master.size_guard import check_limit_option, check_steps
+    from pantocosim.master.size_limits import check_limit_option, check_steps
 
     check_number("--duration", duration, positive=True)
     check_number(dt_name, dt, positive=True)
@@ -105,7 +105,7 @@ def write_outputs(out: Path, stem: str, model, res, formula: str):
     import matplotlib.pyplot as plt
 
     from pantocosim.master.output_folder import writing
-    from pantocosim.master.results import write_csv
+    from pantocosim.master.results.files import write_csv
 
     with writing("file", out / f"{stem}.csv"):
         csv = write_csv(out / f"{stem}.csv", res.columns(model.dof_names))

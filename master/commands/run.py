@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
-from pantocosim.master.size_guard import MAX_DOFS, MAX_STEPS, check_limit_option
+from pantocosim.master.size_limits import MAX_DOFS, MAX_STEPS, check_limit_option
 
 
 def add_cache_option(p) -> None:
@@ -54,7 +54,7 @@ def add_parser(sub):
 
 def add_size_options(p, steps: bool = True) -> None:
     """``--max-dofs`` (and ``--max-steps``): lift the size guard's limits
-    (:mod:`pantocosim.master.size_guard`)."""
+    (:mod:`pantocosim.master.size_limits`)."""
     p.add_argument("--max-dofs", type=int, default=None, metavar="N",
                    help=f"build catenary models of up to N DOFs (default {MAX_DOFS:,})")
     if steps:

@@ -32,7 +32,7 @@ def run(args) -> int:
     from pantocosim.core.params import check_number
 
     from pantocosim.master.output_folder import check_file_target
-    from pantocosim.master.size_guard import check_cli_catenary
+    from pantocosim.master.size_limits import check_cli_catenary
 
     if args.element_size is not None:
         check_number("--element-size", args.element_size, positive=True)

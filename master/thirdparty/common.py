@@ -5,7 +5,7 @@ Not a recipe itself. Every recipe runs the foreign master in a child process (``
 pythonfmu may abort at process exit (docs/third-party.md, "Process exit"), so the child
 imports scipy.sparse.linalg before any FMU, writes the time series as CSV, prints its wall
 time and ends with ``os._exit``. The parent reads the CSV and prints the EN 50317 statistics
-computed with ``pantocosim.master.statistics.contact_statistics``.
+computed with ``pantocosim.master.results.statistics.contact_statistics``.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ import numpy as np
 from pantocosim.catenary.analysis import central_window
 from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
-from pantocosim.master.fmu_check import check_binary_fmu, read_fmu
+from pantocosim.master.fmu.check import check_binary_fmu, read_fmu
 from pantocosim.master.ssp import scenario_support_x
-from pantocosim.master.statistics import contact_statistics
+from pantocosim.master.results.statistics import contact_statistics
 
 DEFAULT_SSP = Path("dist") / "fmus" / "dsa380-ave-300.ssp"
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -68,7 +68,7 @@ def refuse(module: str, exc: Exception):
 
 def check_fmu(module: str, fmu: str | Path, field: str) -> None:
     """Refuse (:func:`refuse`) an FMU file that cannot run here or is not what its model
-    description says (:func:`pantocosim.master.fmu_check.check_binary_fmu`)."""
+    description says (:func:`pantocosim.master.fmu.check.check_binary_fmu`)."""
     try:
         read_fmu(Path(fmu), field, None)
         check_binary_fmu(Path(fmu), field)

@@ -30,7 +30,7 @@ unsigned pcs_model_kind(void);
 PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err);
 void pcs_model_free(PcsModel *m, const PcsMemory *mem);
 /* the variables, by value reference (the same numbers as the modelDescription.xml written
-   by pantocosim.master.native_export, which reads them from the model's header) */
+   by pantocosim.master.native.export, which reads them from the model's header) */
 int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err);
 int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *err);
 int pcs_get_integer(PcsModel *m, unsigned vr, int *value, char *err);

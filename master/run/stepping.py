@@ -1,6 +1,6 @@
 """The monolithic reference run (``pantocosim run --coupling monolithic``): catenary,
 pantographs and penalty contacts advanced together by the stepper the catenary model declares
-(:func:`~pantocosim.interaction.stepping.make_stepper`: Newton-Raphson on the assembled system, or
+(:func:`~pantocosim.interaction.stepper_factory.make_stepper`: Newton-Raphson on the assembled system, or
 the closed-form structure step condensed on the contact points), one row of the time series
 per step.
 """
@@ -16,14 +16,14 @@ from tqdm import tqdm
 
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.stepper import CoupledStepper, warm_up
-from pantocosim.interaction.stepping import make_stepper
+from pantocosim.core.stepper_contract import CoupledStepper, warm_up
+from pantocosim.interaction.stepper_factory import make_stepper
 from pantocosim.master import stability
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.pacing import StepClock
-from pantocosim.master.recorder import Recorder
-from pantocosim.master.run_results import RunResult, column_names
-from pantocosim.master.run_setup import Prepared
+from pantocosim.master.results.recorder import Recorder
+from pantocosim.master.run.finish import RunResult, column_names
+from pantocosim.master.run.setup import Prepared
 
 
 def progress_bar(total: int, label: str, enabled: bool | None = None):
@@ -45,7 +45,7 @@ def monolithic_stepper(prep: Prepared, settings: HHTSettings) -> CoupledStepper:
 
 
 class RowWriter:
-    """One row of the time series (:func:`~.run_results.column_names`) per step: the
+    """One row of the time series (:func:`~.finish.column_names`) per step: the
     stepper's contacts and support uplifts, into the recorder and the stability monitor."""
 
     def __init__(self, prep: Prepared, stepper, rec: Recorder, monitor):

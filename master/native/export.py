@@ -1,5 +1,5 @@
 """The constants of the native FMUs, read from the Python models: the one place that knows
-the models' and steppers' internals (the native models in ``fmus/realtime/`` step exactly
+the models' and steppers' internals (the native models in ``fmus/native/`` step exactly
 these constants with the same closed-form steps).
 
 - linear catenary (:class:`~pantocosim.catenary.linear.LinearCatenary`, its
@@ -10,7 +10,7 @@ these constants with the same closed-form steps).
 - lumped pantograph (:meth:`~pantocosim.pantograph.lumped.LumpedPantograph.linear_form`):
   M, C, K, B and the start state.
 
-Each function returns ``{section name: array}`` for :func:`pantocosim.master.native_fmu.write_data`.
+Each function returns ``{section name: array}`` for :func:`pantocosim.master.native.build.write_data`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 for a model stepped by Newton, or a closed-form structure step under given loads
 (:class:`ForcedStepper`) for one that declares a registered structure step (``"affine"``,
 ``"modal"``, :mod:`.stepper`). With pantographs in contact the one factory is
-:func:`pantocosim.interaction.stepping.make_stepper`, which steps a structure alone with
+:func:`pantocosim.interaction.stepper_factory.make_stepper`, which steps a structure alone with
 this one.
 """
 
@@ -12,7 +12,7 @@ import numpy as np
 
 from . import affine_hht  # noqa: F401  (registers the "affine" structure step)
 from .hht import HHTIntegrator
-from .stepper import NEWTON, Stepper, StepReport, StructureStep, declared_stepping, \
+from .stepper_contract import NEWTON, Stepper, StepReport, StructureStep, declared_stepping, \
     structure_step
 
 

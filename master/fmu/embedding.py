@@ -1,4 +1,4 @@
-"""The FMUs' own FMI export libraries (``pantocosim.fmi.native``).
+"""The FMUs' own FMI export libraries (``pantocosim.fmi.embedding``).
 
 ``pantocosim build-fmus`` compiles the library of each FMI version it builds once per build
 with the system's C compiler (``$CC``, else ``cc``): ``fmi2_export.c`` or ``fmi3_export.c``
@@ -19,7 +19,7 @@ import sys
 import zipfile
 from pathlib import Path
 
-from pantocosim.fmi.native import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS, RUNTIME_FILE
+from pantocosim.fmi.embedding import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS, RUNTIME_FILE
 
 CFLAGS = ["-std=c11", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall"]
 LIBS = ["-ldl", "-lpthread"]

@@ -34,7 +34,7 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.core.stamp import UNBUNDLED, package_stamp
 from pantocosim.fmi.front import FRONTS
 from pantocosim.fmi.slave_base import STAMP_FILE, bundled_stamp
-from pantocosim.master.fmu_export import compile_export_library, install_export_library
+from pantocosim.master.fmu.embedding import compile_export_library, install_export_library
 
 #: pantograph FMU name (the preset) -> slave class name
 PANTOGRAPH_FMUS = {

@@ -1,6 +1,6 @@
 """The one stepper factory (:func:`make_stepper`) and the stepper it builds besides the HHT
 integrator, the condensed step and the closed-form structure step under given loads
-(:class:`~pantocosim.core.stepping.ForcedStepper`): Newton-Raphson on structure, bodies and
+(:class:`~pantocosim.core.structure_stepping.ForcedStepper`): Newton-Raphson on structure, bodies and
 contacts assembled (:class:`AssembledStepper`).
 
 ==========================  =======================  ===================================
@@ -9,7 +9,7 @@ the model declares          under its inputs         with bodies in contact
 ``stepping = "newton"``     ``HHTIntegrator``        :class:`AssembledStepper`
 a registered structure      ``ForcedStepper``        :class:`~.condensed.CondensedStepper`
 step (``"affine"``,         (``structure_stepper``,  (a law that cannot be condensed:
-``"modal"``)                ``core.stepping``)       :class:`AssembledStepper`)
+``"modal"``)                ``core.structure_stepping``)       :class:`AssembledStepper`)
 ==========================  =======================  ===================================
 
 The monolithic run, the catenary FMU and in-process co-simulation all take their stepper from
@@ -21,9 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.hht import HHTIntegrator
-from ..core.stepper import (NEWTON, CoupledStepper, Stepper, StepReport, declared_stepping,
+from ..core.stepper_contract import (NEWTON, CoupledStepper, Stepper, StepReport, declared_stepping,
                             structure_step)
-from ..core.stepping import structure_stepper
+from ..core.structure_stepping import structure_stepper
 from .condensed import CondensedStepper
 from .coupled import CoupledSystem
 
@@ -81,12 +81,12 @@ def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False
                  contact_state=None) -> Stepper | CoupledStepper:
     """The stepper of ``model`` under its inputs, or with ``bodies`` (pantographs) in
     ``contact`` (a law of :mod:`.contact_laws`, in ``contact_state``: the static start's),
-    as the model declares (``stepping``, :mod:`pantocosim.core.stepper`; table
+    as the model declares (``stepping``, :mod:`pantocosim.core.stepper_contract`; table
     above). ``redo``: keep what a step redone from the same state reuses (a co-simulation
     rollback redoes steps). A law that cannot be condensed on the contact points
     (``condensable``) is stepped on the assembled system. Initialize it with
     ``initialize(t0, q0, v0, inputs0)``; with bodies it is a
-    :class:`~pantocosim.core.stepper.CoupledStepper`, q0 = [structure | body 1 | ...] at
+    :class:`~pantocosim.core.stepper_contract.CoupledStepper`, q0 = [structure | body 1 | ...] at
     rest."""
     closed = declared_stepping(model) != NEWTON
     if bodies:

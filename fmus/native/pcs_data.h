@@ -1,6 +1,6 @@
 /*
  * The data file of a pantocosim native FMU (resources/model.pcsdata), written at export by
- * pantocosim.master.native_export and documented in docs/tutorials/hil.md:
+ * pantocosim.master.native.export and documented in docs/tutorials/hil.md:
  *
  *   header (40 bytes)  magic "PCSDATA\0", uint32 version, uint32 byte-order mark 0x01020304,
  *                      uint32 model kind, uint32 number of sections, uint64 payload bytes,

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from pantocosim.core.errors import Interrupted
-from pantocosim.master import plots as P
+from pantocosim.master.results import plots as P
 from pantocosim.master.output_folder import writing
-from pantocosim.master.results import write_json
-from pantocosim.master.run_setup import Prepared
+from pantocosim.master.results.files import write_json
+from pantocosim.master.run.setup import Prepared
 from pantocosim.master.stability import departures
-from pantocosim.master.statistics import contact_statistics, window_mask
+from pantocosim.master.results.statistics import contact_statistics, window_mask
 
 #: the step counters of a monolithic run: the Newton iterations of its step
 MONOLITHIC_COUNTERS = ("newton_iterations",)

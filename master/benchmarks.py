@@ -40,9 +40,9 @@ from pantocosim.catenary.model import CatenaryModel
 from pantocosim.core.errors import PantocosimError, ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.master.cosim import fmu_paths, fmu_subsystems
-from pantocosim.master.fmu_build import default_out, ensure_fmus
-from pantocosim.master.native_fmu import CFLAGS, SOURCE_DIR
-from pantocosim.master.native_models import export_scenario
+from pantocosim.master.fmu.build import default_out, ensure_fmus
+from pantocosim.master.native.build import CFLAGS, SOURCE_DIR
+from pantocosim.master.native.models import export_scenario
 from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
 
@@ -214,7 +214,7 @@ def python_fmu_loop(prep, steps: int, h: float) -> dict:
 
 def native_loop(tmp: Path, printer=print) -> dict:
     """The native FMUs (``pantocosim export-native``) of en50318-300 stepped 2 s at 1 ms from
-    a C loop (fmus/realtime/realtime_host.c, the master applies the penalty law): p50 / p99 /
+    a C loop (fmus/native/realtime_host.c, the master applies the penalty law): p50 / p99 /
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
     scenario, seconds, models = NATIVE_LOOP

@@ -1,5 +1,5 @@
 """The set-up every coupling of a run shares: ``prepare(scenario)`` checks the scenario
-against its catenary (:mod:`.run_checks`), builds the catenary and pantograph models, sets
+against its catenary (:mod:`.checks`), builds the catenary and pantograph models, sets
 each pantograph's actuation (:class:`Actuation`) and solves the static start.
 """
 
@@ -17,10 +17,10 @@ from pantocosim.core.errors import ConvergenceError, ParameterError
 from pantocosim.interaction.contact_laws import CONTACT_LAWS, ContactLaw, make_contact
 from pantocosim.interaction.coupled import CoupledSystem
 from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
-from pantocosim.master.run_checks import (analysis_window, check_passages, check_size, check_speed,
+from pantocosim.master.run.checks import (analysis_window, check_passages, check_size, check_speed,
                                           lowered_above_wire)
 from pantocosim.master.scenario import Scenario, load_scenario, scenario_catenary
-from pantocosim.master.size_guard import check_steps
+from pantocosim.master.size_limits import check_steps
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.presets import load_pantograph
 
@@ -100,7 +100,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
             element_size: float | None = None, max_dofs: int | None = None,
             max_steps: int | None = None) -> Prepared:
     """Validate ``scenario`` and build the models and the static start; the size guard
-    (:mod:`~pantocosim.master.size_guard`, limits ``max_dofs`` and ``max_steps``) runs before
+    (:mod:`~pantocosim.master.size_limits`, limits ``max_dofs`` and ``max_steps``) runs before
     anything is built."""
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     base = scenario_catenary(sc)

@@ -12,7 +12,7 @@ from pantocosim.catenary.mesh import estimate_dofs
 from pantocosim.catenary.operating_height import passage_duration
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.scenario import Scenario
-from pantocosim.master.size_guard import MAX_DOFS, check_catenary_size, culprit
+from pantocosim.master.size_limits import MAX_DOFS, check_catenary_size, culprit
 
 #: EN 50119: operating speed at most 0.7 of the contact-wire wave speed
 MAX_WAVE_SPEED_RATIO = 0.7

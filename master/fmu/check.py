@@ -4,7 +4,7 @@
   description (not a folder, an empty or truncated file);
 - each pantograph FMU is a pantocosim pantograph FMU holding the scenario's model: the model
   of an FMU is its ``modelName``, the slave class of its preset
-  (:data:`pantocosim.master.fmu_build.PANTOGRAPH_FMUS`); a pantograph given by a parameter
+  (:data:`pantocosim.master.fmu.build.PANTOGRAPH_FMUS`); a pantograph given by a parameter
   file is handed to the FMU as its ``parameter_file``;
 - the catenary FMU is pantocosim's and has inputs for every pantograph and uplift outputs for
   every support of the line (its capacities are read from its model description).
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
-from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
+from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
 from pantocosim.pantograph.presets import PRESETS
 
 

@@ -1,7 +1,7 @@
 """The native FMUs of a scenario (``pantocosim export-native``): the catenary (linear or
 modal model) and the constant-matrix pantographs, with the Python FMUs' variable names and
 the export's values as fixed parameters; their constants come from
-:mod:`.native_export`, the FMUs are built by :mod:`.native_fmu`."""
+:mod:`.export`, the FMUs are built by :mod:`.build`."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTSettings
 from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
-from pantocosim.master import native_export
-from pantocosim.master.fmu_build import CATENARY_CLASS, PANTOGRAPH_FMUS
-from pantocosim.master.native_fmu import NativeModel, Variable, build_fmu, value_references
-from pantocosim.master.run_setup import scenario_pantograph
+from pantocosim.master.native import export as native_export
+from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
+from pantocosim.master.native.build import NativeModel, Variable, build_fmu, value_references
+from pantocosim.master.run.setup import scenario_pantograph
 
 CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "catenary.h"))
 MAX_SUPPORTS = 64

@@ -1,5 +1,5 @@
 """The data file of a native FMU (``resources/model.pcsdata``, read by
-``fmus/realtime/pcs_data.c``): the constants the Python models compute at export, with a
+``fmus/native/pcs_data.c``): the constants the Python models compute at export, with a
 header that lets the FMU refuse a damaged or foreign file. Integers are little-endian on the
 hosts the FMUs are built for (the byte-order mark tells):
 

@@ -1,5 +1,5 @@
 """Everything ``pantocosim build-fmus`` (and ``build_fmus.py``) writes, for each FMI
-version: the generic FMUs (:mod:`pantocosim.master.fmu_build`), then the default scenario's
+version: the generic FMUs (:mod:`pantocosim.master.fmu.build`), then the default scenario's
 FMUs, SSP file and (FMI 2.0) CoFmuPy configuration (:mod:`pantocosim.master.ssp`)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from pantocosim.core.errors import PantocosimError
-from pantocosim.master.fmu_build import FMI_VERSIONS, build_fmus, check_fmi, default_out, fmi_out
+from pantocosim.master.fmu.build import FMI_VERSIONS, build_fmus, check_fmi, default_out, fmi_out
 from pantocosim.master.ssp import write_scenario_package
 
 
@@ -29,7 +29,7 @@ def build_all(out: Path | None = None, only=None, ssp: bool = True,
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``build_fmus.py`` / ``python -m pantocosim.master.fmu_dist``."""
+    """``build_fmus.py`` / ``python -m pantocosim.master.fmu.dist``."""
     parser = argparse.ArgumentParser(description="Build the pantocosim FMUs and the SSP file "
                                      "of the default scenario.")
     parser.add_argument("--out", type=Path, default=None, help="output folder (default "

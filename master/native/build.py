@@ -1,6 +1,6 @@
 """Building a native FMU: its modelDescription.xml (FMI 2.0 or 3.0), the C sources of
-``fmus/realtime/`` in ``sources/`` (with ``buildDescription.xml`` for FMI 3.0), the data file
-in ``resources/`` (:mod:`.native_data`) and the binaries compiled from those sources (linux64
+``fmus/native/`` in ``sources/`` (with ``buildDescription.xml`` for FMI 3.0), the data file
+in ``resources/`` (:mod:`.data_file`) and the binaries compiled from those sources (linux64
 with the system's C compiler, win64 with mingw-w64)."""
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from xml.sax.saxutils import escape
 
 import pantocosim
 from pantocosim.core.errors import ParameterError
-from pantocosim.master.native_data import DATA_FILE, write_data
+from pantocosim.master.native.data_file import DATA_FILE, write_data
 
-#: the C sources of the native models (installed with the package as pantocosim/realtime)
-SOURCE_DIR = Path(pantocosim.__file__).resolve().parent / "realtime"
+#: the C sources of the native models (installed with the package as pantocosim/native)
+SOURCE_DIR = Path(pantocosim.__file__).resolve().parent / "native"
 #: warnings are errors: the sources compile clean with any C99 compiler
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 MINGW = "x86_64-w64-mingw32-gcc"

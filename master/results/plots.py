@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from pantocosim.master.statistics import force_spectrum, lowpass  # noqa: E402
+from pantocosim.master.results.statistics import force_spectrum, lowpass  # noqa: E402
 
 
 def plot_contact_force(path: Path, time, positions, forces, window, support_x, dropper_x,

@@ -1,0 +1,1 @@
+"""The Python FMUs: build, export library, packaging, checks and the fmpy runtime."""
