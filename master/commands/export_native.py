@@ -37,10 +37,12 @@ def run(args) -> int:
     from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
     from pantocosim.master.native.models import export_scenario
+    from pantocosim.master.commands.run import named_as_options
     from pantocosim.master.run import prepare
-    from pantocosim.master.scenario import load_scenario
+    from pantocosim.master.scenario import load_scenario, require_port_contact
 
     sc = load_scenario(args.scenario)
+    require_port_contact(sc, "a native FMU export")
     changes = {"catenary_model": args.catenary_model}
     if args.modal_cutoff_hz is not None:
         check_number("--modal-cutoff-hz", args.modal_cutoff_hz, positive=True)
@@ -50,8 +52,9 @@ def run(args) -> int:
     if out.exists() and not out.is_dir():
         raise ParameterError("--out", str(out), "is a file, not a folder")
     win64 = {"auto": None, "yes": True, "no": False}[args.win64]
-    prep = prepare(sc, force=args.force)
-    written, kept = export_scenario(prep, out, fmi=args.fmi, win64=win64)
+    with named_as_options(args):
+        prep = prepare(sc, force=args.force)
+        written, kept = export_scenario(prep, out, fmi=args.fmi, win64=win64)
     for path in written:
         print(f"wrote {path}")
     for k, why in kept:

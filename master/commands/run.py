@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from contextlib import contextmanager
 from pathlib import Path
 
 from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
@@ -95,6 +96,20 @@ def print_statistics(summary: dict) -> None:
         print(f"  results in {Path(summary['files']['summary']).parent}")
 
 
+@contextmanager
+def named_as_options(args):
+    """A bad scenario field that the command line set (``--modal-cutoff-hz``) named as its
+    option."""
+    from pantocosim.core.errors import ParameterError
+
+    try:
+        yield
+    except ParameterError as exc:
+        if exc.field != "simulation.modal_cutoff_hz" or args.modal_cutoff_hz is None:
+            raise
+        raise ParameterError("--modal-cutoff-hz", exc.value, exc.reason) from None
+
+
 def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
     """The scenario with the command line's catenary model and cutoff (None: as given)."""
     from pantocosim.core.errors import ParameterError
@@ -175,8 +190,9 @@ def simulate(args, scenario, coupling: str, out: Path):
 
         require_port_contact(scenario, f"the {coupling} coupling")   # before the set-up
         plan = fmu_paths(scenario)   # the FMU files are checked before the long set-up
-    prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
-                   max_steps=args.max_steps)
+    with named_as_options(args):
+        prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
+                       max_steps=args.max_steps)
     progress = None if not args.quiet else False
     if coupling == "monolithic":
         result = run_monolithic(prep, out, progress=progress, realtime=args.realtime)
