@@ -113,6 +113,27 @@ def test_a_probe_that_never_answers_is_stopped_and_named(host, libraries, tmp_pa
         os.kill(int(pid_file.read_text()), 0)
 
 
+@pytest.mark.parametrize("value", ["abc", "-1", "0", "nan", "inf", "1e6", "1e5x"])
+def test_a_bad_probe_time_bound_is_refused_naming_the_variable(host, libraries, tmp_path,
+                                                               value):
+    fmu = slow_fmu(tmp_path / "fmu", libraries[2])
+    proc, _ = run(host, fmu, ["instantiate A a"], tmp_path, PANTOCOSIM_PROBE_TIMEOUT_S=value)
+    assert_clean_exit(proc)
+    assert results(proc.stdout)[2][0] == ERROR
+    assert (f"PANTOCOSIM_PROBE_TIMEOUT_S = '{value}': not a time bound: give seconds, a "
+            "number > 0 and below 1e+06 (default 30)") in proc.stdout
+
+
+def test_a_probe_time_bound_with_blanks_is_taken(host, libraries, tmp_path):
+    exe = fake_python(tmp_path, "exec sleep 600\n")
+    fmu = slow_fmu(tmp_path / "fmu", libraries[2], runtime="/nonexistent/python")
+    proc, wall = run(host, fmu, ["instantiate A a"], tmp_path, PANTOCOSIM_PYTHON=str(exe),
+                     PANTOCOSIM_PROBE_TIMEOUT_S=" 1 ", PATH=str(tmp_path / "empty"))
+    assert results(proc.stdout)[2][0] == ERROR
+    assert f"PANTOCOSIM_PYTHON = {exe}: did not answer within 1 s" in proc.stdout
+    assert wall < 20.0
+
+
 def test_a_skipped_interpreter_is_a_warning_naming_the_one_used(host, libraries, tmp_path):
     exe = fake_python(tmp_path, "exec sleep 600\n")
     fmu = slow_fmu(tmp_path / "fmu", libraries[2])
