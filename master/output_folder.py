@@ -64,6 +64,9 @@ class OutputFolder:
             parent.mkdir(parents=True, exist_ok=True)
             self.path = Path(tempfile.mkdtemp(prefix=f".{self.out.name or 'out'}.",
                                               suffix=".partial", dir=parent))
+        except (FileExistsError, NotADirectoryError):
+            raise OutputError(field, out, "cannot create the folder: a folder above it is a "
+                              "file") from None
         except OSError as exc:
             raise OutputError(field, out, f"cannot create the folder: {reason(exc)}") from None
 
@@ -105,6 +108,15 @@ def check_file_target(field: str, path) -> Path:
     if p.suffix[1:].lower() not in kinds:
         raise OutputError(field, path, f"unknown picture format {p.suffix or '(none)'!r}; "
                           f"give a file name ending in .png, .pdf or .svg")
+    return check_writable_file(field, path)
+
+
+def check_writable_file(field: str, path) -> Path:
+    """A file a command will write (``--out FILE.json``): refused at once if it is a folder
+    or its folder cannot take a new file."""
+    p = Path(path)
+    if str(path) == "" or p.is_dir():
+        raise OutputError(field, path, "is a folder; give a file name")
     try:
         with tempfile.NamedTemporaryFile(dir=p.absolute().parent, prefix=f".{p.name}."):
             pass
@@ -113,14 +125,20 @@ def check_file_target(field: str, path) -> Path:
     return p
 
 
-def save_figure(fig, field: str, path) -> None:
-    """``fig.savefig(path)`` through a temporary file beside it (an earlier file is replaced
-    whole or not at all); errors name ``field``."""
+def write_whole(field: str, path, write) -> None:
+    """``write(tmp)`` into a temporary file beside ``path``, then moved onto it (an earlier
+    file is replaced whole or not at all); errors name ``field``."""
     p = Path(path)
     tmp = p.with_name(f".{p.name}.partial")
     try:
         with writing(field, path):
-            fig.savefig(tmp, dpi=120, format=p.suffix[1:].lower())
+            write(tmp)
             os.replace(tmp, p)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def save_figure(fig, field: str, path) -> None:
+    """``fig.savefig(path)`` through a temporary file beside it; errors name ``field``."""
+    fmt = Path(path).suffix[1:].lower()
+    write_whole(field, path, lambda tmp: fig.savefig(tmp, dpi=120, format=fmt))

@@ -92,3 +92,77 @@ def test_export_native_refuses_the_constraint_law_before_the_set_up(tmp_path, ca
     code, lines = run_cli(capsys, "export-native", path, "--out", tmp_path / "out")
     assert_one_line(code, lines, "s.toml", "contact.law = 'constraint'", '"penalty"')
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------ output places, compiler
+@pytest.fixture
+def no_set_up(monkeypatch):
+    """The scenario's set-up fails the test if it starts: the refusal comes before it."""
+    import pantocosim.master.run as run_package
+
+    def started(*args, **kwargs):
+        raise AssertionError("the set-up started before the refusal")
+
+    monkeypatch.setattr(run_package, "prepare", started)
+
+
+@pytest.mark.parametrize("where, reason", [
+    ("afile", "is a file, not a folder"), ("afile/sub", "a folder above it is a file"),
+    ("/proc/pantocosim-x", "cannot create the folder")])
+def test_export_native_out_is_checked_before_the_set_up(tmp_path, capsys, monkeypatch,
+                                                        no_set_up, where, reason):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("x")
+    code, lines = run_cli(capsys, "export-native", scenario(tmp_path), "--out", where)
+    assert_one_line(code, lines, f"--out = '{where}'", reason)
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".partial")]
+
+
+def test_a_missing_compiler_in_cc_is_named_before_the_set_up(tmp_path, capsys, monkeypatch,
+                                                             no_set_up):
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-gcc"))
+    code, lines = run_cli(capsys, "export-native", scenario(tmp_path), "--out", tmp_path / "o")
+    assert_one_line(code, lines, "CC = ", "no-such-gcc", "no such compiler")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("where, reason", [
+    ("afolder", "is a folder"), ("afile/x.json", "cannot be written there"),
+    ("/proc/x.json", "cannot be written there")])
+def test_bench_out_is_checked_before_the_benchmarks(tmp_path, capsys, monkeypatch, where,
+                                                    reason):
+    import pantocosim.master.benchmarks as benchmarks
+
+    def started(*args, **kwargs):
+        raise AssertionError("the benchmarks started before the refusal")
+
+    monkeypatch.setattr(benchmarks, "bench", started)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afolder").mkdir()
+    (tmp_path / "afile").write_text("x")
+    code, lines = run_cli(capsys, "bench", "--quick", "--out", where)
+    assert_one_line(code, lines, f"--out = '{where}'", reason)
+
+
+# ------------------------------------------------------------------ third-party FMU ports
+def test_an_array_port_of_a_third_party_fmu_is_named_as_an_array(tmp_path):
+    """An FMI 3.0 pantograph whose contact_force is an array is refused as such, not as
+    missing."""
+    import zipfile
+
+    from pantocosim.master.ssp import pantograph_connections
+
+    ports = [("contact_force", "input", "<Dimension start=\"2\"/>"),
+             ("contact_height", "output", ""), ("contact_velocity", "output", "")]
+    variables = "".join(f'<Float64 name="{n}" valueReference="{i}" causality="{c}">{d}'
+                        "</Float64>" for i, (n, c, d) in enumerate(ports))
+    fmu = tmp_path / "array.fmu"
+    with zipfile.ZipFile(fmu, "w") as z:
+        z.writestr("modelDescription.xml", '<fmiModelDescription fmiVersion="3.0" '
+                   'modelName="P" instantiationToken="{0}"><CoSimulation modelIdentifier="P"/>'
+                   f"<ModelVariables>{variables}</ModelVariables></fmiModelDescription>")
+    with pytest.raises(ParameterError) as info:
+        pantograph_connections(fmu)
+    assert info.value.value == "contact_force"
+    assert "a Real array input instead of a Real input" in info.value.reason
+    assert "missing" not in info.value.reason

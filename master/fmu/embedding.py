@@ -19,6 +19,7 @@ import sys
 import zipfile
 from pathlib import Path
 
+from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.embedding import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS, RUNTIME_FILE
 
 CFLAGS = ["-std=c11", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall"]
@@ -26,9 +27,16 @@ LIBS = ["-ldl", "-lpthread"]
 
 
 def compiler() -> str | None:
-    """The C compiler: ``$CC``, else ``cc`` or ``gcc`` on PATH."""
-    cc = os.environ.get("CC")
-    return cc if cc else shutil.which("cc") or shutil.which("gcc")
+    """The C compiler: ``$CC`` (refused when it names no program), else ``cc`` or ``gcc`` on
+    PATH (None: none)."""
+    cc = os.environ.get("CC", "").strip()
+    if not cc:
+        return shutil.which("cc") or shutil.which("gcc")
+    if shutil.which(cc) is None:
+        raise ParameterError("CC", cc, "no such compiler: give a C compiler's name on PATH "
+                             "or its path, or unset CC for cc or gcc on PATH",
+                             source="environment variable")
+    return cc
 
 
 def compile_export_library(work: Path, fmi: int = 2) -> Path | None:
