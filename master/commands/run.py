@@ -37,7 +37,9 @@ def add_parser(sub):
                    "modal_cutoff_hz)")
     p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING); "
                    "the run writes beside it and moves its files in when done (earlier "
-                   "results are replaced only by a run that computed something)")
+                   "results are replaced only by a run that computed something; a run that "
+                   "stopped early, by Ctrl-C or a solver failure, goes to OUT-stopped when OUT "
+                   "holds a complete run)")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
     p.add_argument("--force", action="store_true",
                    help="run even above 0.7 of the wave speed")
@@ -128,7 +130,7 @@ def run(args) -> int:
     from pantocosim.core.errors import Interrupted, OutputError, PantocosimError
     from pantocosim.master.interrupt import stop_on_interrupt
     from pantocosim.master.output_folder import OutputFolder
-    from pantocosim.master.run import RESULT_FILES, finish
+    from pantocosim.master.run import RESULT_FILES, finish, holds_complete_run
     from pantocosim.master.scenario import load_scenario
     check_limit_option("--max-dofs", args.max_dofs)
     check_limit_option("--max-steps", args.max_steps)
@@ -144,9 +146,13 @@ def run(args) -> int:
         result = simulate(args, scenario, coupling, folder.path)
         if len(result.columns["time"]) < 2 or isinstance(result.error, OutputError):
             raise result.error   # nothing computed (the set-up failed), or a full disk
+        target = out   # a run that stopped early never replaces a complete one
+        if result.error is not None and holds_complete_run(out):
+            target = out.with_name(f"{out.name}-stopped")
         with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
-            summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
-            folder.commit()
+            summary = finish(result, folder.path, plots=not args.no_plots,
+                             report_dir=target)
+            folder.commit(into=target)
     except OutputError as exc:
         if folder is None or exc.field == "--out":   # --out itself, or moving into place
             if folder is not None:
@@ -168,11 +174,14 @@ def run(args) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print_statistics(summary)
+    kept = (f"; the complete results of an earlier run in {out} are kept"
+            if target != out else "")
     if isinstance(result.error, Interrupted):
-        raise Interrupted(f"{result.error}; the results so far are in {out} (summary.json "
-                          "says where the run stopped)")
+        raise Interrupted(f"{result.error}; the results so far are in {target} (summary.json "
+                          f"says where the run stopped){kept}")
     if result.error is not None:
-        raise PantocosimError(f"run stopped: {result.error} (results so far kept in {out})")
+        raise PantocosimError(f"run stopped: {result.error} (results so far kept in "
+                              f"{target}){kept}")
     if late.requested:
         raise Interrupted(f"interrupted (Ctrl-C) while the results were written: they are "
                           f"complete in {out}")

@@ -5,6 +5,7 @@ statistics and writes the JSON summary and the plots.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -71,6 +72,14 @@ class RunResult:
 #: the files a run writes into its output folder (:func:`finish`)
 RESULT_FILES = ("timeseries.csv", "summary.json", "contact_force.png", "spectrum.png",
                 "support_uplift.png")
+
+
+def holds_complete_run(folder: Path) -> bool:
+    """Whether ``folder`` holds the summary of a run that completed (``completed``)."""
+    try:
+        return json.loads((Path(folder) / "summary.json").read_text()).get("completed") is True
+    except (OSError, ValueError, AttributeError):
+        return False
 
 
 def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
