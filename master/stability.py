@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
-from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS, max_passes
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0
@@ -319,6 +319,17 @@ def check(prep, coupling: str) -> list[str]:
                 f"{1.0 / (STEPS_PER_CONTACT_PERIOD * est.frequency):.2g} s): the force "
                 "chatters and the loss of contact is the step's")
     return warnings
+
+
+def unsettled_contacts(times, m: int) -> list[str]:
+    """The warning of a run whose contact active set gave up in some steps (``times``: their
+    ends) over ``m`` contacts; none if it always settled."""
+    if not times:
+        return []
+    return [f"the penalty contact's active set did not settle in {len(times)} step(s) "
+            f"(first at t = {times[0]:.6g} s): the set of pantographs in contact still changed "
+            f"after {max_passes(m)} passes and those steps keep the last pass's forces; a "
+            "smaller dt may settle it"]
 
 
 def departures(prep, statistics) -> list[str]:

@@ -45,11 +45,15 @@ class StepReport:
     from a kept result), or the passes of a closed-form step over the slack set (1 when no
     unilateral element changes state); a step of structure and bodies reports the bodies'
     Newton iterations of its last pass. ``residual``: the Newton residual max |R| [N] at
-    convergence (0 in closed form). ``refactorizations``: Newton matrices factorized."""
+    convergence (0 in closed form). ``refactorizations``: Newton matrices factorized.
+    ``settled``: False when a contact's active set gave up before it repeated (the penalty
+    law condensed on the contact points, interaction/penalty_contact.py): the step's
+    contact forces are then its last pass's."""
 
     iterations: int
     residual: float = 0.0
     refactorizations: int = 0
+    settled: bool = True
 
 
 class Stepper(Protocol):
