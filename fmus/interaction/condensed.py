@@ -23,7 +23,7 @@ from numba import njit
 
 from ..core.hht import HHTIntegrator
 from ..core.model import Evaluation, SecondOrderModel
-from ..core.stepper_contract import StepReport, StructureStep
+from ..core.stepper_contract import StepReport, ClosedFormStep
 from .penalty_contact import condensed_forces
 
 
@@ -333,7 +333,7 @@ class CondensedStepper:
     #: the bodies' Newton iterations may fail half-way through a step
     closed_form = False
 
-    def __init__(self, structure: StructureStep, points, bodies, contact, settings,
+    def __init__(self, structure: ClosedFormStep, points, bodies, contact, settings,
                  speed: float = 0.0):
         #: ``points(t)``: the structure's contact points at t (dofs, weights, offset,
         #: dweights_dx, doffset_dx), one per body
