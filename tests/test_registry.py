@@ -59,3 +59,47 @@ def test_registration_is_checked():
     other = reg.copy()
     other.add("y", float)
     assert "y" not in reg
+
+
+def test_every_registry_uses_the_idiom():
+    # a closed-form step is registered by the module of the model that declares it
+    import pantocosim.catenary.linear  # noqa: F401
+    import pantocosim.catenary.modal  # noqa: F401
+    from pantocosim.catenary.models import CATENARY_MODELS
+    from pantocosim.catenary.supports import SUPPORTS
+    from pantocosim.core.stepper_contract import CLOSED_FORM_STEPS
+    from pantocosim.fmi.embedding import EXPORTS
+    from pantocosim.fmi.front import FRONTS
+    from pantocosim.interaction.contact_laws import CONTACT_LAWS
+    from pantocosim.master.cli import COMMANDS
+    from pantocosim.master.coupling import ACCELERATORS, SCHEMES
+    from pantocosim.master.fmu.build import FMI_BUILDS
+    from pantocosim.master.fmu.runtime import APIS
+    from pantocosim.pantograph.presets import PRESETS
+
+    expected = {
+        "catenary models": (CATENARY_MODELS, ["nonlinear", "linear", "modal"]),
+        "closed-form steps": (CLOSED_FORM_STEPS, ["affine", "modal"]),
+        "contact laws": (CONTACT_LAWS, ["constraint", "penalty"]),
+        "supports": (SUPPORTS, ["fixed", "spring", "steady_arm"]),
+        "schemes": (SCHEMES, ["jacobi", "gauss-seidel", "implicit"]),
+        "accelerators": (ACCELERATORS, ["iqn-imvj", "iqn-ils", "aitken"]),
+        "fronts": (FRONTS, [2, 3]), "exports": (EXPORTS, [2, 3]), "builds": (FMI_BUILDS, [2, 3]),
+        "apis": (APIS, ["2.0", "3.0"]),
+        "presets": (PRESETS, ["dsa380-rigid", "dsa380-flexible", "dsa380-lumped3",
+                              "en50318-2mass"]),
+    }
+    for what, (reg, names) in expected.items():
+        assert isinstance(reg, Registry), what
+        assert sorted(map(str, reg)) == sorted(map(str, names)), what
+    assert len(COMMANDS) == 14 and isinstance(COMMANDS, Registry)
+
+
+def test_the_cli_fails_loudly_on_a_missing_command_module(monkeypatch):
+    from pantocosim.master import cli
+
+    commands = cli.COMMANDS.copy()
+    commands.add("ghost", "pantocosim.master.commands.ghost")
+    monkeypatch.setattr(cli, "COMMANDS", commands)
+    with pytest.raises(ModuleNotFoundError, match="pantocosim.master.commands.ghost"):
+        cli.build_parser()

@@ -50,7 +50,8 @@ class Registry(Mapping):
     def entry(self, name: str):
         """The entry called ``name``; a ParameterError naming the known ones otherwise."""
         if name not in self._entries:
-            raise ParameterError(self.field, name, f"must be one of {', '.join(self)}")
+            raise ParameterError(self.field, name,
+                                 f"must be one of {', '.join(map(str, self))}")
         return self._entries[name]
 
     def code(self, name: str) -> int:
@@ -96,7 +97,7 @@ class Registry(Mapping):
         return len(self._entries)
 
     def __repr__(self) -> str:
-        return f"Registry({self.kind!r}: {', '.join(self)})"
+        return f"Registry({self.kind!r}: {', '.join(map(str, self))})"
 
 
 def _qualname(obj) -> tuple:

@@ -8,6 +8,8 @@ calling the bridge); one bridge module for both (its ``instantiate`` takes the v
 from dataclasses import dataclass
 from pathlib import Path
 
+from pantocosim.core.registry import Registry
+
 HERE = Path(__file__).resolve().parent
 #: the bridge module's source, copied into every FMU's resources under its version's name
 BRIDGE_SOURCE = HERE / "bridge.py"
@@ -27,7 +29,6 @@ class ExportLibrary:
 
 
 #: FMI major version -> its export library
-EXPORTS = {
-    2: ExportLibrary(HERE / "fmi2_export.c", "pantocosim_fmi2_bridge", "linux64"),
-    3: ExportLibrary(HERE / "fmi3_export.c", "pantocosim_fmi3_bridge", "x86_64-linux"),
-}
+EXPORTS = Registry("export library", "FMI version")
+EXPORTS.add(2, ExportLibrary(HERE / "fmi2_export.c", "pantocosim_fmi2_bridge", "linux64"))
+EXPORTS.add(3, ExportLibrary(HERE / "fmi3_export.c", "pantocosim_fmi3_bridge", "x86_64-linux"))
