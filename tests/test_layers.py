@@ -383,3 +383,40 @@ def test_the_two_c_layers_never_include_each_other():
                       if pathlib.PurePath(h).name in theirs or ".." in h]
     assert not wrong, "includes across the native FMUs and the embedding library:\n" + \
         "\n".join(wrong)
+
+
+# ----------------------------------------------------------------------------- FMI libraries
+#: the only modules of the package that import an FMI library: module -> the library
+FMI_LIBRARY_IMPORTERS = {"pantocosim.fmi.fmi2_front": "pythonfmu",
+                         "pantocosim.fmi.fmi3_front": "pythonfmu3"}
+
+
+def fmi_library_imports(path: pathlib.Path) -> set[str]:
+    """The FMI libraries (pythonfmu, pythonfmu3, fmpy) a module imports, anywhere in it."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                 [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                 else [])
+        found |= {n.split(".")[0] for n in names} & {"pythonfmu", "pythonfmu3", "fmpy"}
+    return found
+
+
+def test_only_the_fronts_import_pythonfmu_and_nothing_imports_fmpy():
+    found = {name: fmi_library_imports(path) for name, path in modules().items()
+             if not name.startswith("pantocosim.master")}
+    assert {n: libs for n, libs in found.items() if libs} == \
+        {n: {lib} for n, lib in FMI_LIBRARY_IMPORTERS.items()}
+
+
+def test_the_slaves_import_without_pythonfmu():
+    import subprocess
+    import sys
+
+    code = ("import sys, pantocosim.fmi.catenary_slave, pantocosim.fmi.pantograph_slave, "
+            "pantocosim.fmi.front; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('pythonfmu', 'pythonfmu3', 'fmpy')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
