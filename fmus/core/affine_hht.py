@@ -47,7 +47,7 @@ MAX_SLACK_PASSES = 20
 #: steps after which the kept products of the state are formed again from it
 #: (:mod:`.affine_kernels`: they carry the round-off of their updates)
 RESYNC_STEPS = 4096
-#: memory the unilateral elements' columns may take when solved at set-up (:meth:`prepare`)
+#: memory the unilateral elements' columns may take when solved at set-up (:meth:`AffineHHT.prepare`)
 PREFILL_BYTES = 256 * 2**20
 #: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
 #: steps, and neighbouring droppers do so in turn: the same sets come back)
@@ -136,7 +136,7 @@ class AffineHHT:
     """``AffineHHT(form, settings)``; ``initialize(t0, q0, v0, F0)``; per step
     ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`,
     then ``finish(F)`` (False: the slack set changed, the free response and W were
-    re-solved; supply F again): a :class:`~.stepper.ClosedFormStep`, registered as
+    re-solved; supply F again): a :class:`~.stepper_contract.ClosedFormStep`, registered as
     ``"affine"`` (a model declaring ``stepping = "affine"`` gives its ``affine_form()``).
 
     The constant step data: :attr:`form` (matrices, unilateral elements' rank-one terms

@@ -17,7 +17,7 @@ from .stepper_contract import NEWTON, Stepper, StepReport, ClosedFormStep, decla
 
 
 class ForcedStepper:
-    """A closed-form :class:`~.stepper.ClosedFormStep` under given loads: ``step(h, F)``
+    """A closed-form :class:`~.stepper_contract.ClosedFormStep` under given loads: ``step(h, F)``
     applies F (one force per contact point, at t + h) on the model's contact points
     ``points(t)`` (dofs, weights), e.g. the catenary's under forces read from FMU inputs.
     The constant step data are those of :attr:`structure`."""
