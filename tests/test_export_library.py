@@ -1,5 +1,5 @@
-"""The FMUs' export libraries (fmus/fmi/embedding/) on their own: compiled with every warning
-and GCC's static analyser, and run in the C hosts of tests/native and in a threaded Python
+"""The embedding library (fmus/fmi/embedding/) on its own: compiled with every warning
+and GCC's static analyser, and run in the C hosts of tests/c_hosts and in a threaded Python
 host over a small slave (tests/c_hosts/slow_slave.py) instead of a built FMU: the runtime
 probe reads any answer without overflow and within a time bound, names the interpreter it
 tried and what it lacked; no Python error outlives a call; an instance or FMU state freed on
@@ -30,7 +30,7 @@ OK, WARNING, ERROR = 0, 1, 3
 
 @pytest.fixture(scope="session")
 def libraries(tmp_path_factory):
-    """{FMI version: the export library compiled as build-fmus compiles it}."""
+    """{FMI version: the embedding library compiled as build-fmus compiles it}."""
     if compiler() is None:
         pytest.skip("no C compiler (apt-get install gcc)")
     work = tmp_path_factory.mktemp("export")
@@ -46,7 +46,7 @@ def host3(tmp_path_factory, libraries):
 
 
 def slow_fmu(folder: Path, library: Path, fmi: int = 2, runtime: str = sys.executable) -> Path:
-    """An extracted FMU folder of the slow slave with the export library of ``fmi``."""
+    """An extracted FMU folder of the slow slave with the embedding library of ``fmi``."""
     export = EXPORTS[fmi]
     (folder / "binaries" / export.platform).mkdir(parents=True)
     shutil.copy(library, folder / "binaries" / export.platform / "slow.so")

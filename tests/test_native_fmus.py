@@ -494,7 +494,7 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, 
     """contact_mode 1 (pantograph heights in, the penalty law inside, solved implicitly with
     the wire): the native catenary gives the Python catenary FMU's contact force (the same
     model), through a loss of contact."""
-    from pantocosim.catenary.models import MODEL_NAMES
+    from pantocosim.catenary.models import model_code
 
     if model == "linear":
         cat = exported["catenary"]
@@ -512,7 +512,7 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, 
     params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh,
               "n_pantographs": 1, "position_1": sc.pantographs[0].position_m,
               "static_force_1": F0, "hht_alpha": sc.alpha, "contact_mode": 1,
-              "catenary_model": MODEL_NAMES.index(model),
+              "catenary_model": model_code(model),
               "modal_cutoff_hz": sc.modal_cutoff_hz, "newton_rtol": sc.newton_rtol}
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave

@@ -1,4 +1,4 @@
-"""The FMUs in a native host: a C program (tests/c_hosts/fmi2_host.c, compiled here with the
+"""The Python FMUs in a C host (their embedding library, no Python host): a C program (tests/c_hosts/fmi2_host.c, compiled here with the
 system's C compiler) dlopens each FMU's linux64 binary and runs the FMI 2.0 call sequence in
 a clean environment (no LD_PRELOAD, no PYTHONPATH, no virtual environment on PATH, another
 working folder). Its outputs equal fmpy's; every refused call returns fmi2Error (fmi2Discard
@@ -42,7 +42,7 @@ def host(tmp_path_factory):
 
 
 def clean_env(home: Path, **extra) -> dict:
-    """What a native host started from a desktop has: no Python variables, no venv on PATH."""
+    """What a C host started from a desktop has: no Python variables, no venv on PATH."""
     env = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": str(home), "LANG": "C.UTF-8"}
     env.update(extra)
     return env

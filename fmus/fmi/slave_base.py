@@ -265,7 +265,7 @@ class GuardedSlave:
             self._error = message
         self.log(message, status)
 
-    #: True when the FMU's export library gives each call its own status (pantocosim's
+    #: True when the FMU's embedding library gives each call its own status (pantocosim's
     #: library, ``pantocosim.fmi.embedding``): a refused call then returns fmi2Error itself.
     #: pythonfmu's library returns fmi2OK for it, so the next doStep also reports it.
     statuses_per_call = False

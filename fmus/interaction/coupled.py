@@ -57,7 +57,7 @@ class CoupledSystem(SecondOrderModel):
         """Per pantograph: (F, z_p, z_w, v_p, v_w, contact point, gradient, dF/dgap, dF/dvrel).
 
         The wire velocity seen by the moving pantograph includes the convective term
-        V dz_w/dx, as in :meth:`CatenaryModel.wire_velocity`."""
+        V dz_w/dx, as in :meth:`~pantocosim.catenary.model.CatenaryModel.wire_velocity`."""
         qc, qps = self.split(q)
         vc, vps = self.split(v)
         speed = float(getattr(self.catenary, "speed", 0.0))
@@ -125,7 +125,7 @@ class CoupledSystem(SecondOrderModel):
 
     def newton_solve(self, solve, ev, rhs):
         """The Newton correction with the blocks' factorization ``solve`` and the contact
-        linearisation of the evaluation ``ev`` (the contact law's, :meth:`law.newton_solve`)."""
+        linearisation of the evaluation ``ev`` (the contact law's, ``law.newton_solve``)."""
         return self.law.newton_solve(solve, ev, rhs)
 
     def factorize(self, S):

@@ -1,5 +1,5 @@
 """The one stepper factory (:func:`make_stepper`) and the stepper it builds besides the HHT
-integrator, the condensed step and the closed-form structure step under given loads
+integrator, the condensed step and the closed-form step under given loads
 (:class:`~pantocosim.core.structure_stepping.ForcedStepper`): Newton-Raphson on structure, bodies and
 contacts assembled (:class:`AssembledStepper`).
 
@@ -8,7 +8,7 @@ the model declares          under its inputs         with bodies in contact
 ==========================  =======================  ===================================
 ``stepping = "newton"``     ``HHTIntegrator``        :class:`AssembledStepper`
 a registered structure      ``ForcedStepper``        :class:`~.condensed.CondensedStepper`
-step (``"affine"``,         (``structure_stepper``,  (a law that cannot be condensed:
+step (``"affine"``,         (``stepper_under_inputs``,  (a law that cannot be condensed:
 ``"modal"``)                ``core.structure_stepping``)       :class:`AssembledStepper`)
 ==========================  =======================  ===================================
 
@@ -22,8 +22,8 @@ import numpy as np
 
 from ..core.hht import HHTIntegrator
 from ..core.stepper_contract import (NEWTON, CoupledStepper, Stepper, StepReport, declared_stepping,
-                            structure_step)
-from ..core.structure_stepping import structure_stepper
+                            closed_form_step)
+from ..core.structure_stepping import stepper_under_inputs
 from .condensed import CondensedStepper
 from .coupled import CoupledSystem
 
@@ -91,7 +91,7 @@ def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False
     closed = declared_stepping(model) != NEWTON
     if bodies:
         if closed and contact.condensable:
-            return CondensedStepper(structure_step(model, settings, redo), model.contact_points,
+            return CondensedStepper(closed_form_step(model, settings, redo), model.contact_points,
                                     bodies, contact, settings, speed=model.speed)
         return AssembledStepper(model, bodies, contact, settings, contact_state)
-    return structure_stepper(model, settings, redo=redo)
+    return stepper_under_inputs(model, settings, redo=redo)

@@ -7,17 +7,15 @@ from pathlib import Path
 
 from ..core.errors import ParameterError
 from ..core.params import Table, load_toml
+from ..core.registry import Registry
 from .base import PantographModel, PantographOptions
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
 #: preset name -> parameter file in ``data/``
-PRESETS = {
-    "dsa380-rigid": "dsa380-rigid.toml",
-    "dsa380-flexible": "dsa380-flexible.toml",
-    "dsa380-lumped3": "dsa380-lumped3.toml",
-    "en50318-2mass": "en50318-2mass.toml",
-}
+PRESETS = Registry("pantograph preset", "model")
+for _name in ("dsa380-rigid", "dsa380-flexible", "dsa380-lumped3", "en50318-2mass"):
+    PRESETS.add(_name, f"{_name}.toml")
 
 
 def preset_path(name_or_path: str | Path) -> Path:

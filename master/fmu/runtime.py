@@ -29,6 +29,7 @@ import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
+from pantocosim.core.registry import Registry
 from pantocosim.core.user_cache import cache_root, cache_warning, describe
 
 STATUS_NAMES = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -245,7 +246,9 @@ class Fmi3Api(Fmi2Api):
 
 
 #: the model description's fmiVersion -> its API
-APIS = {"2.0": Fmi2Api, "3.0": Fmi3Api}
+APIS = Registry("FMI API", "fmiVersion")
+APIS.add("2.0", Fmi2Api)
+APIS.add("3.0", Fmi3Api)
 
 
 def fmi_version(fmu_path: str | Path) -> int:

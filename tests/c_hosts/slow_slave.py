@@ -1,4 +1,4 @@
-"""A small FMU slave for the tests of the export libraries (tests/test_export_library.py):
+"""A small FMU slave for the tests of the embedding libraries (tests/test_export_library.py):
 what the bridge calls, with a settable delay in its steps and state serialisation, so that a
 test can act on another thread while a call is under way, and the import of the module the
 environment variable SLOW_SLAVE_IMPORT names, if set (a missing one is then named by the
