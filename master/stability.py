@@ -16,7 +16,8 @@ model's static correction; :func:`feedthrough_gain`)::
 The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` (:data:`GAIN_LIMIT`) is
 refused, one with ``G >= 0.5`` (:data:`GAIN_WARNING`) warned. Any coupling, the monolithic
 one too, warns when the step does not resolve the contact frequency
-``f_c = sqrt(k_c / m_p) / (2 pi)`` (above ``1 / (10 dt)``).
+``f_c = sqrt(k_c / m_p) / (2 pi)`` (above ``1 / (10 dt)``), and when a rigid contact meets
+a contact point without mass (the modal model's static correction).
 
 During. :class:`Monitor` stops a run whose contact force is not finite or exceeds
 :data:`FORCE_CAP_FACTOR` times the pantograph's static force (its mean uplift when larger),
@@ -27,7 +28,9 @@ After. :func:`departures` flags a run whose mean contact force departs from the 
 its static start sets by more than :data:`MEAN_DEPARTURE` of it, or whose loss of contact
 exceeds what the normal law of its own force statistics predicts by more than
 :data:`LOSS_EXCESS_POINTS` (a force that alternates from step to step loses contact while
-its filtered statistics say it should not).
+its filtered statistics say it should not). :func:`step_separations` flags the separations
+of a rigid contact that last at most :data:`UNRESOLVED_SEPARATION_STEPS` steps (the step's,
+not the line's).
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
 from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS, max_passes
+from pantocosim.master.results.statistics import window_mask
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0
@@ -46,6 +50,9 @@ GAIN_LIMIT = 1.0
 GAIN_WARNING = 0.5
 #: steps per contact period below which the contact frequency counts as not resolved
 STEPS_PER_CONTACT_PERIOD = 10
+#: a rigid contact's separation lasting at most this many steps is not resolved by the step
+#: (docs/en50318-validation.md, "Loss of contact and the step")
+UNRESOLVED_SEPARATION_STEPS = 3
 #: a contact force above this multiple of the static force stops the run
 FORCE_CAP_FACTOR = 20.0
 #: a pantograph out of contact this long [s] (after its raising) has not come back to the
@@ -289,6 +296,8 @@ def check(prep, coupling: str) -> list[str]:
                 raise _refusal(prep, est, name, who)
             if est.gain >= GAIN_WARNING:
                 warnings.append(_near_limit(prep, est, name, who))
+        if prep.contact.compliance == 0.0 and est.compliance > 0.0:
+            warnings.append(_massless_contact_point(who, est))
         if est.frequency * sc.dt > 1.0 / STEPS_PER_CONTACT_PERIOD:
             warnings.append(
                 f"{who}: contact frequency {est.frequency:.0f} Hz (contact.stiffness = "
@@ -308,6 +317,46 @@ def unsettled_contacts(times, m: int) -> list[str]:
             f"(first at t = {times[0]:.6g} s): the set of pantographs in contact still changed "
             f"after {max_passes(m)} passes and those steps keep the last pass's forces; a "
             "smaller dt may settle it"]
+
+
+def _massless_contact_point(who: str, est: Estimate) -> str:
+    return (f"{who}: a rigid contact on a catenary whose contact point moves without mass "
+            f"(an instantaneous compliance of {est.compliance:.3g} m/N: the modal model's "
+            "static correction): the loss of contact is that truncated model's, which grows "
+            "with the contact's stiffness and with a shrinking dt, not the line's; the linear "
+            "or nonlinear catenary tells it")
+
+
+def run_lengths(flags: np.ndarray) -> np.ndarray:
+    """The lengths of the runs of True in ``flags``."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    return np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
+
+
+def step_separations(prep, columns) -> list[str]:
+    """Warnings of a rigid contact (compliance 0) whose loss of contact in the analysis
+    window comes from separations of at most :data:`UNRESOLVED_SEPARATION_STEPS` steps: a
+    separation the step does not resolve lasts the same steps at any dt, so that part of the
+    loss of contact is the step's."""
+    if prep.contact.compliance != 0.0:
+        return []
+    out = []
+    many = len(prep.pantographs) > 1
+    for k in range(1, len(prep.pantographs) + 1):
+        inside = window_mask(columns[f"x_{k}"], *prep.window_m)
+        runs = run_lengths(columns[f"contact_force_{k}"][inside] <= 0.0)
+        short = runs[runs <= UNRESOLVED_SEPARATION_STEPS]
+        if short.size == 0:
+            continue
+        who = f"pantograph {k}" if many else "the pantograph"
+        share, total = (100.0 * n / max(int(inside.sum()), 1) for n in (short.sum(),
+                                                                         runs.sum()))
+        out.append(f"{who}: {share:.2f} % of its {total:.2f} % loss of contact are "
+                   f"{short.size} separation(s) of the rigid contact lasting at most "
+                   f"{int(short.max())} step(s) of dt = {prep.scenario.dt:g} s: a separation "
+                   "that short is the step's, not the line's (it keeps its number of steps "
+                   "as dt shrinks); halve dt to tell")
+    return out
 
 
 def departures(prep, statistics) -> list[str]:

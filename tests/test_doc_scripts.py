@@ -291,6 +291,9 @@ def test_en50318_readings(tmp_path, short_ref):
     assert con["mean_n"] == pytest.approx(pen["mean_n"], abs=1.0)
     # no contact mode: a smoother force than the 5e4 N/m penalty's
     assert con["std_n"] < pen["std_n"]
+    # the step's part of the loss of contact: the rigid contact's only
+    assert pen["step_loss_percent"] is None
+    assert 0.0 <= con["step_loss_percent"] <= con["loss_of_contact_percent"]
     assert len(rows_of(out, "a: preset")) == 2 and len(rows_of(out, "c: preset-constraint")) == 2
     text = page.read_text()
     assert "c: preset-constraint" in text.split("<!-- readings:start -->")[1]

@@ -97,7 +97,8 @@ class InterfaceContacts(SecondOrderModel):
         self.forces = np.zeros(self.m)
         self.heights = np.zeros(self.m)
         self.wire_heights = np.zeros(self.m)
-        #: the last evaluation's active set settled (:meth:`PenaltyContact.condensed`)
+        #: the last evaluation's active set settled
+        #: (:meth:`.penalty_contact.PenaltyContact.condensed`)
         self.settled = True
         self._zero = np.zeros(1)
 

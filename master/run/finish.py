@@ -16,7 +16,7 @@ from pantocosim.master.results import plots as P
 from pantocosim.master.output_folder import writing
 from pantocosim.master.results.files import write_json
 from pantocosim.master.run.setup import Prepared
-from pantocosim.master.stability import departures
+from pantocosim.master.stability import departures, step_separations
 from pantocosim.master.results.statistics import contact_statistics, window_mask
 
 #: the step counters of a monolithic run: the Newton iterations of its step
@@ -135,7 +135,8 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "time_s": summary["simulated_time_s"],
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
-    summary["warnings"] = list(result.warnings) + departures(prep, stats)
+    summary["warnings"] = (list(result.warnings) + departures(prep, stats)
+                           + step_separations(prep, c))
     #: the statistics are doubtful (see the warnings)
     summary["flagged"] = bool(summary["warnings"])
     if out_dir is not None:
