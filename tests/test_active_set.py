@@ -14,6 +14,7 @@ from pantocosim.fmi.front import slave_class
 from pantocosim.interaction.condensed import CondensedStepper
 from pantocosim.interaction.penalty_contact import PenaltyContact, max_passes
 from pantocosim.master.cli import main
+from short_scenarios import LINEAR, THREE_SPANS
 
 CatenarySlave = slave_class(catenary_slave.CatenarySlave, 2)
 
@@ -33,23 +34,6 @@ def test_a_cycling_active_set_is_reported():
     assert settled and F[0] == pytest.approx(50.0 / (1.0 + 0.05 + 2.0), rel=1e-12)
 
 
-SCENARIO = """\
-name = "active-set"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_m = [32.0, 40.0]
-
-[simulation]
-catenary_model = "linear"
-"""
 
 
 def unsettled_from(step_index: int, monkeypatch) -> list:
@@ -71,7 +55,7 @@ def unsettled_from(step_index: int, monkeypatch) -> list:
 def test_the_run_summary_warns_of_steps_whose_active_set_gave_up(tmp_path, capsys,
                                                                  monkeypatch):
     path = tmp_path / "s.toml"
-    path.write_text(SCENARIO)
+    path.write_text(THREE_SPANS + LINEAR)
     calls = unsettled_from(100, monkeypatch)
     assert main(["run", str(path), "--quiet", "--no-plots", "--json",
                  "--out", str(tmp_path / "out")]) == 0

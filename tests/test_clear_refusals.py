@@ -12,21 +12,8 @@ from pantocosim.catenary.linear import LinearCatenary
 from pantocosim.catenary.modal import SPARE_MODES, ModalCatenary
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.cli import main
+from short_scenarios import THREE_SPANS
 
-SCENARIO = """\
-name = "refused"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_supports = [1, 2]
-"""
 
 
 def run_cli(capsys, *argv) -> tuple[int, list[str]]:
@@ -47,7 +34,7 @@ def assert_one_line(code, lines, *names):
 
 def scenario(folder: Path, extra: str = "") -> Path:
     path = folder / "s.toml"
-    path.write_text(SCENARIO + extra)
+    path.write_text(THREE_SPANS + extra)
     return path
 
 

@@ -10,28 +10,11 @@ from pathlib import Path
 import pytest
 
 from pantocosim.master.cli import main
+from test_bad_input import SCENARIO, SECOND, edited
 from pantocosim.master.native.models import pantograph_files
 from pantocosim.master.scenario import PantographSpec
 
-TWO = """\
-name = "two"
-catenary = "en50318"
-spans = 4
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 10.0
-start = "static"
-
-[analysis]
-window_m = [35.0, 60.0]
-"""
+TWO = edited(SCENARIO, ("\n[analysis]", SECOND.format(10.0) + "\n[analysis]"))
 
 
 def spec(model: str) -> PantographSpec:

@@ -14,24 +14,8 @@ import pytest
 from pantocosim.master.cli import main
 from pantocosim.master.interrupt import StopRequest, interrupted_at
 from pantocosim.master.output_folder import OWNER, OutputFolder
+from short_scenarios import LINEAR, THREE_SPANS
 
-SCENARIO = """\
-name = "rerun"
-catenary = "en50318"
-spans = 3
-speed_kmh = 250.0
-
-[[pantographs]]
-model = "en50318-2mass"
-position_m = 30.0
-start = "static"
-
-[analysis]
-window_supports = [1, 2]
-
-[simulation]
-catenary_model = "linear"
-"""
 
 
 def files(folder: Path) -> dict:
@@ -41,7 +25,7 @@ def files(folder: Path) -> dict:
 @pytest.mark.slow
 def test_a_rerun_stopped_by_ctrl_c_keeps_the_complete_results(tmp_path, capsys, monkeypatch):
     path = tmp_path / "s.toml"
-    path.write_text(SCENARIO)
+    path.write_text(THREE_SPANS + LINEAR)
     out = tmp_path / "out"
     argv = ["run", str(path), "--quiet", "--no-plots", "--out", str(out)]
     assert main(argv) == 0
