@@ -42,7 +42,6 @@ import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
 from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS, max_passes
-from pantocosim.master.results.statistics import window_mask
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0
@@ -333,24 +332,23 @@ def run_lengths(flags: np.ndarray) -> np.ndarray:
     return np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
 
 
-def step_separations(prep, columns) -> list[str]:
+def step_separations(prep, window_forces) -> list[str]:
     """Warnings of a rigid contact (compliance 0) whose loss of contact in the analysis
-    window comes from separations of at most :data:`UNRESOLVED_SEPARATION_STEPS` steps: a
-    separation the step does not resolve lasts the same steps at any dt, so that part of the
-    loss of contact is the step's."""
+    window (``window_forces``: each pantograph's raw force there) comes from separations of
+    at most :data:`UNRESOLVED_SEPARATION_STEPS` steps: a separation the step does not
+    resolve lasts the same steps at any dt, so that part of the loss of contact is the
+    step's."""
     if prep.contact.compliance != 0.0:
         return []
     out = []
     many = len(prep.pantographs) > 1
-    for k in range(1, len(prep.pantographs) + 1):
-        inside = window_mask(columns[f"x_{k}"], *prep.window_m)
-        runs = run_lengths(columns[f"contact_force_{k}"][inside] <= 0.0)
+    for k, force in enumerate(window_forces, start=1):
+        runs = run_lengths(np.asarray(force) <= 0.0)
         short = runs[runs <= UNRESOLVED_SEPARATION_STEPS]
         if short.size == 0:
             continue
         who = f"pantograph {k}" if many else "the pantograph"
-        share, total = (100.0 * n / max(int(inside.sum()), 1) for n in (short.sum(),
-                                                                         runs.sum()))
+        share, total = (100.0 * n / max(len(force), 1) for n in (short.sum(), runs.sum()))
         out.append(f"{who}: {share:.2f} % of its {total:.2f} % loss of contact are "
                    f"{short.size} separation(s) of the rigid contact lasting at most "
                    f"{int(short.max())} step(s) of dt = {prep.scenario.dt:g} s: a separation "

@@ -135,8 +135,10 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "time_s": summary["simulated_time_s"],
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
+    inside = [c[f"contact_force_{k}"][window_mask(c[f"x_{k}"], *prep.window_m)]
+              for k in range(1, len(prep.pantographs) + 1)] if stats else []
     summary["warnings"] = (list(result.warnings) + departures(prep, stats)
-                           + step_separations(prep, c))
+                           + step_separations(prep, inside))
     #: the statistics are doubtful (see the warnings)
     summary["flagged"] = bool(summary["warnings"])
     if out_dir is not None:
