@@ -308,7 +308,7 @@ def test_en50318_readings(tmp_path, short_ref):
     F = 100 + 20 * np.sin(2 * np.pi * 3 * t) + 5 * np.sin(2 * np.pi * 40 * t)
     x = 30 + 70 * t
     run = {"time": t, "x": x, "force": F, "uplift": np.zeros((t.size, 2)),
-           "support_x": np.array([0.0, 200.0])}
+           "support_x": np.array([0.0, 200.0]), "law": "penalty", "stiffness": 5e4}
     mine = R.statistics(run, (60.0, 120.0))
     ref = contact_statistics(t, F, x, (60.0, 120.0), run["uplift"], run["support_x"])
     assert mine["std_n"] == pytest.approx(ref.std_n, rel=1e-12)
