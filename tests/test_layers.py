@@ -420,3 +420,16 @@ def test_the_slaves_import_without_pythonfmu():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_the_port_tables_import_no_slave():
+    """The master, the SSP writer and the reference page read the port tables without the
+    slave modules."""
+    import subprocess
+    import sys
+
+    code = ("import sys, pantocosim.fmi.catenary_ports, pantocosim.fmi.pantograph_ports; "
+            "print(sorted(m for m in sys.modules if m.endswith(('_slave', 'slave_base'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
