@@ -614,8 +614,12 @@ def test_ctrl_c_during_the_set_up_keeps_earlier_results(tmp_path, good_run):
         (out / name).write_bytes(data)
     sc = _long_scenario(tmp_path)
     proc = _child(["run", sc, "--quiet", "--out", "out"], tmp_path)
-    # the staging folder is made inside the command's guard, before the set-up
+    # the staging folder made, then a little CPU past it: the command holds the folder (a
+    # Ctrl-C within the instant it is created, before the command has it, would leave it)
     wait_until(lambda: list(tmp_path.glob(".out.*.partial")), "the staging folder", proc=proc)
+    made = cpu_seconds(proc.pid)
+    wait_until(lambda: cpu_seconds(proc.pid) >= made + 0.3, "0.3 s of CPU in the set-up",
+               proc=proc)
     proc.send_signal(signal.SIGINT)          # during the set-up (the static start)
     stdout, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, stdout + err
