@@ -7,7 +7,6 @@ not honour with FMI 3.0 statuses, and roll back bit for bit. FMUs never load int
 process: fmpy, the master and the C host run in subprocesses."""
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmi_script import Script, results
+from tooling import c_compiler
 from test_native_host import (CATENARY_RUN, DISCARD, ERROR, OK, PANTOGRAPH_RUN,
                               assert_clean_exit, host, run_host, run_twin, stepping_script)
 
@@ -44,11 +44,7 @@ def fmus3(built):
 @pytest.fixture(scope="session")
 def host3(tmp_path_factory):
     """The FMI 3.0 C host, compiled with the system's C compiler."""
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        if os.environ.get("CI"):
-            pytest.fail("no C compiler: .ci/run installs gcc")
-        pytest.skip("no C compiler (apt-get install gcc)")
+    cc = c_compiler()
     exe = tmp_path_factory.mktemp("host3") / "fmi3_host"
     subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe), str(HOST_SOURCE), "-ldl"],
                    check=True)

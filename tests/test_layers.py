@@ -187,11 +187,13 @@ def against_floors(edges) -> list[tuple[str, str]]:
     return wrong
 
 
-def test_dependencies_point_downwards():
+@pytest.mark.parametrize("what", ["the floors", "master's rooms"])
+def test_dependencies_point_downwards(what):
+    check = against_floors if what == "the floors" else against_master_floors
     known, edges, lines = graph()
     wrong = [f"{known[a].relative_to(ROOT)}:{lines[a, b]} {a} -> {b}"
-             for a, b in against_floors(edges)]
-    assert not wrong, "imports against the floors:\n" + "\n".join(wrong)
+             for a, b in check(edges)]
+    assert not wrong, f"imports against {what}:\n" + "\n".join(wrong)
 
 
 def test_floor_check_finds_upward_and_sideways_imports():
@@ -320,13 +322,6 @@ def test_every_master_module_has_a_room():
         master_floor("pantocosim.master.new_room")
 
 
-def test_master_rooms_point_downwards():
-    known, edges, lines = graph()
-    wrong = [f"{known[a].relative_to(ROOT)}:{lines[a, b]} {a} -> {b}"
-             for a, b in against_master_floors(edges)]
-    assert not wrong, "imports against master's rooms:\n" + "\n".join(wrong)
-
-
 def test_master_floor_check_finds_climbs():
     edges = {"pantocosim.master.results.files": {"pantocosim.master.run.setup"},
              "pantocosim.master.fmu.dist": {"pantocosim.master.ssp"},
@@ -417,6 +412,19 @@ def test_the_slaves_import_without_pythonfmu():
             "pantocosim.fmi.front; "
             "print(sorted(m for m in sys.modules if m.split('.')[0] in "
             "('pythonfmu', 'pythonfmu3', 'fmpy')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_the_port_tables_import_no_slave():
+    """The master, the SSP writer and the reference page read the port tables without the
+    slave modules."""
+    import subprocess
+    import sys
+
+    code = ("import sys, pantocosim.fmi.catenary_ports, pantocosim.fmi.pantograph_ports; "
+            "print(sorted(m for m in sys.modules if m.endswith(('_slave', 'slave_base'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert out.strip() == "[]"

@@ -6,7 +6,6 @@ statuses the Python FMUs give; in our master (explicit and implicit) the native 
 gives the Python catenary FMU's contact force."""
 
 import dataclasses
-import os
 import shutil
 import subprocess
 import zipfile
@@ -14,21 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tooling import required
 
 ROOT = Path(__file__).resolve().parents[1]
 HOST_SOURCE = ROOT / "fmus" / "native" / "realtime_host.c"
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 STEPS, DT = 600, 0.001
-
-
-def required(tool: str, package: str):
-    """The path of ``tool``; on CI its absence fails the test (.ci/run installs it)."""
-    path = shutil.which(tool)
-    if path is None:
-        if os.environ.get("CI"):
-            pytest.fail(f"{tool} is missing: .ci/run installs {package} (apt-get)")
-        pytest.skip(f"{tool} is missing (apt-get install -y {package})")
-    return path
 
 
 @pytest.fixture(scope="module")

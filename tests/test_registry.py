@@ -75,7 +75,7 @@ def test_every_registry_uses_the_idiom():
     from pantocosim.master.coupling import ACCELERATORS, SCHEMES
     from pantocosim.master.fmu.build import FMI_BUILDS
     from pantocosim.master.fmu.runtime import APIS
-    from pantocosim.pantograph.presets import PRESETS
+    from pantocosim.pantograph.presets import MODEL_KINDS, PRESETS
 
     expected = {
         "catenary models": (CATENARY_MODELS, ["nonlinear", "linear", "modal"]),
@@ -88,6 +88,7 @@ def test_every_registry_uses_the_idiom():
         "apis": (APIS, ["2.0", "3.0"]),
         "presets": (PRESETS, ["dsa380-rigid", "dsa380-flexible", "dsa380-lumped3",
                               "en50318-2mass"]),
+        "pantograph model kinds": (MODEL_KINDS, ["chain", "rigid_model", ""]),
     }
     for what, (reg, names) in expected.items():
         assert isinstance(reg, Registry), what

@@ -47,7 +47,8 @@ MAX_SLACK_PASSES = 20
 #: steps after which the kept products of the state are formed again from it
 #: (:mod:`.affine_kernels`: they carry the round-off of their updates)
 RESYNC_STEPS = 4096
-#: memory the unilateral elements' columns may take when solved at set-up (:meth:`AffineHHT.prepare`)
+#: memory the unilateral elements' columns may take when solved at set-up
+#: (:meth:`AffineHHT.prepare`)
 PREFILL_BYTES = 256 * 2**20
 #: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
 #: steps, and neighbouring droppers do so in turn: the same sets come back)

@@ -86,6 +86,39 @@ class Stepper(Protocol):
     def set_state(self, state: Any) -> None: ...
 
 
+class Forwarding:
+    """What a stepper wrapping another engine forwards to it: ``t``, ``q``, ``v``,
+    ``initialize``, ``prepare``, ``get_state``, ``set_state``. The wrapper names the
+    attribute holding the engine in :attr:`wrapped` and adds its own ``step``."""
+
+    #: the attribute that holds the wrapped engine
+    wrapped: str
+
+    @property
+    def t(self) -> float:
+        return getattr(self, self.wrapped).t
+
+    @property
+    def q(self) -> np.ndarray:
+        return getattr(self, self.wrapped).q
+
+    @property
+    def v(self) -> np.ndarray:
+        return getattr(self, self.wrapped).v
+
+    def initialize(self, t0: float, q0, v0=None, inputs0=None) -> None:
+        getattr(self, self.wrapped).initialize(t0, q0, v0, inputs0)
+
+    def prepare(self, h: float) -> None:
+        getattr(self, self.wrapped).prepare(h)
+
+    def get_state(self) -> Any:
+        return getattr(self, self.wrapped).get_state()
+
+    def set_state(self, state: Any) -> None:
+        getattr(self, self.wrapped).set_state(state)
+
+
 class CoupledStepper(Stepper, Protocol):
     """A stepper of a structure with bodies (pantographs) in contact, q = [structure |
     body 1 | ...]: what a monolithic run reads after each step."""

@@ -12,11 +12,11 @@ import numpy as np
 
 from . import affine_hht  # noqa: F401  (registers the "affine" closed-form step)
 from .hht import HHTIntegrator
-from .stepper_contract import NEWTON, Stepper, StepReport, ClosedFormStep, declared_stepping, \
-    closed_form_step
+from .stepper_contract import (NEWTON, ClosedFormStep, Forwarding, Stepper, StepReport,
+                               closed_form_step, declared_stepping)
 
 
-class ForcedStepper:
+class ForcedStepper(Forwarding):
     """A closed-form :class:`~.stepper_contract.ClosedFormStep` under given loads: ``step(h, F)``
     applies F (one force per contact point, at t + h) on the model's contact points
     ``points(t)`` (dofs, weights), e.g. the catenary's under forces read from FMU inputs.
@@ -24,28 +24,11 @@ class ForcedStepper:
 
     #: a step leaves the state alone until it succeeds
     closed_form = True
+    wrapped = "structure"
 
     def __init__(self, structure: ClosedFormStep, points):
         self.structure = structure
         self.points = points
-
-    @property
-    def t(self) -> float:
-        return self.structure.t
-
-    @property
-    def q(self) -> np.ndarray:
-        return self.structure.q
-
-    @property
-    def v(self) -> np.ndarray:
-        return self.structure.v
-
-    def initialize(self, t0: float, q0, v0=None, inputs0=None) -> None:
-        self.structure.initialize(t0, q0, v0, inputs0)
-
-    def prepare(self, h: float) -> None:
-        self.structure.prepare(h)
 
     def step(self, h: float, inputs=None) -> StepReport:
         st = self.structure
@@ -54,12 +37,6 @@ class ForcedStepper:
         while not st.finish(F):
             pass
         return StepReport(iterations=st.passes)
-
-    def get_state(self) -> dict:
-        return self.structure.get_state()
-
-    def set_state(self, state: dict) -> None:
-        self.structure.set_state(state)
 
 
 def stepper_under_inputs(model, settings, *, redo: bool = False) -> Stepper:

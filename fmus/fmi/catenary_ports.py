@@ -11,9 +11,8 @@ from pantocosim.catenary.models import CATENARY_MODELS
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 
-from .slave_base import MAX_SUBSTEPS
-from .variables import (Choices, Described, Each, Interval, Positive, VariableTable, parameter,
-                        real)
+from .variables import (MAX_SUBSTEPS, Choices, Described, Each, Interval, Positive,
+                        VariableTable, parameter, real)
 
 MAX_PANTOGRAPHS = 4
 #: support_uplift_j outputs: the FMU's port limit (a longer line reports the first ones)

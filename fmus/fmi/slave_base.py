@@ -58,9 +58,6 @@ STEP_RTOL = 1e-6
 
 _INT32 = 2 ** 31
 
-#: most integration steps in one communication step (``n_substeps``): a doStep answers in
-#: bounded time
-MAX_SUBSTEPS = 10_000
 
 
 def fmi_type(var) -> str:
@@ -506,7 +503,8 @@ class GuardedSlave:
                       f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
 
     def substeps(self) -> int:
-        """``n_substeps``, checked: 1 .. :data:`MAX_SUBSTEPS` (its declared range)."""
+        """``n_substeps``, checked: 1 .. :data:`~.variables.MAX_SUBSTEPS` (its declared
+        range)."""
         return self.value("n_substeps")
 
     @staticmethod

@@ -340,8 +340,8 @@ def bodies_solver(bodies, contact, settings):
 class CondensedStepper:
     """One HHT-alpha step of structure + bodies + contacts: the structure's free response,
     the bodies' step on the condensed interface, the structure's step with the forces (a
-    :class:`~pantocosim.core.stepper_contract.Stepper`; the structure's constant step data are those of
-    :attr:`structure`)."""
+    :class:`~pantocosim.core.stepper_contract.Stepper`; the structure's constant step data
+    are those of :attr:`structure`)."""
 
     #: the bodies' Newton iterations may fail half-way through a step
     closed_form = False

@@ -6,8 +6,9 @@ scenario's law (:mod:`pantocosim.interaction.contact_laws`: the penalty law
 :mod:`~pantocosim.interaction.penalty_contact`, or the rigid
 :mod:`~pantocosim.interaction.constraint_contact` whose multipliers the Newton correction
 solves with the coordinates). The monolithic reference solver (``master/run/stepping.py``)
-advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once. Contact is lost and recovered through the penalty law; droppers
-slacken inside the catenary model.
+advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once.
+Contact is lost and recovered through the penalty law; droppers slacken inside the catenary
+model.
 
 DOF layout: ``[catenary | pantograph 1 | pantograph 2 | ...]``.
 

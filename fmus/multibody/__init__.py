@@ -11,7 +11,7 @@ One thing per file:
                        (vectorised, numba kernel; r: a time law of actuators)
 - ``beam3d.py``        the 3D beam element set (:class:`~.beam3d.DirectorBeam`, numba element kernel)
 - ``rigid_body.py``    a rigid body carried by a node (mass, centre, inertia tensor)
-- ``joints.py``        clamp, spherical, revolute and universal joints (node-node or ground)
+- ``joints.py``        clamp, revolute and universal joints (node-node or ground)
 - ``prismatic.py``     prismatic joint (a guide: sliding without relative rotation)
 - ``planar.py``        planar joint (a body kept in a plane)
 - ``distance.py``      distance between body points: massless link or linear actuator

@@ -193,8 +193,7 @@ class Fmi2Api:
 
         return fmi2ValueReference, fmi2Real
 
-    STATE_CALLS = {"get": "getFMUstate", "set": "setFMUstate", "free": "freeFMUstate",
-                   "serialize": "serializeFMUstate", "deserialize": "deSerializeFMUstate"}
+    STATE_CALLS = {"get": "getFMUstate", "set": "setFMUstate", "free": "freeFMUstate"}
 
 
 class Fmi3Api(Fmi2Api):
@@ -241,8 +240,7 @@ class Fmi3Api(Fmi2Api):
 
         return fmi3ValueReference, fmi3Float64
 
-    STATE_CALLS = {"get": "getFMUState", "set": "setFMUState", "free": "freeFMUState",
-                   "serialize": "serializeFMUState", "deserialize": "deserializeFMUState"}
+    STATE_CALLS = {"get": "getFMUState", "set": "setFMUState", "free": "freeFMUState"}
 
 
 #: the model description's fmiVersion -> its API
@@ -359,12 +357,6 @@ class FmuInstance:
 
     def free_state(self, state) -> None:
         self._state_call("free", state)
-
-    def serialize_state(self, state) -> bytes:
-        return self._state_call("serialize", state)
-
-    def deserialize_state(self, data: bytes):
-        return self._state_call("deserialize", data)
 
     def terminate(self) -> None:
         if self.fatal:
