@@ -8,17 +8,24 @@ these constants with the same closed-form steps).
   contact wire's reference geometry for the Hermite contact point (3.11)-(3.13), the rows
   behind ``support_uplift_j`` and the static start under the static contact forces;
 - lumped pantograph (:meth:`~pantocosim.pantograph.lumped.LumpedPantograph.linear_form`):
-  M, C, K, B and the start state.
+  M, C, K, B and the start state;
+- rigid DSA-380 (:class:`~pantocosim.pantograph.dsa380.Dsa380Model`): the kernels'
+  parameter vector, the options and the actuation torques, placed by the names of
+  ``fmus/native/dsa380_rigid.h``.
 
 Each function returns ``{section name: array}`` for :func:`pantocosim.master.native.build.write_data`.
 """
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator
+from pantocosim.master.native.build import SOURCE_DIR
+from pantocosim.pantograph import dsa380_kinematics as kin
 
 
 def _i32(x) -> np.ndarray:
@@ -161,3 +168,37 @@ def modal_catenary(model, settings, h: float, static_forces, contact, definition
             "q0": _f64(y0), "F0": _f64(F0), "x0": _f64(model.x0), "drop_ka": _f64(dr.ka),
             "drop_N0": _f64(dr.N0), "drop_tension": _i32(dr.tension_only), **wire,
             "definition": _text(definition)}
+
+
+def header_constants(header: str, prefix: str) -> dict[str, int]:
+    """The ``#define <prefix><NAME> number`` lines of a native header: {NAME: number}."""
+    text = (SOURCE_DIR / header).read_text()
+    return {m.group(1): int(m.group(2))
+            for m in re.finditer(rf"#define {prefix}(\w+) (\d+)", text)}
+
+
+def dsa380_constants(model) -> np.ndarray:
+    """The constants of the native rigid DSA-380 (``fmus/native/dsa380_rigid.h``): the
+    kernels' parameter vector (its layout checked name by name against
+    :mod:`pantocosim.pantograph.dsa380_kinematics`), then the pitch lock, the actuation
+    torques of the static start and the ramp (2.14), (3.3.1), and the options."""
+    layout = header_constants("dsa380_rigid.h", "DSA_P_")
+    for name, index in layout.items():
+        if getattr(kin, name) != index:
+            raise RuntimeError(f"dsa380_rigid.h: DSA_P_{name} = {index}, the kernels' "
+                               f"{name} = {getattr(kin, name)}")
+    keys = header_constants("dsa380_rigid.h", "DSA_K_")
+    o = model.options
+    ramp = o.ramp is not None and model.torque_lowered is not None
+    values = {"PITCH_LOCK": float(model.pitch_lock), "TORQUE": model.torque,
+              "RAMP": float(ramp), "TORQUE_LOWERED": model.torque_lowered if ramp else 0.0,
+              "RAMP_START": o.ramp.start if ramp else 0.0,
+              "RAMP_DURATION": o.ramp.duration if ramp else 0.0,
+              "AERO_FORCE": o.aero_force, "FRICTION_FORCE": o.friction_force,
+              "FRICTION_SMOOTHING": o.friction_smoothing,
+              "ONE_WAY_DAMPER": float(bool(o.one_way_damper))}
+    k = np.zeros(keys.pop("COUNT"))
+    k[:layout["NPAR"]] = model.params.vector()
+    for name, index in keys.items():
+        k[index] = values[name]
+    return k
