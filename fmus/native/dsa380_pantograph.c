@@ -1,0 +1,366 @@
+/*
+ * The rigid DSA-380 as a native pantograph FMU model (pcs_model.h): the model of
+ * dsa380_rigid.c stepped by the HHT-alpha Newton engine of hht_dense.c with the settings,
+ * start and force timing of the Python pantograph FMU (fmus/fmi/pantograph_slave.py):
+ *
+ * - the contact force set before doStep(t, H) is the force at t + H, the force at t the
+ *   previous accepted step's (in the FMU state); a communication step of n internal steps
+ *   interpolates it linearly; with force_extrapolation, F(t + H) = max(0, 2 F(t) - F(t - H));
+ * - a step whose Newton iteration fails, or that leaves the heights the model represents, is
+ *   refused (PCS_DISCARD) with the state as it was.
+ *
+ * The constants, the start (static in contact, or lowered for ramp raising) and the settings
+ * are written at export (pantocosim.master.native.export.dsa380_pantograph).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "dsa380_rigid.h"
+#include "dsa380_vars.h"
+#include "hht_dense.h"
+#include "pcs_model.h"
+
+typedef struct {
+    Dsa380 body;
+    HhtDense engine;
+    void *memory;              /* the engine's work and state (host allocator) */
+    double *saved;             /* the state before a step, for a refused one */
+    const double *sc, *q0;
+    const char *preset;
+    int n, initialised, extrapolate;
+    double force_in, iterations;
+    double force[2];           /* the state beyond the engine's: F(t), the input at t */
+} Dsa380Fmu;
+
+static int text_section(const PcsData *d, const char *name, const char **out, char *err)
+{
+    long n = 0;
+    const char *s = (const char *)pcs_data_section(d, name, PCS_TYPE_I32, -1, &n, err,
+                                                   PCS_MSG);
+    if (!s) return -1;
+    if (n < 1 || s[4 * n - 1] != '\0') {
+        snprintf(err, PCS_MSG, "data file %.400s: section %s is not a string", d->path, name);
+        return -1;
+    }
+    *out = s;
+    return 0;
+}
+
+/* the settings and the model from the data file; -1 with the reason in err */
+static int read_data(Dsa380Fmu *m, const PcsData *d, char *err)
+{
+    char msg[DSA_MSG];
+    const double *k;
+    m->sc = (const double *)pcs_data_section(d, "scalars", PCS_TYPE_F64, DSA_S_COUNT, NULL,
+                                             err, PCS_MSG);
+    k = (const double *)pcs_data_section(d, "constants", PCS_TYPE_F64, DSA_K_COUNT, NULL,
+                                         err, PCS_MSG);
+    if (!m->sc || !k || text_section(d, "preset", &m->preset, err)) return -1;
+    if (dsa380_setup(&m->body, k, DSA_K_COUNT, msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
+        return -1;
+    }
+    m->n = m->body.n_dofs;
+    m->q0 = (const double *)pcs_data_section(d, "q0", PCS_TYPE_F64, m->n, NULL, err, PCS_MSG);
+    if (!m->q0) return -1;
+    if (!(m->sc[DSA_S_STEP] > 0.0) || !isfinite(m->sc[DSA_S_STEP]) ||
+        !(m->sc[DSA_S_HEIGHT_MIN] < m->sc[DSA_S_HEIGHT_MAX])) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, "
+                 "heights %g .. %g m (a positive step and an increasing range)", d->path,
+                 m->sc[DSA_S_STEP], m->sc[DSA_S_HEIGHT_MIN], m->sc[DSA_S_HEIGHT_MAX]);
+        return -1;
+    }
+    return 0;
+}
+
+static void *create(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    char msg[HHT_MSG];
+    HhtSettings s;
+    size_t bytes;
+    Dsa380Fmu *m = (Dsa380Fmu *)pcs_alloc(mem, 1, sizeof *m);
+    if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
+    if (read_data(m, d, err)) goto fail;
+    s.alpha = m->sc[DSA_S_ALPHA];
+    s.rtol = m->sc[DSA_S_RTOL];
+    s.etol = m->sc[DSA_S_ETOL];
+    s.max_iterations = (int)m->sc[DSA_S_MAX_ITERATIONS];
+    s.linear_predictor = m->sc[DSA_S_LINEAR_PREDICTOR] != 0.0;
+    bytes = hht_dense_bytes(m->n);
+    m->memory = pcs_alloc(mem, 1, bytes);
+    m->saved = (double *)pcs_alloc(mem, 2 + 3 + 5 * (size_t)m->n, sizeof(double));
+    if (!m->memory || !m->saved) { snprintf(err, PCS_MSG, "no memory"); goto fail; }
+    if (hht_dense_init(&m->engine, m->n, &s, dsa380_evaluate, &m->body, m->memory, bytes,
+                       msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
+        goto fail;
+    }
+    m->force_in = m->sc[DSA_S_START_FORCE];
+    return m;
+fail:
+    pcs_free(mem, m->memory);
+    pcs_free(mem, m->saved);
+    pcs_free(mem, m);
+    return NULL;
+}
+
+static void destroy(void *model, const PcsMemory *mem)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    if (!m) return;
+    pcs_free(mem, m->memory);
+    pcs_free(mem, m->saved);
+    pcs_free(mem, m);
+}
+
+static int initialize(void *model, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    char msg[HHT_MSG];
+    double F0 = m->sc[DSA_S_START_FORCE];
+    if (hht_dense_start(&m->engine, 0.0, m->q0, NULL, &F0, msg)) {
+        snprintf(err, PCS_MSG, "the start state: %s", msg);
+        return PCS_ERROR;
+    }
+    m->force[0] = m->force[1] = F0;
+    m->force_in = F0;
+    m->iterations = 0.0;
+    m->initialised = 1;
+    return PCS_OK;
+}
+
+static size_t state_bytes(const void *model)
+{
+    return (2 + 3 + 5 * (size_t)((const Dsa380Fmu *)model)->n) * sizeof(double);
+}
+
+static void state_save(const void *model, void *buffer)
+{
+    const Dsa380Fmu *m = (const Dsa380Fmu *)model;
+    double *out = (double *)buffer;
+    out[0] = m->force[0];
+    out[1] = m->force[1];
+    memcpy(out + 2, m->engine.state.block, state_bytes(model) - 2 * sizeof(double));
+}
+
+static void state_restore(void *model, const void *buffer)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    const double *in = (const double *)buffer;
+    m->force[0] = in[0];
+    m->force[1] = in[1];
+    memcpy(m->engine.state.block, in + 2, state_bytes(model) - 2 * sizeof(double));
+}
+
+static void outputs(void *model) { (void)model; }
+
+/* the communication step as internal steps: their number, or 0 (not a whole number) */
+static int substeps(const Dsa380Fmu *m, double H)
+{
+    double ratio = H / m->sc[DSA_S_STEP];
+    int n = (int)floor(ratio + 0.5);
+    if (!(H > 0.0) || !isfinite(ratio) || n < 1 ||
+        fabs(ratio - n) > 1e-9 * (ratio > 1.0 ? ratio : 1.0))
+        return 0;
+    return n;
+}
+
+/* why the state just reached leaves the heights the model represents, or 0 */
+static int outside_range(const Dsa380Fmu *m, double t, double H, char *err)
+{
+    double z = m->engine.state.q[2], lo = m->sc[DSA_S_HEIGHT_MIN], hi = m->sc[DSA_S_HEIGHT_MAX];
+    if (z >= lo && z <= hi) return 0;
+    snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g): the contact point would be at %.4g m, "
+             "outside the heights pantograph '%s' represents (%.3g .. %.3g m): contact_force "
+             "= %.6g N and speed_kmh = %.6g km/h are beyond what it can take", t, H, z,
+             m->preset, lo, hi, m->force_in, m->sc[DSA_S_SPEED_KMH]);
+    return 1;
+}
+
+static int step(void *model, double t, double H, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    char msg[HHT_MSG];
+    int n = substeps(m, H), i, iterations = 0;
+    double F = m->force_in, F0 = m->force[0], u = F;
+    if (!m->initialised) { snprintf(err, PCS_MSG, "doStep before initialisation"); return PCS_ERROR; }
+    if (!n) {
+        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
+                 "steps of %.17g s (the step this FMU was exported for)", H, m->sc[DSA_S_STEP]);
+        return PCS_DISCARD;
+    }
+    if (!(isfinite(F) && F >= 0.0)) {
+        snprintf(err, PCS_MSG, "contact_force = %.17g: must be finite and >= 0", F);
+        return PCS_DISCARD;
+    }
+    if (m->extrapolate) {
+        if (m->engine.state.block[0] == 0.0) u = m->force[1];
+        F = 2.0 * u - m->force[1];
+        if (F < 0.0) F = 0.0;
+    }
+    state_save(m, m->saved);
+    for (i = 1; i <= n; i++) {
+        double Fi = F0 + (F - F0) * i / n;
+        if (hht_dense_step(&m->engine, H / n, &Fi, msg)) {
+            state_restore(m, m->saved);
+            snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g) failed: %s", t, H, msg);
+            return PCS_DISCARD;
+        }
+        iterations += m->engine.iterations;
+    }
+    if (outside_range(m, t, H, err)) {
+        state_restore(m, m->saved);
+        return PCS_DISCARD;
+    }
+    m->force[0] = F;
+    m->force[1] = u;
+    m->iterations = iterations;
+    return PCS_OK;
+}
+
+/* ------------------------------------------------------------------ variables */
+
+/* the Real parameters fixed at export: value reference, name, index in scalars */
+static const struct { unsigned vr; const char *name; int index; } FIXED[] = {
+    {DSA_VR_STATIC_FORCE, "static_force", DSA_S_STATIC_FORCE},
+    {DSA_VR_AERO_C1, "aero_c1", DSA_S_AERO_C1},
+    {DSA_VR_AERO_C2, "aero_c2", DSA_S_AERO_C2},
+    {DSA_VR_SPEED_KMH, "speed_kmh", DSA_S_SPEED_KMH},
+    {DSA_VR_FRICTION_FORCE, "friction_force", DSA_S_FRICTION_FORCE},
+    {DSA_VR_FRICTION_SMOOTHING, "friction_smoothing", DSA_S_FRICTION_SMOOTHING},
+    {DSA_VR_HHT_ALPHA, "hht_alpha", DSA_S_ALPHA},
+    {DSA_VR_INITIAL_HEIGHT, "initial_height", DSA_S_INITIAL_HEIGHT},
+    {DSA_VR_INITIAL_CONTACT_FORCE, "initial_contact_force", DSA_S_INITIAL_CONTACT_FORCE},
+    {DSA_VR_RAMP_START_TIME, "ramp_start_time", DSA_S_RAMP_START_TIME},
+    {DSA_VR_RAMP_DURATION, "ramp_duration", DSA_S_RAMP_DURATION},
+    {DSA_VR_LOWERED_HEIGHT, "lowered_height", DSA_S_LOWERED_HEIGHT},
+    {DSA_VR_INTERNAL_STEP, "internal_step", DSA_S_STEP},
+};
+#define N_FIXED (sizeof FIXED / sizeof FIXED[0])
+
+static int fixed_index(unsigned vr)
+{
+    size_t i;
+    for (i = 0; i < N_FIXED; i++)
+        if (FIXED[i].vr == vr) return (int)i;
+    return -1;
+}
+
+/* a parameter fixed at export: its own value is accepted, another refused */
+static int fixed_value(const char *name, double exported, double value, char *err)
+{
+    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
+    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
+    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
+             "it again with pantocosim export-native to change it)", name, value, name, exported);
+    return PCS_ERROR;
+}
+
+static int get_real(void *model, unsigned vr, double *value, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    int i = fixed_index(vr);
+    const HhtState *st = &m->engine.state;
+    if (i >= 0) { *value = m->sc[FIXED[i].index]; return PCS_OK; }
+    switch (vr) {
+    case DSA_VR_CONTACT_FORCE: *value = m->force_in; return PCS_OK;
+    case DSA_VR_CONTACT_HEIGHT: *value = m->initialised ? st->q[2] : m->q0[2]; return PCS_OK;
+    case DSA_VR_CONTACT_VELOCITY: *value = m->initialised ? st->v[2] : 0.0; return PCS_OK;
+    case DSA_VR_NEWTON_ITERATIONS: *value = m->iterations; return PCS_OK;
+    default: break;
+    }
+    snprintf(err, PCS_MSG, "no Real variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+static int set_real(void *model, unsigned vr, double value, int initialised, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    int i = fixed_index(vr);
+    if (vr == DSA_VR_CONTACT_FORCE) { m->force_in = value; return PCS_OK; }
+    if (i < 0 || vr == DSA_VR_INTERNAL_STEP) {
+        snprintf(err, PCS_MSG, "value reference %u is not a Real input or parameter", vr);
+        return PCS_ERROR;
+    }
+    if (initialised) {
+        snprintf(err, PCS_MSG, "%s is a parameter: it is set before initialisation only",
+                 FIXED[i].name);
+        return PCS_ERROR;
+    }
+    if (vr == DSA_VR_INITIAL_CONTACT_FORCE && value < 0.0 &&
+        m->sc[DSA_S_INITIAL_CONTACT_FORCE] < 0.0)
+        return PCS_OK;             /* < 0: the mean uplift, as exported */
+    return fixed_value(FIXED[i].name, m->sc[FIXED[i].index], value, err);
+}
+
+static int get_integer(void *model, unsigned vr, int *value, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    if (vr == DSA_VR_START_MODE) { *value = (int)m->sc[DSA_S_START_MODE]; return PCS_OK; }
+    snprintf(err, PCS_MSG, "no Integer variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+static int set_integer(void *model, unsigned vr, int value, int initialised, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    int mode = (int)m->sc[DSA_S_START_MODE];
+    if (vr != DSA_VR_START_MODE) {
+        snprintf(err, PCS_MSG, "no Integer parameter of value reference %u", vr);
+        return PCS_ERROR;
+    }
+    if (!initialised && value == mode) return PCS_OK;
+    snprintf(err, PCS_MSG, initialised ? "start_mode is a parameter: it is set before "
+             "initialisation only" : "start_mode = %d: this native FMU was exported with "
+             "start_mode = %d (export it again with pantocosim export-native to change it)",
+             value, mode);
+    return PCS_ERROR;
+}
+
+static int get_boolean(void *model, unsigned vr, int *value, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    if (vr == DSA_VR_ONE_WAY_DAMPER) { *value = m->body.one_way; return PCS_OK; }
+    if (vr == DSA_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
+    snprintf(err, PCS_MSG, "no Boolean variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+static int set_boolean(void *model, unsigned vr, int value, int initialised, char *err)
+{
+    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    if (vr != DSA_VR_ONE_WAY_DAMPER && vr != DSA_VR_FORCE_EXTRAPOLATION) {
+        snprintf(err, PCS_MSG, "no Boolean parameter of value reference %u", vr);
+        return PCS_ERROR;
+    }
+    if (initialised) {
+        snprintf(err, PCS_MSG, "Boolean %u is a parameter: set before initialisation only", vr);
+        return PCS_ERROR;
+    }
+    if (vr == DSA_VR_FORCE_EXTRAPOLATION) { m->extrapolate = value != 0; return PCS_OK; }
+    if ((value != 0) == m->body.one_way) return PCS_OK;
+    snprintf(err, PCS_MSG, "one_way_damper = %s: this native FMU was exported with "
+             "one_way_damper = %s (export it again with pantocosim export-native to change "
+             "it)", value ? "true" : "false", m->body.one_way ? "true" : "false");
+    return PCS_ERROR;
+}
+
+static int get_string(void *model, unsigned vr, const char **value, char *err)
+{
+    (void)model; (void)value;
+    snprintf(err, PCS_MSG, "no String variable of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+static int set_string(void *model, unsigned vr, const char *value, int initialised, char *err)
+{
+    (void)model; (void)value; (void)initialised;
+    snprintf(err, PCS_MSG, "no String parameter of value reference %u", vr);
+    return PCS_ERROR;
+}
+
+const PcsModelType pcs_dsa380_rigid = {
+    "rigid DSA-380 pantograph", PCS_KIND_DSA380_RIGID, create, destroy, initialize, step,
+    outputs, state_bytes, state_save, state_restore, get_real, set_real, get_integer,
+    set_integer, get_boolean, set_boolean, get_string, set_string};
