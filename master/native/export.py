@@ -24,6 +24,7 @@ import numpy as np
 
 from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator
+from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.master.native.build import SOURCE_DIR
 from pantocosim.pantograph import dsa380_kinematics as kin
 
@@ -202,3 +203,34 @@ def dsa380_constants(model) -> np.ndarray:
     for name, index in keys.items():
         k[index] = values[name]
     return k
+
+
+def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
+                      force: float, name: str, lowered_height: float | None = None) -> dict:
+    """The sections of the native rigid DSA-380 pantograph FMU (``dsa380_pantograph.c``,
+    ``dsa380_vars.h``): ``model`` (its options as the Python FMU builds them) in the start of
+    the Python FMU's ``start_mode`` (0: static at ``height`` under ``force``, < 0 the mean
+    uplift; 1: ramp raising from ``lowered_height``), which sets its actuation torques,
+    stepped with the HHT ``settings`` at internal step ``h``."""
+    q0, F0 = start_state(model, start_mode, height=height, force=force,
+                         lowered_height=lowered_height)
+    lo, hi = model.height_range()
+    o = model.options
+    ramp = o.ramp
+    values = {"STEP": h, "ALPHA": settings.alpha, "RTOL": settings.rtol,
+              "ETOL": settings.etol, "MAX_ITERATIONS": settings.max_iterations,
+              "LINEAR_PREDICTOR": float(settings.predictor == "linear"), "HEIGHT_MIN": lo,
+              "HEIGHT_MAX": hi, "STATIC_FORCE": o.static_force, "AERO_C1": o.aero_c1,
+              "AERO_C2": o.aero_c2, "SPEED_KMH": o.speed_kmh,
+              "FRICTION_FORCE": o.friction_force, "FRICTION_SMOOTHING": o.friction_smoothing,
+              "ONE_WAY_DAMPER": float(bool(o.one_way_damper)), "INITIAL_HEIGHT": height,
+              "INITIAL_CONTACT_FORCE": force, "START_MODE": start_mode,
+              "RAMP_START_TIME": ramp.start if ramp else 0.0,
+              "RAMP_DURATION": ramp.duration if ramp else 0.0,
+              "LOWERED_HEIGHT": ramp.lowered_height if ramp else 0.0, "START_FORCE": F0}
+    keys = header_constants("dsa380_vars.h", "DSA_S_")
+    scalars = np.zeros(keys.pop("COUNT"))
+    for key, index in keys.items():
+        scalars[index] = values[key]
+    return {"scalars": _f64(scalars), "constants": _f64(dsa380_constants(model)),
+            "q0": _f64(q0), "preset": _text(name)}
