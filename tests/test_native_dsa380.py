@@ -1,5 +1,5 @@
-"""The native rigid DSA-380 (fmus/native/dsa380_rigid.c) and the dense HHT engine
-(fmus/native/hht_dense.c), built here as a shared library with a probe
+"""The native rigid and flexible DSA-380 (fmus/native/dsa380_rigid.c, dsa380_flexible.c) and
+the dense HHT engine (fmus/native/hht_dense.c), built here as a shared library with a probe
 (tests/c_hosts/dsa380_probe.c) and called through ctypes: residual and tangents equal the
 Python kernels' at random states with every option on and off, the tangents equal finite
 differences, a trajectory under a prescribed force equals HHTIntegrator's, a failed step
@@ -18,7 +18,7 @@ import pytest
 
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.master.native.build import CFLAGS, SOURCE_DIR
-from pantocosim.master.native.export import dsa380_constants
+from pantocosim.master.native.export import dsa380_constants, dsa380_flexible_data
 from pantocosim.pantograph.base import Ramp
 from pantocosim.pantograph.dsa380 import load_dsa380
 from pantocosim.pantograph.modal import modal_analysis
@@ -46,9 +46,10 @@ CASES = {
 def probe(tmp_path_factory):
     lib = tmp_path_factory.mktemp("dsa380") / "probe.so"
     cc = required("gcc", "gcc")
+    sources = [SOURCE_DIR / f"{name}.c" for name in ("dsa380_rigid", "dsa380_flexible",
+                                                      "hht_dense", "actuation")]
     subprocess.run([cc, *CFLAGS, "-fPIC", "-shared", f"-I{SOURCE_DIR}", "-o", str(lib),
-                    str(PROBE), str(SOURCE_DIR / "dsa380_rigid.c"),
-                    str(SOURCE_DIR / "hht_dense.c"), "-lm"], check=True)
+                    str(PROBE), *map(str, sources), "-lm"], check=True)
     so = ctypes.CDLL(str(lib))
     so.probe_mechanism.restype = ctypes.c_double
     so.probe_evaluate.argtypes = [ctypes.c_double, P, P, P, ctypes.c_double, P, P,
@@ -56,6 +57,12 @@ def probe(tmp_path_factory):
     so.probe_start.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_int,
                                ctypes.c_int, ctypes.c_double, P, ctypes.c_double,
                                ctypes.c_char_p]
+    so.probe_flex_setup.argtypes = [P, ctypes.c_long, *[P] * 7,
+                                    ctypes.POINTER(ctypes.c_int), P, P, P, ctypes.c_char_p]
+    so.probe_flex_evaluate.argtypes = so.probe_evaluate.argtypes
+    so.probe_flex_start.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double,
+                                    ctypes.c_int, ctypes.c_int, P, ctypes.c_double,
+                                    ctypes.c_char_p]
     so.probe_step.argtypes = [ctypes.c_double, ctypes.c_double, P,
                               ctypes.POINTER(ctypes.c_int), ctypes.c_char_p]
     return so
@@ -230,4 +237,116 @@ def test_natural_frequencies_of_the_native_tangent_equal_pantocosim_modal(probe)
                                                          120.0)
     got = modal_analysis(M, C, K + Kin).frequencies_hz
     assert len(want) == n
+    assert np.allclose(got, want, rtol=1e-9, atol=0.0), (got, want)
+
+
+# ---------------------------------------------------------------------- the flexible DSA-380
+FLEX_CASES = {k: v for k, v in CASES.items() if k != "pitch_lock"}
+
+
+def flexible_of(case: str):
+    """The preset's flexible DSA-380 with the options of ``case``, in its static start."""
+    return load_pantograph("dsa380-flexible", **CASES[case])
+
+
+class NativeFlexible(Native):
+    """The probe's flexible model, set up with a Python model's exported data (kept alive
+    here: the C model reads the arrays in place)."""
+
+    def __init__(self, so, model):
+        self.so, self.n = so, model.n_dofs
+        self.data = dsa380_flexible_data(model)
+        d = self.data
+        msg = ctypes.create_string_buffer(512)
+        arrays = [ptr(d[name]) for name in ("q_ref", "M", "Qg", "E0", "length", "EA", "EI")]
+        status = so.probe_flex_setup(
+            ptr(d["constants"]), len(d["constants"]), *arrays,
+            d["pg"].ctypes.data_as(ctypes.POINTER(ctypes.c_int)), ptr(d["pR"]),
+            ptr(d["xi_g"]), ptr(d["w_g"]), msg)
+        assert status == 0, msg.value
+        self.evaluate_call = so.probe_flex_evaluate
+
+    def evaluate(self, t, q, v, a, F):
+        n = self.n
+        f, mats = np.zeros(2 * n), np.zeros(4 * n * n)
+        msg = ctypes.create_string_buffer(512)
+        arrays = [np.ascontiguousarray(x, float) for x in (q, v, a)]
+        assert self.evaluate_call(t, *map(ptr, arrays), F, ptr(f), ptr(mats), msg) == 0, \
+            msg.value
+        return f[:n], f[n:], mats.reshape(4, n, n)
+
+
+def flexible_state(model, rng):
+    n = model.n_dofs
+    return (model.q_equilibrium + rng.normal(0.0, 1e-4, n), rng.normal(0.0, 0.05, n),
+            rng.normal(0.0, 1.0, n))
+
+
+@pytest.mark.parametrize("case", sorted(FLEX_CASES))
+def test_flexible_residual_and_tangents_equal_the_python_kernels(probe, case):
+    model = flexible_of(case)
+    native = NativeFlexible(probe, model)
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        q, v, a = flexible_state(model, rng)
+        t, F = rng.uniform(0.0, 0.05), rng.uniform(0.0, 300.0)
+        f_in, f_rest, (M, Kin, C, K) = native.evaluate(t, q, v, a, F)
+        ev = model.evaluate(t, q, v, a, np.array([F]), tangent=True)
+        close(f_in, ev.f_inertia, 1e-12)
+        close(f_rest, ev.f_rest, 1e-12)
+        for got, want in ((M, ev.mass), (C, ev.damping), (K, ev.stiffness)):
+            close(got, want, 1e-12)
+        assert not Kin.any()
+
+
+@pytest.mark.parametrize("case", sorted(FLEX_CASES))
+def test_flexible_trajectory_equals_hht_integrators(probe, case):
+    """100 steps of 1 ms under the prescribed force of the rigid model's test."""
+    model = flexible_of(case)
+    settings = HHTSettings(alpha=-0.05)
+    h, steps = 1e-3, 100
+    F0 = model.options.mean_uplift
+    t = h * np.arange(1, steps + 1)
+    forces = F0 * (1.0 + 0.3 * np.sin(2.0 * np.pi * 6.0 * t))
+    q0 = model.q_equilibrium
+    if model.options.ramp is not None:
+        q0, F0 = model.lowered_equilibrium(model.options.ramp.lowered_height), 0.0
+        forces = np.where(t > 0.04, forces, 0.0)
+    want, its_py = python_trajectory(model, settings, q0, F0, forces, h)
+    native = NativeFlexible(probe, model)
+    n = model.n_dofs
+    msg = ctypes.create_string_buffer(512)
+    q0 = np.ascontiguousarray(q0, float)
+    assert probe.probe_flex_start(settings.alpha, settings.rtol, settings.etol,
+                                  settings.max_iterations, 0, ptr(q0), F0, msg) == 0, msg.value
+    rows, its = [], []
+    out, it = np.zeros(3 + 5 * n), ctypes.c_int()
+    for F in forces:
+        assert probe.probe_step(h, F, ptr(out), ctypes.byref(it), msg) == 0, msg.value
+        rows.append(out[3:3 + 3 * n].copy())
+        its.append(it.value)
+    got = np.array(rows)
+    assert native.n == n
+    y10 = int(native.data["constants"][8])
+    for block in range(3):          # q, v, a: each to 1e-10 of its largest entry
+        w, g = want[:, block * n:(block + 1) * n], got[:, block * n:(block + 1) * n]
+        assert np.max(np.abs(g - w)) <= 1e-10 * np.max(np.abs(w)), block
+    assert its == its_py
+    assert np.ptp(want[:, y10]) > 1e-3      # the collector moved
+
+
+def test_flexible_natural_frequencies_equal_pantocosim_modal(probe):
+    """The lowest ten modes (the mechanism's and the first bending modes)."""
+    from pantocosim.master.cli import main
+
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["modal", "dsa380-flexible", "--json", "--count", "10"]) == 0
+    want = json.loads(out.getvalue())["frequencies_hz"]
+    model = flexible_of("plain")
+    q0 = model.static_equilibrium(120.0)
+    n = model.n_dofs
+    _, _, (M, Kin, C, K) = NativeFlexible(probe, model).evaluate(0.0, q0, np.zeros(n),
+                                                                 np.zeros(n), 120.0)
+    got = modal_analysis(M, C, K + Kin).frequencies_hz[:10]
     assert np.allclose(got, want, rtol=1e-9, atol=0.0), (got, want)

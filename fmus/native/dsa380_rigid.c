@@ -221,11 +221,11 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
     memset(m, 0, sizeof *m);
     memcpy(m->P, k, sizeof m->P);
     m->n_dofs = k[DSA_K_PITCH_LOCK] != 0.0 ? 3 : 4;
-    m->torque = k[DSA_K_TORQUE];
-    m->ramp = k[DSA_K_RAMP] != 0.0;
-    m->torque_lowered = k[DSA_K_TORQUE_LOWERED];
-    m->ramp_start = k[DSA_K_RAMP_START];
-    m->ramp_duration = k[DSA_K_RAMP_DURATION];
+    m->act.torque = k[DSA_K_TORQUE];
+    m->act.ramp = k[DSA_K_RAMP] != 0.0;
+    m->act.torque_lowered = k[DSA_K_TORQUE_LOWERED];
+    m->act.ramp_start = k[DSA_K_RAMP_START];
+    m->act.ramp_duration = k[DSA_K_RAMP_DURATION];
     m->aero_force = k[DSA_K_AERO_FORCE];
     m->friction_force = k[DSA_K_FRICTION_FORCE];
     m->friction_smoothing = k[DSA_K_FRICTION_SMOOTHING];
@@ -236,19 +236,6 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
         return -1;
     }
     return 0;
-}
-
-double dsa380_torque(const Dsa380 *m, double t)
-{
-    double f;
-    if (!m->ramp) return m->torque;
-    if (m->ramp_duration <= 0.0) f = t >= m->ramp_start ? 1.0 : 0.0;
-    else {
-        f = (t - m->ramp_start) / m->ramp_duration;
-        f = f < 0.0 ? 0.0 : f;
-        f = f > 1.0 ? 1.0 : f;
-    }
-    return m->torque_lowered + f * (m->torque - m->torque_lowered);
 }
 
 /* inertia (A.9) and d(M a)/dq (3.28) */
@@ -416,7 +403,7 @@ int dsa380_evaluate(void *model, double t, const double *q, const double *v, con
         m->v4[i] = i < n ? v[i] : 0.0;
         m->a4[i] = i < n ? a[i] : 0.0;
     }
-    if (!(kernel(m, F, dsa380_torque(m, t)) > 0.0)) {
+    if (!(kernel(m, F, actuation_torque(&m->act, t)) > 0.0)) {
         snprintf(msg, HHT_MSG, "theta = %.6g rad: the mechanism loops (A.1) cannot be closed "
                  "at this angle", m->q4[0]);
         return -1;

@@ -11,6 +11,7 @@
 #ifndef DSA380_RIGID_H
 #define DSA380_RIGID_H
 
+#include "actuation.h"
 #include "hht_dense.h"
 
 /* parameter vector P: fixed points (point 2 at the roof height), bars 1..7, links, springs,
@@ -59,8 +60,8 @@
 typedef struct {
     double P[DSA_P_NPAR];
     int n_dofs;
-    int ramp, one_way;
-    double torque, torque_lowered, ramp_start, ramp_duration;
+    int one_way;
+    Actuation act;
     double aero_force, friction_force, friction_smoothing;
     /* work of an evaluation (4 coordinates; the locked pitch is 0) */
     double q4[4], v4[4], a4[4], vec[3][4], mat[4][4][4];
@@ -68,8 +69,6 @@ typedef struct {
 
 /* Fill m from the constants k (count DSA_K_COUNT); 0, or -1 with the reason in msg. */
 int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg);
-/* The actuation torque on bar 1 at t (2.14), ramp-weighted (3.3.1). */
-double dsa380_torque(const Dsa380 *m, double t);
 /* The residual pieces and tangents at (t, q, v, a) under inputs[0] = F (an HhtModelFn). */
 int dsa380_evaluate(void *model, double t, const double *q, const double *v, const double *a,
                     const double *inputs, int tangent, HhtEval *out, char *msg);

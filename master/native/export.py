@@ -26,6 +26,7 @@ from pantocosim.core.errors import ParameterError
 from pantocosim.core.hht import HHTIntegrator
 from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.master.native.build import SOURCE_DIR
+from pantocosim.pantograph import dsa380_flexible as flex
 from pantocosim.pantograph import dsa380_kinematics as kin
 
 
@@ -234,3 +235,35 @@ def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
         scalars[index] = values[key]
     return {"scalars": _f64(scalars), "constants": _f64(dsa380_constants(model)),
             "q0": _f64(q0), "preset": _text(name)}
+
+
+def dsa380_flexible_data(model) -> dict:
+    """The constants and arrays of the native flexible DSA-380
+    (``fmus/native/dsa380_flexible.h``): the model's topology (elements' coordinate pairs,
+    2x2 maps, reference coordinates, section stiffnesses), constant mass matrix and gravity,
+    Gauss rule, the indices of the points the springs, damper, torque and contact act on, the
+    options and the actuation torques."""
+    keys = header_constants("dsa380_flexible.h", "DSF_K_")
+    o = model.options
+    ints, reals = model._ints, model._reals
+    ramp = o.ramp is not None and model.torque_lowered is not None
+    values = {"N": model.n_dofs, "NE": model.n_elements, "NG": len(model._xi),
+              "P5": ints[flex.I_P5], "P11": ints[flex.I_P11], "P12": ints[flex.I_P12],
+              "P1P": ints[flex.I_P1P], "S1": ints[flex.I_S1], "Y10": ints[flex.I_Y10],
+              "Y5": ints[flex.I_Y5], "KL": reals[flex.R_KL], "L0": reals[flex.R_L0],
+              "C": reals[flex.R_C], "X13": reals[flex.R_X13], "Y13": reals[flex.R_Y13],
+              "KR": reals[flex.R_KR], "TH0": reals[flex.R_TH0],
+              "ONE_WAY_DAMPER": float(bool(o.one_way_damper)),
+              "FRICTION_FORCE": o.friction_force, "FRICTION_SMOOTHING": o.friction_smoothing,
+              "AERO_FORCE": o.aero_force, "TORQUE": model.torque, "RAMP": float(ramp),
+              "TORQUE_LOWERED": model.torque_lowered if ramp else 0.0,
+              "RAMP_START": o.ramp.start if ramp else 0.0,
+              "RAMP_DURATION": o.ramp.duration if ramp else 0.0}
+    k = np.zeros(keys.pop("COUNT"))
+    for key, index in keys.items():
+        k[index] = values[key]
+    return {"constants": _f64(k), "q_ref": _f64(model.q_ref), "M": _f64(model.M).ravel(),
+            "Qg": _f64(model.Qg), "E0": _f64(model._E0).ravel(),
+            "length": _f64(model._length), "EA": _f64(model._EA), "EI": _f64(model._EI),
+            "pg": _i32(model._pg).ravel(), "pR": _f64(model._pR).ravel(),
+            "xi_g": _f64(model._xi), "w_g": _f64(model._w)}
