@@ -208,8 +208,8 @@ def dsa380_constants(model) -> np.ndarray:
 
 def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
                       force: float, name: str, lowered_height: float | None = None) -> dict:
-    """The sections of the native rigid DSA-380 pantograph FMU (``dsa380_pantograph.c``,
-    ``dsa380_vars.h``): ``model`` (its options as the Python FMU builds them) in the start of
+    """The sections of the native rigid DSA-380 pantograph FMU (``nonlinear_pantograph.c``,
+    ``nonlinear_pantograph_vars.h``): ``model`` (its options as the Python FMU builds them) in the start of
     the Python FMU's ``start_mode`` (0: static at ``height`` under ``force``, < 0 the mean
     uplift; 1: ramp raising from ``lowered_height``), which sets its actuation torques,
     stepped with the HHT ``settings`` at internal step ``h``."""
@@ -229,7 +229,7 @@ def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
               "RAMP_START_TIME": ramp.start if ramp else 0.0,
               "RAMP_DURATION": ramp.duration if ramp else 0.0,
               "LOWERED_HEIGHT": ramp.lowered_height if ramp else 0.0, "START_FORCE": F0}
-    keys = header_constants("dsa380_vars.h", "DSA_S_")
+    keys = header_constants("nonlinear_pantograph_vars.h", "NLP_S_")
     scalars = np.zeros(keys.pop("COUNT"))
     for key, index in keys.items():
         scalars[index] = values[key]

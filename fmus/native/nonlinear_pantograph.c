@@ -1,7 +1,8 @@
 /*
- * The rigid DSA-380 as a native pantograph FMU model (pcs_model.h): the model of
- * dsa380_rigid.c stepped by the HHT-alpha Newton engine of hht_dense.c with the settings,
- * start and force timing of the Python pantograph FMU (fmus/fmi/pantograph_slave.py):
+ * The nonlinear pantographs (the rigid DSA-380 of dsa380_rigid.c, the flexible one of
+ * dsa380_flexible.c) as native pantograph FMU models (pcs_model.h), stepped by the HHT-alpha
+ * Newton engine of hht_dense.c with the settings, start and force timing of the Python
+ * pantograph FMU (fmus/fmi/pantograph_slave.py):
  *
  * - the contact force set before doStep(t, H) is the force at t + H, the force at t the
  *   previous accepted step's (in the FMU state); a communication step of n internal steps
@@ -10,28 +11,37 @@
  *   refused (PCS_DISCARD) with the state as it was.
  *
  * The constants, the start (static in contact, or lowered for ramp raising) and the settings
- * are written at export (pantocosim.master.native.export.dsa380_pantograph).
+ * are written at export (pantocosim.master.native.export).
  */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "dsa380_flexible.h"
 #include "dsa380_rigid.h"
-#include "dsa380_vars.h"
 #include "hht_dense.h"
+#include "nonlinear_pantograph_vars.h"
 #include "pcs_model.h"
 
 typedef struct {
-    Dsa380 body;
+    Dsa380 rigid;
+    Dsa380Flex flexible;
+    void *body_work;           /* the flexible model's work memory */
     HhtDense engine;
     void *memory;              /* the engine's work and state (host allocator) */
     double *saved;             /* the state before a step, for a refused one */
     const double *sc, *q0;
     const char *preset;
-    int n, initialised, extrapolate;
+    HhtModelFn evaluate;       /* the body's evaluation and its data */
+    void *body;
+    int n, initialised, extrapolate, height_index;
+    double height_offset;      /* contact height = height_offset + q[height_index] */
     double force_in, iterations;
     double force[2];           /* the state beyond the engine's: F(t), the input at t */
-} Dsa380Fmu;
+} Pantograph;
+
+#define SECTION(d, name, type, count, err) \
+    pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG)
 
 static int text_section(const PcsData *d, const char *name, const char **out, char *err)
 {
@@ -47,68 +57,138 @@ static int text_section(const PcsData *d, const char *name, const char **out, ch
     return 0;
 }
 
-/* the settings and the model from the data file; -1 with the reason in err */
-static int read_data(Dsa380Fmu *m, const PcsData *d, char *err)
+/* the stepping, the start and the fixed parameters; -1 with the reason in err */
+static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 {
-    char msg[DSA_MSG];
-    const double *k;
-    m->sc = (const double *)pcs_data_section(d, "scalars", PCS_TYPE_F64, DSA_S_COUNT, NULL,
-                                             err, PCS_MSG);
-    k = (const double *)pcs_data_section(d, "constants", PCS_TYPE_F64, DSA_K_COUNT, NULL,
-                                         err, PCS_MSG);
-    if (!m->sc || !k || text_section(d, "preset", &m->preset, err)) return -1;
-    if (dsa380_setup(&m->body, k, DSA_K_COUNT, msg)) {
-        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
-        return -1;
-    }
-    m->n = m->body.n_dofs;
-    m->q0 = (const double *)pcs_data_section(d, "q0", PCS_TYPE_F64, m->n, NULL, err, PCS_MSG);
-    if (!m->q0) return -1;
-    if (!(m->sc[DSA_S_STEP] > 0.0) || !isfinite(m->sc[DSA_S_STEP]) ||
-        !(m->sc[DSA_S_HEIGHT_MIN] < m->sc[DSA_S_HEIGHT_MAX])) {
+    const double *sc = (const double *)SECTION(d, "scalars", PCS_TYPE_F64, NLP_S_COUNT, err);
+    m->sc = sc;
+    if (!sc || text_section(d, "preset", &m->preset, err)) return -1;
+    if (!(sc[NLP_S_STEP] > 0.0) || !isfinite(sc[NLP_S_STEP]) ||
+        !(sc[NLP_S_HEIGHT_MIN] < sc[NLP_S_HEIGHT_MAX])) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, "
                  "heights %g .. %g m (a positive step and an increasing range)", d->path,
-                 m->sc[DSA_S_STEP], m->sc[DSA_S_HEIGHT_MIN], m->sc[DSA_S_HEIGHT_MAX]);
+                 sc[NLP_S_STEP], sc[NLP_S_HEIGHT_MIN], sc[NLP_S_HEIGHT_MAX]);
         return -1;
     }
     return 0;
 }
 
-static void *create(const PcsData *d, const PcsMemory *mem, char *err)
+/* the rigid DSA-380 from the section "constants" */
+static int rigid_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err)
+{
+    char msg[DSA_MSG];
+    const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSA_K_COUNT, err);
+    (void)mem;
+    if (!k) return -1;
+    if (dsa380_setup(&m->rigid, k, DSA_K_COUNT, msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
+        return -1;
+    }
+    m->n = m->rigid.n_dofs;
+    m->evaluate = dsa380_evaluate;
+    m->body = &m->rigid;
+    m->height_index = 2;
+    m->height_offset = 0.0;
+    return 0;
+}
+
+/* the flexible DSA-380 from its constants and arrays (sizes read from the constants and
+   checked before anything is allocated) */
+static int flexible_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err)
+{
+    char msg[DSA_MSG];
+    DsfArrays a;
+    long n, ne, ng;
+    size_t bytes;
+    const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSF_K_COUNT, err);
+    if (!k) return -1;
+    n = (long)k[DSF_K_N];
+    ne = (long)k[DSF_K_NE];
+    ng = (long)k[DSF_K_NG];
+    if (!(n >= 2 && n <= DSF_MAX_N && ne >= 1 && ne <= DSF_MAX_NE && ng >= 1 &&
+          ng <= DSF_MAX_NG)) {
+        snprintf(err, PCS_MSG, "data file %.400s: the flexible model's sizes %ld unknowns, "
+                 "%ld elements, %ld Gauss points (accepted 2..%d, 1..%d, 1..%d)", d->path, n,
+                 ne, ng, DSF_MAX_N, DSF_MAX_NE, DSF_MAX_NG);
+        return -1;
+    }
+    if (!(a.q_ref = SECTION(d, "q_ref", PCS_TYPE_F64, n, err)) ||
+        !(a.M = SECTION(d, "M", PCS_TYPE_F64, n * n, err)) ||
+        !(a.Qg = SECTION(d, "Qg", PCS_TYPE_F64, n, err)) ||
+        !(a.E0 = SECTION(d, "E0", PCS_TYPE_F64, 8 * ne, err)) ||
+        !(a.length = SECTION(d, "length", PCS_TYPE_F64, ne, err)) ||
+        !(a.EA = SECTION(d, "EA", PCS_TYPE_F64, ne, err)) ||
+        !(a.EI = SECTION(d, "EI", PCS_TYPE_F64, ne, err)) ||
+        !(a.pg = SECTION(d, "pg", PCS_TYPE_I32, 4 * ne, err)) ||
+        !(a.pR = SECTION(d, "pR", PCS_TYPE_F64, 16 * ne, err)) ||
+        !(a.xi_g = SECTION(d, "xi_g", PCS_TYPE_F64, ng, err)) ||
+        !(a.w_g = SECTION(d, "w_g", PCS_TYPE_F64, ng, err)))
+        return -1;
+    bytes = dsf_work_bytes((int)n, (int)ne);
+    m->body_work = pcs_alloc(mem, 1, bytes);
+    if (!m->body_work) { snprintf(err, PCS_MSG, "no memory"); return -1; }
+    if (dsf_setup(&m->flexible, k, DSF_K_COUNT, &a, m->body_work, bytes, msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
+        return -1;
+    }
+    m->n = (int)n;
+    m->evaluate = dsf_evaluate;
+    m->body = &m->flexible;
+    m->height_index = m->flexible.y10;
+    m->height_offset = a.q_ref[m->height_index];
+    return 0;
+}
+
+typedef int (*BodyReader)(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err);
+
+static void destroy(void *model, const PcsMemory *mem);
+
+/* the engine and the FMU's buffers around the body read by body */
+static void *create(const PcsData *d, const PcsMemory *mem, char *err, BodyReader body)
 {
     char msg[HHT_MSG];
     HhtSettings s;
     size_t bytes;
-    Dsa380Fmu *m = (Dsa380Fmu *)pcs_alloc(mem, 1, sizeof *m);
+    Pantograph *m = (Pantograph *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    if (read_data(m, d, err)) goto fail;
-    s.alpha = m->sc[DSA_S_ALPHA];
-    s.rtol = m->sc[DSA_S_RTOL];
-    s.etol = m->sc[DSA_S_ETOL];
-    s.max_iterations = (int)m->sc[DSA_S_MAX_ITERATIONS];
-    s.linear_predictor = m->sc[DSA_S_LINEAR_PREDICTOR] != 0.0;
+    if (read_scalars(m, d, err) || body(m, d, mem, err)) goto fail;
+    m->q0 = (const double *)SECTION(d, "q0", PCS_TYPE_F64, m->n, err);
+    if (!m->q0) goto fail;
+    s.alpha = m->sc[NLP_S_ALPHA];
+    s.rtol = m->sc[NLP_S_RTOL];
+    s.etol = m->sc[NLP_S_ETOL];
+    s.max_iterations = (int)m->sc[NLP_S_MAX_ITERATIONS];
+    s.linear_predictor = m->sc[NLP_S_LINEAR_PREDICTOR] != 0.0;
     bytes = hht_dense_bytes(m->n);
     m->memory = pcs_alloc(mem, 1, bytes);
     m->saved = (double *)pcs_alloc(mem, 2 + 3 + 5 * (size_t)m->n, sizeof(double));
     if (!m->memory || !m->saved) { snprintf(err, PCS_MSG, "no memory"); goto fail; }
-    if (hht_dense_init(&m->engine, m->n, &s, dsa380_evaluate, &m->body, m->memory, bytes,
-                       msg)) {
+    if (hht_dense_init(&m->engine, m->n, &s, m->evaluate, m->body, m->memory, bytes, msg)) {
         snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
         goto fail;
     }
-    m->force_in = m->sc[DSA_S_START_FORCE];
+    m->force_in = m->sc[NLP_S_START_FORCE];
     return m;
 fail:
-    pcs_free(mem, m->memory);
-    pcs_free(mem, m->saved);
-    pcs_free(mem, m);
+    destroy(m, mem);
     return NULL;
+}
+
+static void *create_rigid(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    return create(d, mem, err, rigid_body);
+}
+
+static void *create_flexible(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    return create(d, mem, err, flexible_body);
 }
 
 static void destroy(void *model, const PcsMemory *mem)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     if (!m) return;
+    pcs_free(mem, m->body_work);
     pcs_free(mem, m->memory);
     pcs_free(mem, m->saved);
     pcs_free(mem, m);
@@ -116,9 +196,9 @@ static void destroy(void *model, const PcsMemory *mem)
 
 static int initialize(void *model, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     char msg[HHT_MSG];
-    double F0 = m->sc[DSA_S_START_FORCE];
+    double F0 = m->sc[NLP_S_START_FORCE];
     if (hht_dense_start(&m->engine, 0.0, m->q0, NULL, &F0, msg)) {
         snprintf(err, PCS_MSG, "the start state: %s", msg);
         return PCS_ERROR;
@@ -132,12 +212,12 @@ static int initialize(void *model, char *err)
 
 static size_t state_bytes(const void *model)
 {
-    return (2 + 3 + 5 * (size_t)((const Dsa380Fmu *)model)->n) * sizeof(double);
+    return (2 + 3 + 5 * (size_t)((const Pantograph *)model)->n) * sizeof(double);
 }
 
 static void state_save(const void *model, void *buffer)
 {
-    const Dsa380Fmu *m = (const Dsa380Fmu *)model;
+    const Pantograph *m = (const Pantograph *)model;
     double *out = (double *)buffer;
     out[0] = m->force[0];
     out[1] = m->force[1];
@@ -146,7 +226,7 @@ static void state_save(const void *model, void *buffer)
 
 static void state_restore(void *model, const void *buffer)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     const double *in = (const double *)buffer;
     m->force[0] = in[0];
     m->force[1] = in[1];
@@ -156,9 +236,9 @@ static void state_restore(void *model, const void *buffer)
 static void outputs(void *model) { (void)model; }
 
 /* the communication step as internal steps: their number, or 0 (not a whole number) */
-static int substeps(const Dsa380Fmu *m, double H)
+static int substeps(const Pantograph *m, double H)
 {
-    double ratio = H / m->sc[DSA_S_STEP];
+    double ratio = H / m->sc[NLP_S_STEP];
     int n = (int)floor(ratio + 0.5);
     if (!(H > 0.0) || !isfinite(ratio) || n < 1 ||
         fabs(ratio - n) > 1e-9 * (ratio > 1.0 ? ratio : 1.0))
@@ -167,27 +247,27 @@ static int substeps(const Dsa380Fmu *m, double H)
 }
 
 /* why the state just reached leaves the heights the model represents, or 0 */
-static int outside_range(const Dsa380Fmu *m, double t, double H, char *err)
+static int outside_range(const Pantograph *m, double t, double H, char *err)
 {
-    double z = m->engine.state.q[2], lo = m->sc[DSA_S_HEIGHT_MIN], hi = m->sc[DSA_S_HEIGHT_MAX];
+    double z = m->height_offset + m->engine.state.q[m->height_index], lo = m->sc[NLP_S_HEIGHT_MIN], hi = m->sc[NLP_S_HEIGHT_MAX];
     if (z >= lo && z <= hi) return 0;
     snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g): the contact point would be at %.4g m, "
              "outside the heights pantograph '%s' represents (%.3g .. %.3g m): contact_force "
              "= %.6g N and speed_kmh = %.6g km/h are beyond what it can take", t, H, z,
-             m->preset, lo, hi, m->force_in, m->sc[DSA_S_SPEED_KMH]);
+             m->preset, lo, hi, m->force_in, m->sc[NLP_S_SPEED_KMH]);
     return 1;
 }
 
 static int step(void *model, double t, double H, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     char msg[HHT_MSG];
     int n = substeps(m, H), i, iterations = 0;
     double F = m->force_in, F0 = m->force[0], u = F;
     if (!m->initialised) { snprintf(err, PCS_MSG, "doStep before initialisation"); return PCS_ERROR; }
     if (!n) {
         snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->sc[DSA_S_STEP]);
+                 "steps of %.17g s (the step this FMU was exported for)", H, m->sc[NLP_S_STEP]);
         return PCS_DISCARD;
     }
     if (!(isfinite(F) && F >= 0.0)) {
@@ -223,19 +303,19 @@ static int step(void *model, double t, double H, char *err)
 
 /* the Real parameters fixed at export: value reference, name, index in scalars */
 static const struct { unsigned vr; const char *name; int index; } FIXED[] = {
-    {DSA_VR_STATIC_FORCE, "static_force", DSA_S_STATIC_FORCE},
-    {DSA_VR_AERO_C1, "aero_c1", DSA_S_AERO_C1},
-    {DSA_VR_AERO_C2, "aero_c2", DSA_S_AERO_C2},
-    {DSA_VR_SPEED_KMH, "speed_kmh", DSA_S_SPEED_KMH},
-    {DSA_VR_FRICTION_FORCE, "friction_force", DSA_S_FRICTION_FORCE},
-    {DSA_VR_FRICTION_SMOOTHING, "friction_smoothing", DSA_S_FRICTION_SMOOTHING},
-    {DSA_VR_HHT_ALPHA, "hht_alpha", DSA_S_ALPHA},
-    {DSA_VR_INITIAL_HEIGHT, "initial_height", DSA_S_INITIAL_HEIGHT},
-    {DSA_VR_INITIAL_CONTACT_FORCE, "initial_contact_force", DSA_S_INITIAL_CONTACT_FORCE},
-    {DSA_VR_RAMP_START_TIME, "ramp_start_time", DSA_S_RAMP_START_TIME},
-    {DSA_VR_RAMP_DURATION, "ramp_duration", DSA_S_RAMP_DURATION},
-    {DSA_VR_LOWERED_HEIGHT, "lowered_height", DSA_S_LOWERED_HEIGHT},
-    {DSA_VR_INTERNAL_STEP, "internal_step", DSA_S_STEP},
+    {NLP_VR_STATIC_FORCE, "static_force", NLP_S_STATIC_FORCE},
+    {NLP_VR_AERO_C1, "aero_c1", NLP_S_AERO_C1},
+    {NLP_VR_AERO_C2, "aero_c2", NLP_S_AERO_C2},
+    {NLP_VR_SPEED_KMH, "speed_kmh", NLP_S_SPEED_KMH},
+    {NLP_VR_FRICTION_FORCE, "friction_force", NLP_S_FRICTION_FORCE},
+    {NLP_VR_FRICTION_SMOOTHING, "friction_smoothing", NLP_S_FRICTION_SMOOTHING},
+    {NLP_VR_HHT_ALPHA, "hht_alpha", NLP_S_ALPHA},
+    {NLP_VR_INITIAL_HEIGHT, "initial_height", NLP_S_INITIAL_HEIGHT},
+    {NLP_VR_INITIAL_CONTACT_FORCE, "initial_contact_force", NLP_S_INITIAL_CONTACT_FORCE},
+    {NLP_VR_RAMP_START_TIME, "ramp_start_time", NLP_S_RAMP_START_TIME},
+    {NLP_VR_RAMP_DURATION, "ramp_duration", NLP_S_RAMP_DURATION},
+    {NLP_VR_LOWERED_HEIGHT, "lowered_height", NLP_S_LOWERED_HEIGHT},
+    {NLP_VR_INTERNAL_STEP, "internal_step", NLP_S_STEP},
 };
 #define N_FIXED (sizeof FIXED / sizeof FIXED[0])
 
@@ -259,15 +339,19 @@ static int fixed_value(const char *name, double exported, double value, char *er
 
 static int get_real(void *model, unsigned vr, double *value, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     int i = fixed_index(vr);
     const HhtState *st = &m->engine.state;
     if (i >= 0) { *value = m->sc[FIXED[i].index]; return PCS_OK; }
     switch (vr) {
-    case DSA_VR_CONTACT_FORCE: *value = m->force_in; return PCS_OK;
-    case DSA_VR_CONTACT_HEIGHT: *value = m->initialised ? st->q[2] : m->q0[2]; return PCS_OK;
-    case DSA_VR_CONTACT_VELOCITY: *value = m->initialised ? st->v[2] : 0.0; return PCS_OK;
-    case DSA_VR_NEWTON_ITERATIONS: *value = m->iterations; return PCS_OK;
+    case NLP_VR_CONTACT_FORCE: *value = m->force_in; return PCS_OK;
+    case NLP_VR_CONTACT_HEIGHT:
+        *value = m->height_offset + (m->initialised ? st->q : m->q0)[m->height_index];
+        return PCS_OK;
+    case NLP_VR_CONTACT_VELOCITY:
+        *value = m->initialised ? st->v[m->height_index] : 0.0;
+        return PCS_OK;
+    case NLP_VR_NEWTON_ITERATIONS: *value = m->iterations; return PCS_OK;
     default: break;
     }
     snprintf(err, PCS_MSG, "no Real variable of value reference %u", vr);
@@ -276,10 +360,10 @@ static int get_real(void *model, unsigned vr, double *value, char *err)
 
 static int set_real(void *model, unsigned vr, double value, int initialised, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
+    Pantograph *m = (Pantograph *)model;
     int i = fixed_index(vr);
-    if (vr == DSA_VR_CONTACT_FORCE) { m->force_in = value; return PCS_OK; }
-    if (i < 0 || vr == DSA_VR_INTERNAL_STEP) {
+    if (vr == NLP_VR_CONTACT_FORCE) { m->force_in = value; return PCS_OK; }
+    if (i < 0 || vr == NLP_VR_INTERNAL_STEP) {
         snprintf(err, PCS_MSG, "value reference %u is not a Real input or parameter", vr);
         return PCS_ERROR;
     }
@@ -288,25 +372,25 @@ static int set_real(void *model, unsigned vr, double value, int initialised, cha
                  FIXED[i].name);
         return PCS_ERROR;
     }
-    if (vr == DSA_VR_INITIAL_CONTACT_FORCE && value < 0.0 &&
-        m->sc[DSA_S_INITIAL_CONTACT_FORCE] < 0.0)
+    if (vr == NLP_VR_INITIAL_CONTACT_FORCE && value < 0.0 &&
+        m->sc[NLP_S_INITIAL_CONTACT_FORCE] < 0.0)
         return PCS_OK;             /* < 0: the mean uplift, as exported */
     return fixed_value(FIXED[i].name, m->sc[FIXED[i].index], value, err);
 }
 
 static int get_integer(void *model, unsigned vr, int *value, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
-    if (vr == DSA_VR_START_MODE) { *value = (int)m->sc[DSA_S_START_MODE]; return PCS_OK; }
+    Pantograph *m = (Pantograph *)model;
+    if (vr == NLP_VR_START_MODE) { *value = (int)m->sc[NLP_S_START_MODE]; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Integer variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
 static int set_integer(void *model, unsigned vr, int value, int initialised, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
-    int mode = (int)m->sc[DSA_S_START_MODE];
-    if (vr != DSA_VR_START_MODE) {
+    Pantograph *m = (Pantograph *)model;
+    int mode = (int)m->sc[NLP_S_START_MODE];
+    if (vr != NLP_VR_START_MODE) {
         snprintf(err, PCS_MSG, "no Integer parameter of value reference %u", vr);
         return PCS_ERROR;
     }
@@ -320,17 +404,21 @@ static int set_integer(void *model, unsigned vr, int value, int initialised, cha
 
 static int get_boolean(void *model, unsigned vr, int *value, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
-    if (vr == DSA_VR_ONE_WAY_DAMPER) { *value = m->body.one_way; return PCS_OK; }
-    if (vr == DSA_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
+    Pantograph *m = (Pantograph *)model;
+    if (vr == NLP_VR_ONE_WAY_DAMPER) {
+        *value = m->sc[NLP_S_ONE_WAY_DAMPER] != 0.0;
+        return PCS_OK;
+    }
+    if (vr == NLP_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Boolean variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
 static int set_boolean(void *model, unsigned vr, int value, int initialised, char *err)
 {
-    Dsa380Fmu *m = (Dsa380Fmu *)model;
-    if (vr != DSA_VR_ONE_WAY_DAMPER && vr != DSA_VR_FORCE_EXTRAPOLATION) {
+    Pantograph *m = (Pantograph *)model;
+    int one_way = m->sc[NLP_S_ONE_WAY_DAMPER] != 0.0;
+    if (vr != NLP_VR_ONE_WAY_DAMPER && vr != NLP_VR_FORCE_EXTRAPOLATION) {
         snprintf(err, PCS_MSG, "no Boolean parameter of value reference %u", vr);
         return PCS_ERROR;
     }
@@ -338,11 +426,11 @@ static int set_boolean(void *model, unsigned vr, int value, int initialised, cha
         snprintf(err, PCS_MSG, "Boolean %u is a parameter: set before initialisation only", vr);
         return PCS_ERROR;
     }
-    if (vr == DSA_VR_FORCE_EXTRAPOLATION) { m->extrapolate = value != 0; return PCS_OK; }
-    if ((value != 0) == m->body.one_way) return PCS_OK;
+    if (vr == NLP_VR_FORCE_EXTRAPOLATION) { m->extrapolate = value != 0; return PCS_OK; }
+    if ((value != 0) == one_way) return PCS_OK;
     snprintf(err, PCS_MSG, "one_way_damper = %s: this native FMU was exported with "
              "one_way_damper = %s (export it again with pantocosim export-native to change "
-             "it)", value ? "true" : "false", m->body.one_way ? "true" : "false");
+             "it)", value ? "true" : "false", one_way ? "true" : "false");
     return PCS_ERROR;
 }
 
@@ -361,6 +449,11 @@ static int set_string(void *model, unsigned vr, const char *value, int initialis
 }
 
 const PcsModelType pcs_dsa380_rigid = {
-    "rigid DSA-380 pantograph", PCS_KIND_DSA380_RIGID, create, destroy, initialize, step,
-    outputs, state_bytes, state_save, state_restore, get_real, set_real, get_integer,
+    "rigid DSA-380 pantograph", PCS_KIND_DSA380_RIGID, create_rigid, destroy, initialize,
+    step, outputs, state_bytes, state_save, state_restore, get_real, set_real, get_integer,
     set_integer, get_boolean, set_boolean, get_string, set_string};
+
+const PcsModelType pcs_dsa380_flexible = {
+    "flexible DSA-380 pantograph", PCS_KIND_DSA380_FLEXIBLE, create_flexible, destroy,
+    initialize, step, outputs, state_bytes, state_save, state_restore, get_real, set_real,
+    get_integer, set_integer, get_boolean, set_boolean, get_string, set_string};
