@@ -58,7 +58,8 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     host = (Host *)functions->allocateMemory(1, sizeof *host);
     if (!host) return NULL;
     host->cb = *functions;
-    if (type != fmi2CoSimulation || pcs_uri_to_path(resources, dir, sizeof dir) != 0 || !dir[0]) {
+    if (type != fmi2CoSimulation || pcs_uri_to_path(resources, dir, sizeof dir) != 0
+        || !dir[0]) {
         host_log(host, name ? name : "", PCS_ERROR, "logStatusError", type != fmi2CoSimulation
                  ? "this FMU is for co-simulation only"
                  : "fmuResourceLocation is not a file URI (or longer than 479 bytes): the "
@@ -203,16 +204,16 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueRefere
                                        const fmi2Real value[])
 {
     (void)vr; (void)n; (void)order; (void)value;
-    return unsupported(comp, "fmi2SetRealInputDerivatives", "input derivatives are not supported (canInterpolateInputs = "
-                       "false)");
+    return unsupported(comp, "fmi2SetRealInputDerivatives", "input derivatives are not "
+                       "supported (canInterpolateInputs = false)");
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[],
                                         size_t n, const fmi2Integer order[], fmi2Real value[])
 {
     (void)vr; (void)n; (void)order; (void)value;
-    return unsupported(comp, "fmi2GetRealOutputDerivatives", "output derivatives are not supported (maxOutputDerivativeOrder "
-                       "= 0)");
+    return unsupported(comp, "fmi2GetRealOutputDerivatives", "output derivatives are not "
+                       "supported (maxOutputDerivativeOrder = 0)");
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[],
@@ -220,7 +221,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueRefer
                                         const fmi2Real du[], fmi2Real dz[])
 {
     (void)u; (void)nu; (void)z; (void)nz; (void)du; (void)dz;
-    return unsupported(comp, "fmi2GetDirectionalDerivative", "directional derivatives are not supported");
+    return unsupported(comp, "fmi2GetDirectionalDerivative", "directional derivatives are "
+                       "not supported");
 }
 
 /* ------------------------------------------------------------------ FMU states */
