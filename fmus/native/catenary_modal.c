@@ -47,7 +47,7 @@ struct Modal {
 };
 
 /* the screen's tables (modal_step._screen_tables) and an empty reference */
-static void screen_tables(PcsModel *m)
+static void screen_tables(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, nd = m->nd, d, b, j, n;
@@ -81,24 +81,45 @@ static void screen_tables(PcsModel *m)
         if (!dst) goto fail;                                                              \
     } while (0)
 
-PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
+/* the model's work and state memory: measured (the arena not open) or taken */
+static void carve(Catenary *m, PcsArena *a)
 {
-    PcsModel *m;
+    struct Modal *md = m->modal;
+    size_t N = (size_t)md->N, nd = (size_t)m->nd, K = (size_t)md->K, np = (size_t)m->np;
+    size_t nb = (size_t)md->nb;
+    m->state = (double *)pcs_arena_take(a, m->state_len, sizeof(double));
+    md->inv_diag = (double *)pcs_arena_take(a, K + nd * K + nd * nd + 1, sizeof(double));
+    md->Wc = (double *)pcs_arena_take(a, 2 * np * N + 8 * N + np * N + K, sizeof(double));
+    md->ys = (double *)pcs_arena_take(a, 6 * nd + nd * nd + 8, sizeof(double));
+    md->rows = (int *)pcs_arena_take(a, nd + 1, sizeof(int));
+    md->T32 = (float *)pcs_arena_take(a, nd * K + K + 1, sizeof(float));
+    md->Tb = (double *)pcs_arena_take(a, 2 * nd * nb + 3 * nd + K + 2 * nb + 1, sizeof(double));
+}
+
+static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err);
+static void modal_outputs(Catenary *m);
+static const CatenaryStep MODAL = {modal_step, modal_outputs};
+static void modal_free(void *model, const PcsMemory *mem);
+
+static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    Catenary *m;
     struct Modal *md;
     const int *sizes;
     const double *sc;
     long n_def = 0;
     size_t N, nd, K;
     int k;
-    m = (PcsModel *)mem->alloc(1, sizeof *m);
-    md = (struct Modal *)mem->alloc(1, sizeof *md);
+    m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
+    md = (struct Modal *)pcs_alloc(mem, 1, sizeof *md);
     if (!m || !md) {
-        if (m) mem->release(m);
-        if (md) mem->release(md);
+        pcs_free(mem, m);
+        pcs_free(mem, md);
         snprintf(err, PCS_MSG, "no memory");
         return NULL;
     }
     m->modal = md;
+    m->own = &MODAL;
     sizes = pcs_data_section(d, "sizes", PCS_TYPE_I32, 12, NULL, err, PCS_MSG);
     if (!sizes) goto fail;
     md->N = sizes[0]; md->m = sizes[1]; md->nz = sizes[2]; md->nx = sizes[3]; m->nd = sizes[4];
@@ -173,17 +194,9 @@ PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
         goto fail;
     }
     m->state_len = 4 + 2 * NP + 4 * N + nd;
-    m->state = (double *)mem->alloc(m->state_len, sizeof(double));
-    md->inv_diag = (double *)mem->alloc(K + nd * K + nd * nd + 1, sizeof(double));
-    md->Wc = (double *)mem->alloc(2 * (size_t)m->np * N + 8 * N + (size_t)m->np * N + K,
-                                  sizeof(double));
-    md->ys = (double *)mem->alloc(6 * nd + nd * nd + 8, sizeof(double));
-    md->rows = (int *)mem->alloc(nd + 1, sizeof(int));
     md->nb = (md->K + SCREEN_BLOCK - 1) / SCREEN_BLOCK;
-    md->T32 = (float *)mem->alloc(nd * K + K + 1, sizeof(float));
-    md->Tb = (double *)mem->alloc(2 * nd * (size_t)md->nb + 3 * nd + K + 2 * (size_t)md->nb + 1,
-                                  sizeof(double));
-    if (!m->state || !md->inv_diag || !md->Wc || !md->ys || !md->rows || !md->T32 || !md->Tb) {
+    carve(m, &m->arena);
+    if (pcs_arena_open(&m->arena, mem) != 0 || (carve(m, &m->arena), pcs_arena_full(&m->arena))) {
         snprintf(err, PCS_MSG, "no memory for a modal model of %d coordinates", md->N);
         goto fail;
     }
@@ -214,23 +227,18 @@ fail:
     return NULL;
 }
 
-void modal_free(PcsModel *m, const PcsMemory *mem)
+static void modal_free(void *model, const PcsMemory *mem)
 {
-    struct Modal *md = m->modal;
-    if (md->inv_diag) mem->release(md->inv_diag);
-    if (md->Wc) mem->release(md->Wc);
-    if (md->ys) mem->release(md->ys);
-    if (md->rows) mem->release(md->rows);
-    if (md->T32) mem->release(md->T32);
-    if (md->Tb) mem->release(md->Tb);
-    if (m->state) mem->release(m->state);
-    mem->release(md);
-    mem->release(m);
+    Catenary *m = (Catenary *)model;
+    if (!m) return;
+    pcs_arena_close(&m->arena, mem);
+    pcs_free(mem, m->modal);
+    pcs_free(mem, m);
 }
 
 /* the contact rows and residual at the points m->pts (modal_kernels.point_rows,
    residual_flexibility); -1 when two pantographs lie outside the tabulated band */
-static int geometry(PcsModel *m)
+static int geometry(Catenary *m)
 {
     struct Modal *md = m->modal;
     int np = m->np, mm = md->m, nz = md->nz, N = md->N, k, j, i, a, b;
@@ -294,7 +302,7 @@ static int geometry(PcsModel *m)
     return 0;
 }
 
-static int locate_all(PcsModel *m, double t, char *err)
+static int locate_all(Catenary *m, double t, char *err)
 {
     int k;
     for (k = 0; k < m->np; k++)
@@ -316,7 +324,7 @@ static double row_dot(const double *row, const double *x, int n)
     return s;
 }
 
-static int slack_at(const PcsModel *m, int d, const double *y)
+static int slack_at(const Catenary *m, int d, const double *y)
 {
     const struct Modal *md = m->modal;
     return m->d_tension[d]
@@ -324,7 +332,7 @@ static int slack_at(const PcsModel *m, int d, const double *y)
 }
 
 /* out[:K] = the forces the slack and committed droppers no longer carry (slack_forces) */
-static void slack_forces(const PcsModel *m, const double *slack, const double *y,
+static void slack_forces(const Catenary *m, const double *slack, const double *y,
                          const double *v, double *out)
 {
     const struct Modal *md = m->modal;
@@ -341,7 +349,7 @@ static void slack_forces(const PcsModel *m, const double *slack, const double *y
 }
 
 /* the Woodbury rows (rows, s) of the slack set and the committed set (removed_stiffness) */
-static void woodbury_rows(PcsModel *m, const double *slack)
+static void woodbury_rows(Catenary *m, const double *slack)
 {
     struct Modal *md = m->modal;
     int d;
@@ -358,7 +366,7 @@ static void woodbury_rows(PcsModel *m, const double *slack)
 }
 
 /* out = A^-1 (scale r) (modal_kernels.diag_woodbury); -1 if the small matrix is singular */
-static int diag_woodbury(PcsModel *m, const double *r, double scale, double *out)
+static int diag_woodbury(Catenary *m, const double *r, double scale, double *out)
 {
     struct Modal *md = m->modal;
     int K = md->K, nx = md->nx, np = m->np, nr = md->n_rows, i, j, a, b;
@@ -385,7 +393,7 @@ static int diag_woodbury(PcsModel *m, const double *r, double scale, double *out
 }
 
 /* delta_free and W for the slack set md->slack (solve_step) */
-static int solve_step(PcsModel *m)
+static int solve_step(Catenary *m)
 {
     struct Modal *md = m->modal;
     int N = md->N, k, d, i, active = 0;
@@ -405,7 +413,7 @@ static int solve_step(PcsModel *m)
 }
 
 /* the diagonal and the droppers' Gram matrix of the step's coefficients (woodbury_base) */
-static void woodbury_base(PcsModel *m)
+static void woodbury_base(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, mm = md->m, nd = m->nd, i, d, e;
@@ -423,7 +431,7 @@ static void woodbury_base(PcsModel *m)
 }
 
 /* f_rest at (y, v) with the loads F and the committed set (ModalCatenary.evaluate) */
-static void rest_forces(PcsModel *m, const double *y, const double *v, const double *F,
+static void rest_forces(Catenary *m, const double *y, const double *v, const double *F,
                         double *f)
 {
     struct Modal *md = m->modal;
@@ -443,7 +451,7 @@ static void rest_forces(PcsModel *m, const double *y, const double *v, const dou
         for (i = 0; i < N; i++) f[i] -= md->Wc[(size_t)j * N + i] * F[j];
 }
 
-void modal_outputs(PcsModel *m)
+static void modal_outputs(Catenary *m)
 {
     struct Modal *md = m->modal;
     int N = md->N, K = md->K, mm = md->m, nz = md->nz, np = m->np, k, j, i, r;
@@ -487,8 +495,9 @@ void modal_outputs(PcsModel *m)
     }
 }
 
-int modal_initialize(PcsModel *m, char *err)
+static int modal_initialize(void *model, char *err)
 {
+    Catenary *m = (Catenary *)model;
     struct Modal *md = m->modal;
     int N = md->N, k, d, i;
     for (k = 0; k < m->np; k++)
@@ -545,7 +554,7 @@ static float dot32(const float *a, const float *b, int n)
    settle most droppers; the others take their row in single precision with a bound of its
    error, in double precision when that is too close; when more than an eighth are open,
    every row and a new reference. The set is the double-precision one, to round-off. */
-static void screen_slack(PcsModel *m)
+static void screen_slack(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, nd = m->nd, nb = md->nb, d, b, j, open = 0, refresh;
@@ -606,7 +615,7 @@ static void screen_slack(PcsModel *m)
 
 /* contact_mode 1: the penalty forces F of the pantographs at zp, vp with the wire at t + h
    affine in F, z_w = z_free + G F, v_w = v_free + H F (interaction/condensed.py) */
-static int contact_forces(PcsModel *m, const double *zp, const double *vp, double *F)
+static int contact_forces(Catenary *m, const double *zp, const double *vp, double *F)
 {
     struct Modal *md = m->modal;
     int N = md->N, np = m->np, k, j, i;
@@ -634,7 +643,7 @@ static int contact_forces(PcsModel *m, const double *zp, const double *vp, doubl
     return 0;
 }
 
-int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char *err)
+static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err)
 {
     struct Modal *md = m->modal;
     int N = md->N, mm = md->m, K = md->K, np = m->np, i, j, k, d, passes = 0;
@@ -704,3 +713,6 @@ int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char 
     m->iterations += passes;
     return PCS_OK;
 }
+
+const PcsModelType pcs_modal_catenary = CATENARY_TABLE(
+    "modal catenary", PCS_KIND_MODAL_CATENARY, modal_new, modal_free, modal_initialize);

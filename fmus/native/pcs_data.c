@@ -55,7 +55,7 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
                  "(truncated or not a pantocosim data file)", path, size, HEADER_BYTES);
         return -1;
     }
-    d->bytes = (unsigned char *)mem->alloc((size_t)size, 1);
+    d->bytes = (unsigned char *)pcs_alloc(mem, (size_t)size, 1);
     if (!d->bytes) {
         fclose(f);
         snprintf(err, n_err, "data file %s: no memory for %ld bytes", path, size);
@@ -103,13 +103,13 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
         snprintf(err, n_err, "data file %s: checksum mismatch (damaged)", path);
         return -1;
     }
+    d->checksum = sum;
     return 0;
 }
 
 void pcs_data_free(PcsData *d, const PcsMemory *mem)
 {
-    if (d->bytes)
-        mem->release(d->bytes);
+    pcs_free(mem, d->bytes);
     d->bytes = NULL;
     d->size = 0;
 }

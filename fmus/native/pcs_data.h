@@ -16,6 +16,8 @@
 
 #include <stddef.h>
 
+#include "pcs_memory.h"
+
 #define PCS_DATA_VERSION 1u
 #define PCS_KIND_LINEAR_CATENARY 1u
 #define PCS_KIND_MODAL_CATENARY 2u
@@ -24,15 +26,11 @@
 #define PCS_TYPE_I32 2u
 
 typedef struct {
-    void *(*alloc)(size_t count, size_t size);   /* zeroed memory, as calloc */
-    void (*release)(void *p);
-} PcsMemory;
-
-typedef struct {
     unsigned char *bytes;      /* the whole file */
     size_t size;
     unsigned kind;
     unsigned n_sections;
+    unsigned long long checksum;   /* the payload's (tells one export from another) */
     char path[512];
 } PcsData;
 

@@ -193,14 +193,27 @@ def build_description_fmi3(identifier: str, c_files: list[str]) -> str:
 
 @dataclass(frozen=True)
 class NativeModel:
-    """What goes into a native FMU besides its variables: the model's C files and headers."""
+    """What goes into a native FMU besides its variables: the model's C files and headers
+    and the model tables (``PcsModelType``, pcs_model.h) its binary holds."""
 
     sources: tuple         # its C files, e.g. catenary.c
     headers: tuple         # its headers, the first one numbering the value references
+    tables: tuple          # its model tables, e.g. pcs_linear_catenary
 
 
-COMMON_SOURCES = ("pcs_data.c",)
-COMMON_HEADERS = ("pcs_data.h", "pcs_model.h")
+COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c")
+COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h")
+#: the generated list of a binary's models (pcs_model_table)
+TABLE_SOURCE = "model_table.c"
+
+
+def model_table(model: NativeModel) -> str:
+    """model_table.c: the models the FMU's binary holds, found by their data file's kind."""
+    names = ", ".join(f"&{t}" for t in model.tables)
+    return ("/* The models of this FMU (written by pantocosim export-native). */\n"
+            '#include "pcs_model.h"\n\n'
+            + "".join(f"extern const PcsModelType {t};\n" for t in model.tables)
+            + f"\nconst PcsModelType *const pcs_model_table[] = {{{names}, NULL}};\n")
 @dataclass(frozen=True)
 class Front:
     """An FMI version's interface files and binary folders."""
@@ -264,13 +277,14 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
     if fmi not in FRONTS:
         raise ParameterError("--fmi", fmi, f"native FMUs are written for FMI {', '.join(map(str, FRONTS))}")
     files = source_files(model, fmi)
-    c_files = [n for n in files if n.endswith(".c")]
+    c_files = [n for n in files if n.endswith(".c")] + [TABLE_SOURCE]
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         src = root / "sources"
         src.mkdir()
         for n, p in files.items():
             shutil.copyfile(p, src / n)
+        (src / TABLE_SOURCE).write_text(model_table(model))
         (root / "resources").mkdir()
         data = write_data(root / "resources" / DATA_FILE, kind, sections)
         guid = "{" + str(hashlib.sha256(data).hexdigest()[:32]) + "}"

@@ -16,7 +16,9 @@ from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
 from pantocosim.master.native.build import NativeModel, Variable, build_fmu, value_references
 from pantocosim.master.run.setup import scenario_pantograph
 
-CATENARY = NativeModel(("catenary.c", "catenary_modal.c"), ("catenary_vars.h", "catenary.h"))
+CATENARY = NativeModel(("catenary.c", "catenary_linear.c", "catenary_modal.c"),
+                       ("catenary_vars.h", "catenary.h"),
+                       ("pcs_linear_catenary", "pcs_modal_catenary"))
 MAX_SUPPORTS = 64
 
 
@@ -98,7 +100,7 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
 
 
 # ---------------------------------------------------------------------- the pantograph FMU
-LUMPED = NativeModel(("lumped.c",), ("lumped_vars.h",))
+LUMPED = NativeModel(("lumped.c",), ("lumped_vars.h",), ("pcs_lumped_pantograph",))
 
 
 def pantograph_variables(sections: dict) -> list[Variable]:
