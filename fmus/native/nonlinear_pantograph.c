@@ -26,9 +26,13 @@
 typedef struct {
     Dsa380 rigid;
     Dsa380Flex flexible;
-    void *body_work;           /* the flexible model's work memory */
+    const double *constants;   /* the flexible model's, and its arrays (in the data file) */
+    DsfArrays arrays;
+    PcsArena arena;            /* the work memory: */
+    void *body_work;           /* the flexible model's (work_bytes) */
+    size_t work_bytes;
     HhtDense engine;
-    void *memory;              /* the engine's work and state (host allocator) */
+    void *memory;              /* the engine's work and state */
     double *saved;             /* the state before a step, for a refused one */
     const double *sc, *q0;
     const char *preset;
@@ -57,6 +61,8 @@ static int text_section(const PcsData *d, const char *name, const char **out, ch
     return 0;
 }
 
+static void destroy(void *model, const PcsMemory *mem);
+
 /* the stepping, the start and the fixed parameters; -1 with the reason in err */
 static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 {
@@ -74,11 +80,10 @@ static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 }
 
 /* the rigid DSA-380 from the section "constants" */
-static int rigid_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err)
+static int rigid_body(Pantograph *m, const PcsData *d, char *err)
 {
     char msg[DSA_MSG];
     const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSA_K_COUNT, err);
-    (void)mem;
     if (!k) return -1;
     if (dsa380_setup(&m->rigid, k, DSA_K_COUNT, msg)) {
         snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
@@ -92,14 +97,12 @@ static int rigid_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, cha
     return 0;
 }
 
-/* the flexible DSA-380 from its constants and arrays (sizes read from the constants and
-   checked before anything is allocated) */
-static int flexible_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err)
+/* the flexible DSA-380's constants and arrays (sizes read from the constants and checked
+   before anything is allocated; dsf_setup checks the rest once its work memory is there) */
+static int flexible_body(Pantograph *m, const PcsData *d, char *err)
 {
-    char msg[DSA_MSG];
-    DsfArrays a;
+    DsfArrays *a = &m->arrays;
     long n, ne, ng;
-    size_t bytes;
     const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSF_K_COUNT, err);
     if (!k) return -1;
     n = (long)k[DSF_K_N];
@@ -112,58 +115,84 @@ static int flexible_body(Pantograph *m, const PcsData *d, const PcsMemory *mem, 
                  ne, ng, DSF_MAX_N, DSF_MAX_NE, DSF_MAX_NG);
         return -1;
     }
-    if (!(a.q_ref = SECTION(d, "q_ref", PCS_TYPE_F64, n, err)) ||
-        !(a.M = SECTION(d, "M", PCS_TYPE_F64, n * n, err)) ||
-        !(a.Qg = SECTION(d, "Qg", PCS_TYPE_F64, n, err)) ||
-        !(a.E0 = SECTION(d, "E0", PCS_TYPE_F64, 8 * ne, err)) ||
-        !(a.length = SECTION(d, "length", PCS_TYPE_F64, ne, err)) ||
-        !(a.EA = SECTION(d, "EA", PCS_TYPE_F64, ne, err)) ||
-        !(a.EI = SECTION(d, "EI", PCS_TYPE_F64, ne, err)) ||
-        !(a.pg = SECTION(d, "pg", PCS_TYPE_I32, 4 * ne, err)) ||
-        !(a.pR = SECTION(d, "pR", PCS_TYPE_F64, 16 * ne, err)) ||
-        !(a.xi_g = SECTION(d, "xi_g", PCS_TYPE_F64, ng, err)) ||
-        !(a.w_g = SECTION(d, "w_g", PCS_TYPE_F64, ng, err)))
+    if (!(a->q_ref = SECTION(d, "q_ref", PCS_TYPE_F64, n, err)) ||
+        !(a->M = SECTION(d, "M", PCS_TYPE_F64, n * n, err)) ||
+        !(a->Qg = SECTION(d, "Qg", PCS_TYPE_F64, n, err)) ||
+        !(a->E0 = SECTION(d, "E0", PCS_TYPE_F64, 8 * ne, err)) ||
+        !(a->length = SECTION(d, "length", PCS_TYPE_F64, ne, err)) ||
+        !(a->EA = SECTION(d, "EA", PCS_TYPE_F64, ne, err)) ||
+        !(a->EI = SECTION(d, "EI", PCS_TYPE_F64, ne, err)) ||
+        !(a->pg = SECTION(d, "pg", PCS_TYPE_I32, 4 * ne, err)) ||
+        !(a->pR = SECTION(d, "pR", PCS_TYPE_F64, 16 * ne, err)) ||
+        !(a->xi_g = SECTION(d, "xi_g", PCS_TYPE_F64, ng, err)) ||
+        !(a->w_g = SECTION(d, "w_g", PCS_TYPE_F64, ng, err)))
         return -1;
-    bytes = dsf_work_bytes((int)n, (int)ne);
-    m->body_work = pcs_alloc(mem, 1, bytes);
-    if (!m->body_work) { snprintf(err, PCS_MSG, "no memory"); return -1; }
-    if (dsf_setup(&m->flexible, k, DSF_K_COUNT, &a, m->body_work, bytes, msg)) {
-        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
-        return -1;
-    }
+    m->constants = k;
     m->n = (int)n;
+    m->work_bytes = dsf_work_bytes((int)n, (int)ne);
     m->evaluate = dsf_evaluate;
     m->body = &m->flexible;
-    m->height_index = m->flexible.y10;
-    m->height_offset = a.q_ref[m->height_index];
     return 0;
 }
 
-typedef int (*BodyReader)(Pantograph *m, const PcsData *d, const PcsMemory *mem, char *err);
+static int rigid_bind(Pantograph *m, const PcsData *d, char *err)
+{
+    (void)m; (void)d; (void)err;
+    return 0;
+}
 
-static void destroy(void *model, const PcsMemory *mem);
+static int flexible_bind(Pantograph *m, const PcsData *d, char *err)
+{
+    char msg[DSA_MSG];
+    if (dsf_setup(&m->flexible, m->constants, DSF_K_COUNT, &m->arrays, m->body_work,
+                  m->work_bytes, msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
+        return -1;
+    }
+    m->height_index = m->flexible.y10;
+    m->height_offset = m->arrays.q_ref[m->height_index];
+    return 0;
+}
 
-/* the engine and the FMU's buffers around the body read by body */
-static void *create(const PcsData *d, const PcsMemory *mem, char *err, BodyReader body)
+/* a body: its sections read and checked, then bound to its work memory */
+typedef struct {
+    int (*read)(Pantograph *m, const PcsData *d, char *err);
+    int (*bind)(Pantograph *m, const PcsData *d, char *err);
+} Body;
+
+static const Body RIGID = {rigid_body, rigid_bind}, FLEXIBLE = {flexible_body, flexible_bind};
+
+/* the work memory: the body's, the engine's, a state copy */
+static void carve(Pantograph *m, PcsArena *a)
+{
+    m->body_work = m->work_bytes ? pcs_arena_take(a, 1, m->work_bytes) : NULL;
+    m->memory = pcs_arena_take(a, 1, hht_dense_bytes(m->n));
+    m->saved = (double *)pcs_arena_take(a, 2 + 3 + 5 * (size_t)m->n, sizeof(double));
+}
+
+static void *create(const PcsData *d, const PcsMemory *mem, char *err, const Body *body)
 {
     char msg[HHT_MSG];
     HhtSettings s;
-    size_t bytes;
     Pantograph *m = (Pantograph *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    if (read_scalars(m, d, err) || body(m, d, mem, err)) goto fail;
+    if (read_scalars(m, d, err) || body->read(m, d, err)) goto fail;
     m->q0 = (const double *)SECTION(d, "q0", PCS_TYPE_F64, m->n, err);
     if (!m->q0) goto fail;
+    carve(m, &m->arena);
+    if (pcs_arena_open(&m->arena, mem)) { snprintf(err, PCS_MSG, "no memory"); goto fail; }
+    carve(m, &m->arena);
+    if (pcs_arena_full(&m->arena) || body->bind(m, d, err)) {
+        if (pcs_arena_full(&m->arena)) snprintf(err, PCS_MSG, "work memory miscounted");
+        goto fail;
+    }
     s.alpha = m->sc[NLP_S_ALPHA];
     s.rtol = m->sc[NLP_S_RTOL];
     s.etol = m->sc[NLP_S_ETOL];
     s.max_iterations = (int)m->sc[NLP_S_MAX_ITERATIONS];
     s.linear_predictor = m->sc[NLP_S_LINEAR_PREDICTOR] != 0.0;
-    bytes = hht_dense_bytes(m->n);
-    m->memory = pcs_alloc(mem, 1, bytes);
-    m->saved = (double *)pcs_alloc(mem, 2 + 3 + 5 * (size_t)m->n, sizeof(double));
-    if (!m->memory || !m->saved) { snprintf(err, PCS_MSG, "no memory"); goto fail; }
-    if (hht_dense_init(&m->engine, m->n, &s, m->evaluate, m->body, m->memory, bytes, msg)) {
+    if (hht_dense_init(&m->engine, m->n, &s, m->evaluate, m->body, m->memory,
+                       hht_dense_bytes(m->n), msg)) {
         snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
         goto fail;
     }
@@ -176,21 +205,19 @@ fail:
 
 static void *create_rigid(const PcsData *d, const PcsMemory *mem, char *err)
 {
-    return create(d, mem, err, rigid_body);
+    return create(d, mem, err, &RIGID);
 }
 
 static void *create_flexible(const PcsData *d, const PcsMemory *mem, char *err)
 {
-    return create(d, mem, err, flexible_body);
+    return create(d, mem, err, &FLEXIBLE);
 }
 
 static void destroy(void *model, const PcsMemory *mem)
 {
     Pantograph *m = (Pantograph *)model;
     if (!m) return;
-    pcs_free(mem, m->body_work);
-    pcs_free(mem, m->memory);
-    pcs_free(mem, m->saved);
+    pcs_arena_close(&m->arena, mem);
     pcs_free(mem, m);
 }
 

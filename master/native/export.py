@@ -206,12 +206,18 @@ def dsa380_constants(model) -> np.ndarray:
     return k
 
 
-def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
-                      force: float, name: str, lowered_height: float | None = None) -> dict:
-    """The sections of the native rigid DSA-380 pantograph FMU (``nonlinear_pantograph.c``,
-    ``nonlinear_pantograph_vars.h``): ``model`` (its options as the Python FMU builds them) in the start of
-    the Python FMU's ``start_mode`` (0: static at ``height`` under ``force``, < 0 the mean
-    uplift; 1: ramp raising from ``lowered_height``), which sets its actuation torques,
+def rigid_body(model) -> dict:
+    """The body sections of the native rigid DSA-380: its constants."""
+    return {"constants": _f64(dsa380_constants(model))}
+
+
+def nonlinear_pantograph(model, body, settings, h: float, start_mode: int, height: float,
+                         force: float, name: str, lowered_height: float | None = None) -> dict:
+    """The sections of a native nonlinear pantograph FMU (``nonlinear_pantograph.c``,
+    ``nonlinear_pantograph_vars.h``): ``model`` (its options as the Python FMU builds them) in
+    the start of the Python FMU's ``start_mode`` (0: static at ``height`` under ``force``, < 0
+    the mean uplift; 1: ramp raising from ``lowered_height``), which sets its actuation
+    torques, then its ``body`` sections (:func:`rigid_body`, :func:`dsa380_flexible_data`),
     stepped with the HHT ``settings`` at internal step ``h``."""
     q0, F0 = start_state(model, start_mode, height=height, force=force,
                          lowered_height=lowered_height)
@@ -233,8 +239,7 @@ def dsa380_pantograph(model, settings, h: float, start_mode: int, height: float,
     scalars = np.zeros(keys.pop("COUNT"))
     for key, index in keys.items():
         scalars[index] = values[key]
-    return {"scalars": _f64(scalars), "constants": _f64(dsa380_constants(model)),
-            "q0": _f64(q0), "preset": _text(name)}
+    return {"scalars": _f64(scalars), **body(model), "q0": _f64(q0), "preset": _text(name)}
 
 
 def dsa380_flexible_data(model) -> dict:

@@ -1,5 +1,6 @@
 """The native FMUs of a scenario (``pantocosim export-native``): the catenary (linear or
-modal model) and the constant-matrix pantographs, with the Python FMUs' variable names and
+modal model) and the pantographs with a native form (the constant-matrix chains, the rigid
+and the flexible DSA-380: :data:`NATIVE_PANTOGRAPHS`), with the Python FMUs' variable names and
 the export's values as fixed parameters; their constants come from
 :mod:`.export`, the FMUs are built by :mod:`.build`."""
 
@@ -15,6 +16,9 @@ from pantocosim.master.native import export as native_export
 from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
 from pantocosim.master.native.build import NativeModel, Variable, build_fmu, value_references
 from pantocosim.master.run.setup import scenario_pantograph
+from pantocosim.pantograph.dsa380 import Dsa380Model
+from pantocosim.pantograph.dsa380_flexible import Dsa380FlexibleModel
+from pantocosim.pantograph.lumped import LumpedPantograph
 
 CATENARY = NativeModel(("catenary.c", "catenary_linear.c", "catenary_modal.c"),
                        ("catenary_vars.h", "catenary.h"),
@@ -126,19 +130,18 @@ def pantograph_variables(sections: dict) -> list[Variable]:
     return out
 
 
-def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
-                      win64: bool | None = None) -> Path:
-    """The native FMU of the scenario's pantograph ``k`` (a constant-matrix model in the
-    static start of the scenario, as the Python FMU starts in our master)."""
+def export_lumped(prep, k: int, model, out: Path, fmi: int, win64: bool | None) -> Path:
+    """The native FMU of the scenario's constant-matrix pantograph ``k`` (``model``) in the
+    static start of the scenario, as the Python FMU starts in our master."""
     sc = prep.scenario
     spec = sc.pantographs[k]
     if spec.start != "static":
-        raise ParameterError(f"pantographs[{k}].start", spec.start, "the native pantograph "
-                             "FMU starts static in contact (start = \"static\")", sc.source)
-    model = scenario_pantograph(sc, k)
+        raise ParameterError(f"pantographs[{k}].start", spec.start, "the native constant-"
+                             "matrix pantograph FMU starts static in contact (start = "
+                             "\"static\")", sc.source)
     if model.linear_form() is None:
         raise ParameterError("pantograph", spec.model, "has no constant-matrix form (collector "
-                             "friction, a one-way damper or a nonlinear mechanism)")
+                             "friction or a one-way damper)")
     height = float(prep.pantographs[k].contact_height(prep.q_pan0[k]))
     sections = native_export.lumped_pantograph(
         model, HHTSettings(alpha=sc.alpha), sc.dt, height, float(prep.static_forces[k]),
@@ -149,6 +152,89 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
                      f"pantocosim pantograph '{spec.model}' (native C, constant matrices, "
                      f"internal step {sc.dt:g} s)", pantograph_variables(sections), "lumped",
                      sections, sc.dt, fmi=fmi, win64=win64)
+
+
+# ---------------------------------------------------------------------- nonlinear pantographs
+NONLINEAR = NativeModel(
+    ("nonlinear_pantograph.c", "dsa380_rigid.c", "dsa380_flexible.c", "hht_dense.c",
+     "actuation.c"),
+    ("nonlinear_pantograph_vars.h", "dsa380_rigid.h", "dsa380_flexible.h", "hht_dense.h",
+     "actuation.h"),
+    ("pcs_dsa380_rigid", "pcs_dsa380_flexible"))
+#: the body of each nonlinear pantograph model: (data-file kind, its sections)
+NONLINEAR_BODIES = {Dsa380Model: ("dsa380-rigid", native_export.rigid_body),
+                    Dsa380FlexibleModel: ("dsa380-flexible", native_export.dsa380_flexible_data)}
+
+
+def nonlinear_variables(sections: dict) -> list[Variable]:
+    """The native nonlinear pantograph's variables: the Python pantograph FMU's
+    (fmus/fmi/pantograph_ports.py), the export's values as fixed parameters."""
+    table = PANTOGRAPH_VARIABLES
+    vr = value_references(NONLINEAR.headers[0])
+    index = native_export.header_constants(NONLINEAR.headers[0], "NLP_S_")
+    sc = sections["scalars"]
+
+    def value(name):
+        return float(sc[index[name.upper()]])
+
+    out = [declared(table, "contact_force", vr["CONTACT_FORCE"], value("start_force"))]
+    out += [declared(table, key, vr[key.upper()]) for key in ("contact_height",
+                                                              "contact_velocity")]
+    out += [declared(table, key, vr[key.upper()], value(key), fixed=True) for key in (
+        "static_force", "aero_c1", "aero_c2", "speed_kmh", "friction_force",
+        "friction_smoothing", "initial_height", "initial_contact_force", "ramp_start_time",
+        "ramp_duration", "lowered_height")]
+    out += [declared(table, "hht_alpha", vr["HHT_ALPHA"], value("alpha"), fixed=True),
+            declared(table, "start_mode", vr["START_MODE"], int(value("start_mode")),
+                     fixed=True),
+            declared(table, "one_way_damper", vr["ONE_WAY_DAMPER"],
+                     bool(value("one_way_damper")), fixed=True),
+            declared(table, "force_extrapolation", vr["FORCE_EXTRAPOLATION"], False),
+            declared(table, "newton_iterations", vr["NEWTON_ITERATIONS"]),
+            Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
+                     value("step"), "s", "the fixed internal step: a communication step is a "
+                     "whole number of it")]
+    return out
+
+
+def export_nonlinear(prep, k: int, model, out: Path, fmi: int, win64: bool | None) -> Path:
+    """The native FMU of the scenario's nonlinear pantograph ``k`` (``model``: the rigid or
+    the flexible DSA-380) in the start our master gives the Python FMU (cosim.py): static at
+    the static start's height and force, or ramp raising."""
+    sc = prep.scenario
+    spec = sc.pantographs[k]
+    kind, body = NONLINEAR_BODIES[type(model)]
+    if spec.start == "static":
+        mode, force = 0, float(prep.static_forces[k])
+        height = float(prep.pantographs[k].contact_height(prep.q_pan0[k]))
+    else:
+        mode, force = 1, float(model.options.mean_uplift)
+        height = float(prep.actuation.height[k])
+    ramp = model.options.ramp
+    sections = native_export.nonlinear_pantograph(
+        model, body, HHTSettings(alpha=sc.alpha), sc.dt, mode, height, force, spec.model,
+        lowered_height=ramp.lowered_height if ramp else None)
+    return build_fmu(out, NONLINEAR, "pantocosim_pantograph_native",
+                     PANTOGRAPH_FMUS.get(spec.model, "Pantograph"),
+                     f"pantocosim pantograph '{spec.model}' (native C, HHT-alpha Newton, "
+                     f"internal step {sc.dt:g} s)", nonlinear_variables(sections), kind,
+                     sections, sc.dt, fmi=fmi, win64=win64)
+
+
+#: the native form of each pantograph model (by its class)
+NATIVE_PANTOGRAPHS = {LumpedPantograph: export_lumped, Dsa380Model: export_nonlinear,
+                      Dsa380FlexibleModel: export_nonlinear}
+
+
+def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
+                      win64: bool | None = None) -> Path:
+    """The native FMU of the scenario's pantograph ``k`` (see :data:`NATIVE_PANTOGRAPHS`)."""
+    model = scenario_pantograph(prep.scenario, k)
+    export = NATIVE_PANTOGRAPHS.get(type(model))
+    if export is None:
+        raise ParameterError("pantograph", prep.scenario.pantographs[k].model,
+                             f"has no native form (model {type(model).__name__})")
+    return export(prep, k, model, Path(out), fmi, win64)
 
 
 def export_scenario(prep, out: Path, fmi: int = 2, win64: bool | None = None):

@@ -1,0 +1,203 @@
+"""The native nonlinear pantograph FMUs of ``pantocosim export-native`` (the rigid and the
+flexible DSA-380, fmus/native/nonlinear_pantograph.c): in a C host with no Python they give the
+Python FMU's stepper's numbers and allocate nothing in doStep; in fmpy they refuse bad input
+with the Python FMU's statuses, keep their state through refused steps, roll back and
+serialise; FMI 3.0 validates; in our master they give the Python pantograph FMU's contact
+force (slow)."""
+
+import dataclasses
+import zipfile
+
+import numpy as np
+import pytest
+
+from pantocosim.core.hht import HHTIntegrator, HHTSettings
+from pantocosim.interaction.pantograph_start import start_state
+from pantocosim.master.native.models import export_pantograph, export_scenario
+from pantocosim.master.run import prepare
+from pantocosim.master.run.setup import scenario_pantograph
+from pantocosim.master.scenario import load_scenario
+from test_native_fmus import DISCARD, ERROR, OK, STEPS, host, required, run_host  # noqa: F401
+from test_native_fmus import slave, status_of
+
+DT = 0.001
+IDENTIFIER = "pantocosim_pantograph_native"
+
+
+def with_model(model: str, **changes):
+    """dsa380-ave-300 (linear catenary: a quick set-up) with pantograph ``model``."""
+    sc = load_scenario("dsa380-ave-300")
+    pans = [dataclasses.replace(p, model=model) for p in sc.pantographs]
+    return dataclasses.replace(sc, pantographs=pans, catenary_model="linear", **changes)
+
+
+@pytest.fixture(scope="module", params=["dsa380-rigid", "dsa380-flexible"])
+def exported(request, tmp_path_factory):
+    """(prepared scenario, unpacked native pantograph FMU folder, .fmu file)."""
+    required("gcc", "gcc")
+    prep = prepare(with_model(request.param))
+    out = tmp_path_factory.mktemp("native-pantograph")
+    fmu = export_pantograph(prep, 0, out / f"{request.param}.fmu", win64=False)
+    folder = out / request.param
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    return prep, folder, fmu
+
+
+def forced(F0, t):
+    """The host's pantograph mode: F0 (1 + 0.1 sin(2 pi 7 t))."""
+    return F0 * (1.0 + 0.1 * np.sin(2.0 * np.pi * 7.0 * t))
+
+
+def python_fmu_stepper(prep):
+    """The Python pantograph FMU's model, start and integrator for the scenario's start."""
+    sc = prep.scenario
+    model = scenario_pantograph(sc, 0)
+    F0 = float(prep.static_forces[0])
+    q0, F0 = start_state(model, 0, height=float(prep.pantographs[0].contact_height(
+        prep.q_pan0[0])), force=F0)
+    integ = HHTIntegrator(model, HHTSettings(alpha=sc.alpha))
+    integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([F0]))
+    return model, integ, F0
+
+
+def test_in_a_c_host_the_pantograph_equals_the_python_fmu_stepper(exported, host, tmp_path):
+    prep, folder, _ = exported
+    steps = 300
+    got, counts = run_host(host, ["pantograph", folder, steps, DT], tmp_path)
+    model, integ, F0 = python_fmu_stepper(prep)
+    want = []
+    for i in range(steps):
+        t1 = (i + 1) * DT
+        integ.step(DT, np.array([forced(F0, t1)]))
+        want.append([t1, model.contact_height(integ.q), model.contact_velocity(integ.q,
+                                                                               integ.v)])
+    want = np.array(want)
+    assert np.ptp(want[:, 1]) > 1e-4
+    for col in (1, 2):
+        assert np.max(np.abs(got[:, col] - want[:, col])) <= 1e-10 * np.max(
+            np.abs(want[:, col])), col
+    assert counts["allocations in doStep"] == 0
+    assert counts["allocations outside doStep"] > 0
+
+
+def test_bad_inputs_get_the_python_fmus_statuses_and_keep_the_state(exported):
+    _, folder, _ = exported
+    fmu, vr = slave(folder, IDENTIFIER)
+    ref, _ = slave(folder, IDENTIFIER)
+    F, out = [vr["contact_force"]], [vr["contact_height"], vr["contact_velocity"]]
+    for bad in (float("nan"), -1.0, float("inf")):
+        fmu.setReal(F, [bad])
+        assert status_of(fmu.doStep, 0.0, DT) == DISCARD
+    fmu.setReal(F, [1e7])                       # drives the collector off its range
+    assert status_of(fmu.doStep, 0.0, 0.05) == DISCARD
+    for f in (fmu, ref):                         # the state was kept: the same next step
+        f.setReal(F, [150.0])
+        assert status_of(f.doStep, 0.0, DT) == OK
+    assert fmu.getReal(out) == ref.getReal(out)
+    assert status_of(fmu.doStep, DT, 1.5 * DT) == DISCARD     # not a whole number of steps
+    assert status_of(fmu.doStep, DT, 2 * DT) == OK
+    assert fmu.getReal([vr["newton_iterations"]])[0] >= 2.0
+
+
+def test_fixed_parameters_accept_the_exported_value_and_refuse_another(exported):
+    from fmpy import read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    _, folder, _ = exported
+    md = read_model_description(str(folder / "modelDescription.xml"))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=IDENTIFIER,
+                    instanceName="fresh")
+    fmu.instantiate()
+    var = {v.name: v for v in md.modelVariables}
+    for name in ("speed_kmh", "static_force", "initial_height", "hht_alpha"):
+        v = var[name]
+        assert status_of(fmu.setReal, [v.valueReference], [float(v.start)]) == OK
+        assert status_of(fmu.setReal, [v.valueReference], [float(v.start) + 1.0]) == ERROR
+    assert var["one_way_damper"].variability == "fixed"
+
+
+def test_fmu_states_roll_back_and_serialize(exported):
+    _, folder, _ = exported
+    fmu, vr = slave(folder, IDENTIFIER)
+    F, out = [vr["contact_force"]], [vr["contact_height"], vr["contact_velocity"]]
+    fmu.setReal(F, [130.0])
+    fmu.doStep(0.0, DT)
+    state = fmu.getFMUstate()
+    blob = fmu.serializeFMUstate(state)
+    runs = []
+    for _ in range(2):
+        for i in range(1, 20):
+            fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
+            fmu.doStep(i * DT, DT)
+        runs.append(fmu.getReal(out))
+        fmu.setFMUstate(state)
+    fmu.setFMUstate(fmu.deSerializeFMUstate(blob))
+    for i in range(1, 20):
+        fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
+        fmu.doStep(i * DT, DT)
+    assert runs[0] == runs[1] == fmu.getReal(out)
+    assert runs[0][0] != pytest.approx(0.0)
+
+
+def test_fmi3_fmu_validates_and_gives_the_fmi2_numbers(exported, tmp_path):
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    prep, _, fmu2 = exported
+    fmu3 = export_pantograph(prep, 0, tmp_path / "fmi3.fmu", fmi=3, win64=False)
+    assert validate_fmu(str(fmu3)) == []
+    assert validate_fmu(str(fmu2)) == []
+    inputs = np.array([(t, 120.0 + 30.0 * np.sin(40 * t)) for t in np.arange(0, 0.05, DT)],
+                      dtype=[("time", float), ("contact_force", float)])
+    runs = [simulate_fmu(str(f), stop_time=0.05, step_size=DT, input=inputs,
+                         output=["contact_height"]) for f in (fmu2, fmu3)]
+    assert np.array_equal(runs[0]["contact_height"], runs[1]["contact_height"])
+
+
+def test_export_native_writes_the_rigid_pantograph_and_names_what_stays_python(tmp_path,
+                                                                             capsys):
+    from pantocosim.master.cli import main
+
+    required("gcc", "gcc")
+    assert main(["export-native", "dsa380-ave-300", "--out", str(tmp_path / "n"),
+                 "--win64", "no"]) == 0
+    out = capsys.readouterr().out
+    assert f"wrote {tmp_path / 'n' / 'dsa380-rigid.fmu'}" in out
+    assert "catenary: the scenario's nonlinear model" in out
+    assert "stays a Python FMU" in out
+
+
+def test_a_lumped_chain_with_friction_stays_python_with_the_reason(tmp_path):
+    required("gcc", "gcc")
+    sc = load_scenario("en50318-300")
+    pans = [dataclasses.replace(p, options={"friction_force": 5.0}) for p in sc.pantographs]
+    prep = prepare(dataclasses.replace(sc, pantographs=pans, catenary_model="linear"))
+    written, kept = export_scenario(prep, tmp_path, win64=False)
+    assert [p.name for p in written] == ["catenary.fmu"]
+    assert len(kept) == 1 and "no constant-matrix form (collector friction" in kept[0][1]
+
+
+# ---------------------------------------------------------------------- in our master
+@pytest.mark.slow
+@pytest.mark.parametrize("scheme", ["jacobi", "implicit"])
+def test_native_pantograph_in_our_master_gives_the_python_pantograph_fmus_force(
+        scheme, fmus, tmp_path):
+    """dsa380-ave-300 (0.2 s) with the Python nonlinear catenary FMU: the native rigid
+    DSA-380 FMU and the Python one give the same contact force to 1e-9 of the mean."""
+    from pantocosim.master.cosim import run_cosim
+    from pantocosim.master.fmu.check import FmuPlan
+
+    required("gcc", "gcc")
+    sc = dataclasses.replace(load_scenario("dsa380-ave-300"), duration_s=0.2)
+    prep = prepare(sc)
+    native = export_pantograph(prep, 0, tmp_path / "dsa380-rigid.fmu", win64=False)
+    forces = {}
+    for label, pantograph in (("python", fmus["dsa380-rigid"]), ("native", native)):
+        res = run_cosim(prep, None, scheme, plan=FmuPlan(fmus["catenary"], [pantograph],
+                                                         [None]), progress=False)
+        assert res.error is None, res.error
+        forces[label] = res.columns["contact_force_1"]
+    py, nat = forces["python"], forces["native"]
+    assert len(py) == len(nat) == prep.n_steps + 1
+    assert np.max(np.abs(nat - py)) <= 1e-9 * np.mean(py), scheme
