@@ -101,19 +101,32 @@ def test_bad_inputs_get_the_python_fmus_statuses_and_keep_the_state(exported):
 
 
 def test_fixed_parameters_accept_the_exported_value_and_refuse_another(exported):
+    """The export's values are accepted; another value is an error (the instance fails, as
+    with the other native FMUs)."""
     from fmpy import read_model_description
     from fmpy.fmi2 import FMU2Slave
 
     _, folder, _ = exported
     md = read_model_description(str(folder / "modelDescription.xml"))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=IDENTIFIER,
-                    instanceName="fresh")
-    fmu.instantiate()
     var = {v.name: v for v in md.modelVariables}
-    for name in ("speed_kmh", "static_force", "initial_height", "hht_alpha"):
+
+    def fresh():
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=str(folder), modelIdentifier=IDENTIFIER,
+                        instanceName="fresh")
+        fmu.instantiate()
+        return fmu
+
+    names = ("speed_kmh", "static_force", "initial_height", "hht_alpha", "friction_force")
+    fmu = fresh()
+    for name in names:
         v = var[name]
         assert status_of(fmu.setReal, [v.valueReference], [float(v.start)]) == OK
-        assert status_of(fmu.setReal, [v.valueReference], [float(v.start) + 1.0]) == ERROR
+    v = var["start_mode"]
+    assert status_of(fmu.setInteger, [v.valueReference], [int(v.start)]) == OK
+    for name in names:
+        v = var[name]
+        assert status_of(fresh().setReal, [v.valueReference], [float(v.start) + 1.0]) == ERROR
+    assert status_of(fresh().setInteger, [v.valueReference], [2]) == ERROR
     assert var["one_way_damper"].variability == "fixed"
 
 
