@@ -6,6 +6,9 @@ the export's values as fixed parameters; their constants come from
 
 from __future__ import annotations
 
+import tempfile
+from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 from pantocosim.core.errors import ParameterError
@@ -237,6 +240,12 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
     return export(prep, k, model, Path(out), fmi, win64)
 
 
+def no_native_form(exc: ParameterError) -> bool:
+    """Whether ``exc`` from :func:`export_pantograph` says the pantograph has no native form
+    (it stays a Python FMU) rather than that the export failed."""
+    return exc.field == "pantograph" or str(exc.field).startswith("pantographs[")
+
+
 def export_scenario(prep, out: Path, fmi: int = 2, win64: bool | None = None):
     """The native FMUs of a prepared scenario into the folder ``out``: ``catenary.fmu`` and
     ``<pantograph model>.fmu`` of each constant-matrix pantograph. Returns (written files,
@@ -250,7 +259,30 @@ def export_scenario(prep, out: Path, fmi: int = 2, win64: bool | None = None):
             written.append(export_pantograph(prep, k, out / f"{spec.model}.fmu", fmi=fmi,
                                              win64=win64))
         except ParameterError as exc:
-            if exc.field not in ("pantograph",) and not str(exc.field).startswith("pantographs["):
+            if not no_native_form(exc):
                 raise
             kept.append((k, str(exc)))
     return written, kept
+
+
+@contextmanager
+def native_pantographs(prep, plan, native: bool = True):
+    """(plan, notes): the checked FMU ``plan`` of a co-simulation with each pantograph that
+    has a native form replaced by its native FMU, exported for ``prep`` into a folder that
+    lives as long as the context (``native`` false: the plan as it is); ``notes`` says, one
+    line each, which pantographs run native and which stay Python FMUs and why."""
+    if not native:
+        yield plan, []
+        return
+    with tempfile.TemporaryDirectory(prefix="pantocosim-native-") as folder:
+        paths, files, notes = list(plan.pantographs), list(plan.parameter_files), []
+        for k, spec in enumerate(prep.scenario.pantographs):
+            try:
+                paths[k] = export_pantograph(prep, k, Path(folder) / f"{k}.fmu", win64=False)
+                files[k] = None                  # its parameter set is in the native FMU
+                notes.append(f"pantograph {k + 1} ({spec.model}): native FMU")
+            except ParameterError as exc:
+                if not no_native_form(exc):
+                    raise
+                notes.append(f"pantograph {k + 1} ({spec.model}): {exc}; it stays a Python FMU")
+        yield replace(plan, pantographs=paths, parameter_files=files), notes
