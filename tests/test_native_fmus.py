@@ -292,10 +292,18 @@ def test_bad_inputs_get_the_python_fmus_statuses(exported):
     fmu.doStep(0.0, DT)
     ref.doStep(0.0, DT)
     assert fmu.getReal(out) == ref.getReal(out)
-    # a communication step that is not a whole number of internal steps: fmi2Error, and the
-    # instance takes no step after it
-    assert status_of(fmu.doStep, DT, 1.5 * DT) == ERROR
-    assert status_of(fmu.doStep, DT, DT) == ERROR
+    # a communication step that is not a whole number of internal steps, or more of them than
+    # the FMU takes in one call: refused, the instance steps on
+    assert status_of(fmu.doStep, DT, 1.5 * DT) == DISCARD
+    assert status_of(fmu.doStep, DT, 2e6) == DISCARD
+    # a contact force no pantograph applies is refused before the step
+    fmu.setReal(F, [1e300])
+    assert status_of(fmu.doStep, DT, DT) == DISCARD
+    fmu.setReal(F, [150.0])
+    ref.setReal(F, [150.0])
+    assert status_of(fmu.doStep, DT, DT) == OK
+    ref.doStep(DT, DT)
+    assert fmu.getReal(out) == ref.getReal(out)
     # a step that would take the pantograph off the contact wire is refused before it is taken
     far, vr2 = slave(cat, "pantocosim_catenary_native")
     assert status_of(far.doStep, 0.0, 10.0) == DISCARD
@@ -315,6 +323,8 @@ def test_bad_inputs_get_the_python_fmus_statuses(exported):
     pan, pvr = slave(exported["en50318-2mass"], "pantocosim_pantograph_native")
     pan.setReal([pvr["contact_force"]], [float("nan")])
     assert status_of(pan.doStep, 0.0, DT) == DISCARD
+    pan.setReal([pvr["contact_force"]], [150.0])
+    assert status_of(pan.doStep, 0.0, 2e6) == DISCARD           # 2e9 internal steps: refused
     pan.setReal([pvr["contact_force"]], [1e9])                 # throws the head off its range
     assert status_of(pan.doStep, 0.0, DT) == DISCARD
     assert status_of(pan.doStep, 0.0, DT) == DISCARD           # only a rollback recovers

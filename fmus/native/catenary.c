@@ -125,7 +125,7 @@ static double penalty(const Catenary *m, double zp, double zw, double vp, double
     return F > 0.0 ? F : 0.0;
 }
 
-void pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
+int pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
                         const double *G, const double *H, double *F)
 {
     int np = m->np, it, i, j, active[CAT_MAX_PANTOGRAPHS], trial[CAT_MAX_PANTOGRAPHS];
@@ -142,7 +142,7 @@ void pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
         }
         if (pcs_dense_solve(A, y, np) != 0) {
             for (i = 0; i < np; i++) F[i] = NAN;
-            return;
+            return -1;
         }
         for (i = 0; i < np; i++) F[i] = y[i];
         for (i = 0; i < np; i++) {
@@ -154,9 +154,10 @@ void pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
             trial[i] = gap > 0.0 && m->k_h * gap + m->c_h * rel > 0.0;
             changed = changed || trial[i] != active[i];
         }
-        if (!changed || it == 2 * np + 1) break;
+        if (!changed) return 0;
         for (i = 0; i < np; i++) active[i] = trial[i];
     }
+    return -1;                 /* the active set did not settle: the last forces in F */
 }
 
 /* one internal step of h with forces F (mode 0) or pantograph heights zp, vp (mode 1);
@@ -165,7 +166,7 @@ int cat_step(void *model, double t, double H, char *err)
 {
     Catenary *m = (Catenary *)model;
     int k, i, n_sub, status;
-    double ratio, u[CAT_MAX_PANTOGRAPHS], zp[CAT_MAX_PANTOGRAPHS], vp[CAT_MAX_PANTOGRAPHS];
+    double u[CAT_MAX_PANTOGRAPHS], zp[CAT_MAX_PANTOGRAPHS], vp[CAT_MAX_PANTOGRAPHS];
     double nw[2 * CAT_MAX_PANTOGRAPHS];
     (void)t;
     if (!m->initialised) {
@@ -176,36 +177,23 @@ int cat_step(void *model, double t, double H, char *err)
         snprintf(err, PCS_MSG, "doStep after a failed step: roll back with a saved FMU state");
         return PCS_DISCARD;
     }
-    ratio = H / m->h;
-    n_sub = (int)floor(ratio + 0.5);
-    if (!(H > 0.0) || n_sub < 1 || fabs(ratio - n_sub) > 1e-9 * (ratio > 1.0 ? ratio : 1.0)) {
-        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->h);
-        return PCS_ERROR;
-    }
+    if ((n_sub = (int)pcs_substeps(H, m->h, err)) < 0) return PCS_DISCARD;
     for (k = 0; k < m->np; k++) {            /* inputs at t + H, checked before any change */
-        if (m->mode == 0) {
-            if (!(isfinite(m->u_force[k]) && m->u_force[k] >= 0.0)) {
-                snprintf(err, PCS_MSG, "contact_force_%d = %.17g: must be finite and >= 0",
-                         k + 1, m->u_force[k]);
-                return PCS_DISCARD;
-            }
-            nw[2 * k] = m->u_force[k];
-            nw[2 * k + 1] = 0.0;
-        } else {
-            if (!isfinite(m->u_z[k])) {
-                snprintf(err, PCS_MSG, "pantograph_height_%d = %.17g: must be finite", k + 1,
-                         m->u_z[k]);
-                return PCS_DISCARD;
-            }
-            if (!isfinite(m->u_v[k])) {
-                snprintf(err, PCS_MSG, "pantograph_velocity_%d = %.17g: must be finite", k + 1,
-                         m->u_v[k]);
-                return PCS_DISCARD;
-            }
-            nw[2 * k] = m->u_z[k];
-            nw[2 * k + 1] = m->u_v[k];
-        }
+        char name[40];
+        snprintf(name, sizeof name, "contact_force_%d", k + 1);
+        if (m->mode == 0
+            && pcs_within(name, m->u_force[k], 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
+            return PCS_DISCARD;
+        snprintf(name, sizeof name, "pantograph_height_%d", k + 1);
+        if (m->mode == 1
+            && pcs_within(name, m->u_z[k], -PCS_MAX_HEIGHT, PCS_MAX_HEIGHT, " m", err) != 0)
+            return PCS_DISCARD;
+        snprintf(name, sizeof name, "pantograph_velocity_%d", k + 1);
+        if (m->mode == 1 && pcs_within(name, m->u_v[k], -PCS_MAX_VELOCITY, PCS_MAX_VELOCITY,
+                                       " m/s", err) != 0)
+            return PCS_DISCARD;
+        nw[2 * k] = m->mode == 0 ? m->u_force[k] : m->u_z[k];
+        nw[2 * k + 1] = m->mode == 0 ? 0.0 : m->u_v[k];
     }
     {   /* the points of the whole step must lie on the wire */
         double t_end = *m->t;
@@ -460,4 +448,95 @@ int cat_set_string(void *model, unsigned vr, const char *value, int initialised,
     }
     snprintf(err, PCS_MSG, "no String parameter of value reference %u", vr);
     return PCS_ERROR;
+}
+
+/* ------------------------------------------------------------------ reading */
+
+int cat_check_sizes(const Catenary *m, const PcsData *d, char *err)
+{
+    if (m->np >= 1 && m->np <= CAT_MAX_PANTOGRAPHS && m->nd >= 0 && m->nd <= PCS_MAX_DROPPERS
+        && m->ne >= 1 && m->ne <= PCS_MAX_DOFS && m->ns >= 0 && m->ns <= CAT_MAX_SUPPORTS)
+        return 0;
+    snprintf(err, PCS_MSG, "data file %.400s: section sizes: pantographs %d (1..%d), droppers "
+             "%d (0..%d), wire elements %d (1..%d), supports %d (0..%d)", d->path, m->np,
+             CAT_MAX_PANTOGRAPHS, m->nd, PCS_MAX_DROPPERS, m->ne, PCS_MAX_DOFS, m->ns,
+             CAT_MAX_SUPPORTS);
+    return -1;
+}
+
+#define READ(dst, name, type, count)                                                      \
+    do {                                                                                  \
+        dst = pcs_data_section(d, name, type, count, NULL, err, PCS_MSG);                 \
+        if (!dst) return -1;                                                              \
+    } while (0)
+
+static int wire_dofs(const Catenary *m, const PcsData *d, int dofs, char *err)
+{
+    size_t i;
+    for (i = 0; i < 4 * (size_t)m->ne; i++)
+        if (m->w_dof[i] < -1 || m->w_dof[i] >= dofs) {
+            snprintf(err, PCS_MSG, "data file %.400s: section wire_dof: index %d outside "
+                     "-1..%d", d->path, m->w_dof[i], dofs - 1);
+            return -1;
+        }
+    return 0;
+}
+
+int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err)
+{
+    size_t nd = (size_t)m->nd, np = (size_t)m->np, ne = (size_t)m->ne;
+    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
+    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
+    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12]; m->rtol = sc[13];
+    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
+        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
+                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
+                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
+        return -1;
+    }
+    if (!(m->h > 0.0) || !(m->x_max > m->x_min) || !(m->beta > 0.0) || !(m->k_h > 0.0)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
+                 "[%g, %g] m, HHT beta %g, contact stiffness %g N/m (all must be > 0)",
+                 d->path, m->h, m->x_min, m->x_max, m->beta, m->k_h);
+        return -1;
+    }
+    READ(m->F0, "F0", PCS_TYPE_F64, np);
+    READ(m->x0, "x0", PCS_TYPE_F64, np);
+    READ(m->d_ka, "drop_ka", PCS_TYPE_F64, nd);
+    READ(m->d_N0, "drop_N0", PCS_TYPE_F64, nd);
+    READ(m->d_tension, "drop_tension", PCS_TYPE_I32, nd);
+    READ(m->w_xs, "wire_xs", PCS_TYPE_F64, ne);
+    READ(m->w_xe, "wire_xe", PCS_TYPE_F64, ne);
+    READ(m->w_Ex, "wire_Ex", PCS_TYPE_F64, 4 * ne);
+    READ(m->w_Le, "wire_Le", PCS_TYPE_F64, ne);
+    READ(m->w_dof, "wire_dof", PCS_TYPE_I32, 4 * ne);
+    READ(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * ne);
+    m->definition = pcs_data_text(d, "definition", err, PCS_MSG);
+    if (!m->definition) return -1;
+    return wire_dofs(m, d, dofs, err);
+}
+
+int cat_arena(Catenary *m, const PcsData *d, const PcsMemory *mem,
+              void (*carve)(Catenary *m, PcsArena *a), char *err)
+{
+    double mib = 1024.0 * 1024.0;
+    carve(m, &m->arena);
+    if (m->arena.overflow || (double)m->arena.used + (double)d->size > PCS_MAX_BYTES) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d coordinates and %d droppers "
+                 "need %s%.0f MiB with the data, above the limit of %.0f MiB", d->path, m->n,
+                 m->nd, m->arena.overflow ? "more than " : "",
+                 ((double)m->arena.used + (double)d->size) / mib, PCS_MAX_BYTES / mib);
+        return -1;
+    }
+    if (pcs_arena_open(&m->arena, mem) != 0) {
+        snprintf(err, PCS_MSG, "no memory for a model of %d coordinates (%.0f MiB)", m->n,
+                 (double)m->arena.size / mib);
+        return -1;
+    }
+    carve(m, &m->arena);
+    if (pcs_arena_full(&m->arena) != 0) {
+        snprintf(err, PCS_MSG, "the model took other blocks than it measured");
+        return -1;
+    }
+    return 0;
 }

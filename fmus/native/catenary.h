@@ -9,6 +9,7 @@
 #define CATENARY_H
 
 #include "catenary_vars.h"
+#include "pcs_limits.h"
 #include "pcs_model.h"
 
 typedef struct Catenary Catenary;
@@ -76,9 +77,18 @@ struct Catenary {
 int pcs_locate(const Catenary *m, double x, Point *p, char *err);
 int pcs_dense_solve(double *A, double *y, int n);
 /* the penalty forces F with the wire affine in them: z_w = z0 + G F, v_w = v0 + H F (the
-   pantographs at z0 + dz, v0 + dv; penalty_contact.condensed_forces) */
-void pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
+   pantographs at z0 + dz, v0 + dv; penalty_contact.condensed_forces); -1 when the system is
+   singular or the active set does not settle in 2 np + 2 passes */
+int pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
                         const double *G, const double *H, double *F);
+/* reading: the sizes both models share within the limits (pcs_limits.h); the scalars'
+   first 14 and the sections both read (F0, x0, drop_ka, drop_N0, drop_tension, wire_*,
+   definition; master/native/export.py), the wire's DOFs below dofs; the work memory of
+   carve (measured, bounded by PCS_MAX_BYTES, allocated, taken). 0, or -1 with err */
+int cat_check_sizes(const Catenary *m, const PcsData *d, char *err);
+int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err);
+int cat_arena(Catenary *m, const PcsData *d, const PcsMemory *mem,
+              void (*carve)(Catenary *m, PcsArena *a), char *err);
 /* the model table's entries both models share */
 int cat_step(void *model, double t, double h, char *err);
 void cat_outputs(void *model);

@@ -263,7 +263,7 @@ static void linear_outputs(Catenary *m)
 
 #define SECTION(dst, name, type, count)                                                   \
     do {                                                                                  \
-        dst = pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG);          \
+        dst = pcs_data_section(d, name, type, count, NULL, err, PCS_MSG);                 \
         if (!dst) goto fail;                                                              \
     } while (0)
 
@@ -271,13 +271,14 @@ static void linear_outputs(Catenary *m)
 static void carve(Catenary *m, PcsArena *a)
 {
     size_t n = (size_t)m->n, nd = (size_t)m->nd, w = (size_t)m->bw + 1;
-    m->L = (double *)pcs_arena_take(a, w * n, sizeof(double));
-    m->LR = (double *)pcs_arena_take(a, w * n, sizeof(double));
+    size_t np = (size_t)m->np;
+    m->L = (double *)pcs_arena_take(a, pcs_mul(w, n), sizeof(double));
+    m->LR = (double *)pcs_arena_take(a, pcs_mul(w, n), sizeof(double));
     m->inv_diag = (double *)pcs_arena_take(a, n, sizeof(double));
-    m->Z = (double *)pcs_arena_take(a, nd * n + 1, sizeof(double));
+    m->Z = (double *)pcs_arena_take(a, pcs_add(pcs_mul(nd, n), 1), sizeof(double));
     m->state = (double *)pcs_arena_take(a, m->state_len, sizeof(double));
-    m->qp = (double *)pcs_arena_take(a, 10 * n + (size_t)m->np * n, sizeof(double));
-    m->Np = (double *)pcs_arena_take(a, 7 * nd + nd * nd + (size_t)m->np * nd + 8,
+    m->qp = (double *)pcs_arena_take(a, (10 + np) * n, sizeof(double));
+    m->Np = (double *)pcs_arena_take(a, pcs_add(pcs_mul(nd, nd), (7 + np) * nd + 8),
                                      sizeof(double));
     m->rows = (int *)pcs_arena_take(a, nd + 1, sizeof(int));
     m->used_m = (unsigned char *)pcs_arena_take(a, (size_t)m->bw_m + 1, 1);
@@ -308,8 +309,7 @@ static void *linear_new(const PcsData *d, const PcsMemory *mem, char *err)
     Catenary *m;
     const int *sizes;
     const double *sc;
-    long n_def = 0;
-    size_t n, nd;
+    size_t n, nd, i;
     int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
@@ -317,86 +317,42 @@ static void *linear_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->n = sizes[0]; m->bw_m = sizes[1]; m->bw_k = sizes[2]; m->nd = sizes[3];
     m->np = sizes[5]; m->ne = sizes[6]; m->ns = sizes[7]; m->spans = sizes[8];
     m->model_code = sizes[9];
-    if (m->n < 1 || m->bw_m < 0 || m->bw_k < 0 || m->nd < 0 || sizes[4] != DROPPER_WIDTH
-        || m->np < 1 || m->np > CAT_MAX_PANTOGRAPHS || m->ne < 1 || m->ns < 0
-        || m->ns > CAT_MAX_SUPPORTS) {
-        snprintf(err, PCS_MSG, "data file %s: section sizes holds sizes this FMU cannot "
-                 "take (n = %d, pantographs = %d, supports = %d)", d->path, m->n, m->np, m->ns);
+    if (cat_check_sizes(m, d, err) != 0) goto fail;
+    if (m->n < 1 || m->n > PCS_MAX_DOFS || m->bw_m < 0 || m->bw_m > PCS_MAX_BAND
+        || m->bw_k < 0 || m->bw_k > PCS_MAX_BAND || sizes[4] != DROPPER_WIDTH) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d DOFs (1..%d), bands %d and "
+                 "%d (0..%d), dropper width %d (%d)", d->path, m->n, PCS_MAX_DOFS, m->bw_m,
+                 m->bw_k, PCS_MAX_BAND, sizes[4], DROPPER_WIDTH);
         goto fail;
     }
     m->bw = m->bw_m > m->bw_k ? m->bw_m : m->bw_k;
     n = (size_t)m->n;
     nd = (size_t)m->nd;
     SECTION(sc, "scalars", PCS_TYPE_F64, 16);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
-    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
-    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12];
-    m->rtol = sc[13];
-    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
-        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
-                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
-                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
-        goto fail;
-    }
-    if (!(m->h > 0.0) || !(m->x_max > m->x_min)) {
-        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
-                 "[%g, %g] m", d->path, m->h, m->x_min, m->x_max);
-        goto fail;
-    }
-    SECTION(m->M, "M_band", PCS_TYPE_F64, (m->bw_m + 1) * n);
-    SECTION(m->K, "K_band", PCS_TYPE_F64, (m->bw_k + 1) * n);
+    if (cat_read_common(m, d, sc, m->n, err) != 0) goto fail;
+    SECTION(m->M, "M_band", PCS_TYPE_F64, pcs_mul((size_t)m->bw_m + 1, n));
+    SECTION(m->K, "K_band", PCS_TYPE_F64, pcs_mul((size_t)m->bw_k + 1, n));
     SECTION(m->q_ref, "q_ref", PCS_TYPE_F64, n);
     SECTION(m->r0, "r0", PCS_TYPE_F64, n);
     SECTION(m->q0, "q0", PCS_TYPE_F64, n);
-    SECTION(m->F0, "F0", PCS_TYPE_F64, m->np);
-    SECTION(m->x0, "x0", PCS_TYPE_F64, m->np);
     SECTION(m->d_idx, "drop_idx", PCS_TYPE_I32, nd * DROPPER_WIDTH);
     SECTION(m->d_val, "drop_val", PCS_TYPE_F64, nd * DROPPER_WIDTH);
-    SECTION(m->d_ka, "drop_ka", PCS_TYPE_F64, nd);
-    SECTION(m->d_N0, "drop_N0", PCS_TYPE_F64, nd);
-    SECTION(m->d_tension, "drop_tension", PCS_TYPE_I32, nd);
-    SECTION(m->w_xs, "wire_xs", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_xe, "wire_xe", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_Ex, "wire_Ex", PCS_TYPE_F64, 4 * m->ne);
-    SECTION(m->w_Le, "wire_Le", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_dof, "wire_dof", PCS_TYPE_I32, 4 * m->ne);
-    SECTION(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * m->ne);
-    SECTION(m->s_dof, "support_dof", PCS_TYPE_I32, m->ns);
-    SECTION(m->s_z, "support_z", PCS_TYPE_F64, m->ns);
-    m->definition = (const char *)pcs_data_section(d, "definition", PCS_TYPE_I32, -1, &n_def,
-                                                   err, PCS_MSG);
-    if (!m->definition) goto fail;
-    if (n_def < 1 || m->definition[4 * n_def - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %s: section definition is not a string", d->path);
-        goto fail;
-    }
-    {   /* every index inside its array */
-        size_t i;
-        for (i = 0; i < nd * DROPPER_WIDTH; i++)
-            if (m->d_idx[i] < -1 || m->d_idx[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section drop_idx: index %d outside "
-                         "0..%d", d->path, m->d_idx[i], m->n - 1);
-                goto fail;
-            }
-        for (i = 0; i < 4 * (size_t)m->ne; i++)
-            if (m->w_dof[i] < -1 || m->w_dof[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section wire_dof: index %d outside "
-                         "0..%d", d->path, m->w_dof[i], m->n - 1);
-                goto fail;
-            }
-        for (i = 0; i < (size_t)m->ns; i++)
-            if (m->s_dof[i] < -1 || m->s_dof[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section support_dof: index %d outside "
-                         "0..%d", d->path, m->s_dof[i], m->n - 1);
-                goto fail;
-            }
-    }
+    SECTION(m->s_dof, "support_dof", PCS_TYPE_I32, (size_t)m->ns);
+    SECTION(m->s_z, "support_z", PCS_TYPE_F64, (size_t)m->ns);
+    for (i = 0; i < nd * DROPPER_WIDTH; i++)       /* every index inside its array */
+        if (m->d_idx[i] < -1 || m->d_idx[i] >= m->n) {
+            snprintf(err, PCS_MSG, "data file %.400s: section drop_idx: index %d outside "
+                     "-1..%d", d->path, m->d_idx[i], m->n - 1);
+            goto fail;
+        }
+    for (i = 0; i < (size_t)m->ns; i++)
+        if (m->s_dof[i] < -1 || m->s_dof[i] >= m->n) {
+            snprintf(err, PCS_MSG, "data file %.400s: section support_dof: index %d outside "
+                     "-1..%d", d->path, m->s_dof[i], m->n - 1);
+            goto fail;
+        }
     m->state_len = 4 + CAT_MAX_PANTOGRAPHS * 2 + 9 * n + nd + 1;
-    carve(m, &m->arena);
-    if (pcs_arena_open(&m->arena, mem) != 0 || (carve(m, &m->arena), pcs_arena_full(&m->arena))) {
-        snprintf(err, PCS_MSG, "no memory for a model of %d degrees of freedom", m->n);
-        goto fail;
-    }
+    if (cat_arena(m, d, mem, carve, err) != 0) goto fail;
     used_diagonals(m->M, m->bw_m, n, m->used_m);
     used_diagonals(m->K, m->bw_k, n, m->used_k);
     m->t = m->state; m->n_steps = m->state + 1; m->failed = m->state + 2;
@@ -597,13 +553,12 @@ static int linear_step(Catenary *m, double *F, const double *zp, const double *v
                 dz[k] = zp[k] - z0[k];
                 dv[k] = vpan[k] - v0[k];
             }
-            pcs_penalty_forces(m, dz, dv, G, H, F);
-            for (k = 0; k < np; k++)
-                if (!isfinite(F[k])) {
-                    snprintf(err, PCS_MSG, "the penalty contact is singular at t = %.6g s",
-                             *m->t + h);
-                    return PCS_DISCARD;
-                }
+            if (pcs_penalty_forces(m, dz, dv, G, H, F) != 0) {
+                snprintf(err, PCS_MSG, "the penalty contact has no solution at t = %.6g s "
+                         "(singular, or its active set does not settle in %d passes)",
+                         *m->t + h, 2 * np + 2);
+                return PCS_DISCARD;
+            }
             for (d = 0; d < nd; d++)
                 for (k = 0; k < np; k++)
                     m->bW[(size_t)k * nd + d] = dropper_dot(m, d, m->W + (size_t)k * n);

@@ -77,7 +77,7 @@ static void screen_tables(Catenary *m)
 
 #define TABLE(dst, name, count)                                                           \
     do {                                                                                  \
-        dst = pcs_data_section(d, name, PCS_TYPE_F64, (long)(count), NULL, err, PCS_MSG);  \
+        dst = pcs_data_section(d, name, PCS_TYPE_F64, count, NULL, err, PCS_MSG);         \
         if (!dst) goto fail;                                                              \
     } while (0)
 
@@ -87,13 +87,16 @@ static void carve(Catenary *m, PcsArena *a)
     struct Modal *md = m->modal;
     size_t N = (size_t)md->N, nd = (size_t)m->nd, K = (size_t)md->K, np = (size_t)m->np;
     size_t nb = (size_t)md->nb;
+    size_t ndK = pcs_mul(nd, K), ndnd = pcs_mul(nd, nd), ndnb = pcs_mul(nd, nb);
     m->state = (double *)pcs_arena_take(a, m->state_len, sizeof(double));
-    md->inv_diag = (double *)pcs_arena_take(a, K + nd * K + nd * nd + 1, sizeof(double));
-    md->Wc = (double *)pcs_arena_take(a, 2 * np * N + 8 * N + np * N + K, sizeof(double));
-    md->ys = (double *)pcs_arena_take(a, 6 * nd + nd * nd + 8, sizeof(double));
+    md->inv_diag = (double *)pcs_arena_take(a, pcs_add(pcs_add(ndK, ndnd), K + 1),
+                                            sizeof(double));
+    md->Wc = (double *)pcs_arena_take(a, (3 * np + 8) * N + K, sizeof(double));
+    md->ys = (double *)pcs_arena_take(a, pcs_add(ndnd, 6 * nd + 8), sizeof(double));
     md->rows = (int *)pcs_arena_take(a, nd + 1, sizeof(int));
-    md->T32 = (float *)pcs_arena_take(a, nd * K + K + 1, sizeof(float));
-    md->Tb = (double *)pcs_arena_take(a, 2 * nd * nb + 3 * nd + K + 2 * nb + 1, sizeof(double));
+    md->T32 = (float *)pcs_arena_take(a, pcs_add(ndK, K + 1), sizeof(float));
+    md->Tb = (double *)pcs_arena_take(a, pcs_add(pcs_mul(2, ndnb), 3 * nd + K + 2 * nb + 1),
+                                      sizeof(double));
 }
 
 static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err);
@@ -107,8 +110,7 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     struct Modal *md;
     const int *sizes;
     const double *sc;
-    long n_def = 0;
-    size_t N, nd, K;
+    size_t N, nd, K, nS;
     int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     md = (struct Modal *)pcs_alloc(mem, 1, sizeof *md);
@@ -125,81 +127,44 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     md->N = sizes[0]; md->m = sizes[1]; md->nz = sizes[2]; md->nx = sizes[3]; m->nd = sizes[4];
     m->np = sizes[5]; m->ne = sizes[6]; md->nsup = m->ns = sizes[7]; md->nS = sizes[8];
     md->band = sizes[9]; m->spans = sizes[10]; m->model_code = sizes[11];
-    md->K = md->m + md->nz;
-    if (md->m < 1 || md->nz < 0 || md->nx < 0 || md->nx > m->np || m->nd < 0 || m->np < 1
-        || m->np > NP || m->ne < 1 || m->ns < 0 || m->ns > CAT_MAX_SUPPORTS || md->nS < 1
-        || md->band < 0 || md->N != md->K + md->nx) {
-        snprintf(err, PCS_MSG, "data file %.400s: section sizes holds sizes this FMU cannot "
-                 "take (coordinates %d = modes %d + droppers %d + pantographs %d, supports %d)",
-                 d->path, md->N, md->m, md->nz, md->nx, m->ns);
+    if (cat_check_sizes(m, d, err) != 0) goto fail;
+    if (md->m < 1 || md->m > PCS_MAX_DOFS || md->nz < 0 || md->nz > PCS_MAX_DROPPERS
+        || md->nx < 0 || md->nx > m->np || md->nS < 1 || md->nS > PCS_MAX_DOFS
+        || md->band < 0 || md->band > PCS_MAX_BAND || md->N != md->m + md->nz + md->nx) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: coordinates %d = modes %d "
+                 "(1..%d) + droppers %d (0..%d) + pantographs %d (0..%d), wire DOFs %d (1..%d), "
+                 "band %d (0..%d)", d->path, md->N, md->m, PCS_MAX_DOFS, md->nz,
+                 PCS_MAX_DROPPERS, md->nx, m->np, md->nS, PCS_MAX_DOFS, md->band, PCS_MAX_BAND);
         goto fail;
     }
+    md->K = md->m + md->nz;
     m->n = md->N;
     N = (size_t)md->N;
     nd = (size_t)m->nd;
     K = (size_t)md->K;
+    nS = (size_t)md->nS;
     TABLE(sc, "scalars", 18);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
-    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
-    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12]; m->rtol = sc[13];
     md->kbar = sc[16]; md->beta_r = sc[17];
-    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
-        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
-                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
-                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
+    if (md->nz > 0 && !(md->kbar > 0.0)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: dropper stiffness scale %g "
+                 "(must be > 0)", d->path, md->kbar);
         goto fail;
     }
-    if (!(m->h > 0.0) || !(m->x_max > m->x_min) || (md->nz > 0 && !(md->kbar > 0.0))) {
-        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
-                 "[%g, %g] m, dropper stiffness scale %g", d->path, m->h, m->x_min, m->x_max,
-                 md->kbar);
-        goto fail;
-    }
-    TABLE(md->Phi_S, "Phi_S", (size_t)md->nS * md->m);
-    TABLE(md->Q_S, "Q_S", (size_t)md->nS * md->nz);
-    TABLE(md->C_band, "C_band", (size_t)md->nS * (2 * md->band + 1));
-    TABLE(md->omega2, "omega2", md->m);
-    TABLE(md->zeta_c, "zeta_c", md->m);
+    if (cat_read_common(m, d, sc, md->nS, err) != 0) goto fail;
+    TABLE(md->Phi_S, "Phi_S", pcs_mul(nS, (size_t)md->m));
+    TABLE(md->Q_S, "Q_S", pcs_mul(nS, (size_t)md->nz));
+    TABLE(md->C_band, "C_band", pcs_mul(nS, 2 * (size_t)md->band + 1));
+    TABLE(md->omega2, "omega2", (size_t)md->m);
+    TABLE(md->zeta_c, "zeta_c", (size_t)md->m);
     TABLE(md->r0, "r0", N);
-    TABLE(md->T_K, "T_K", nd * K);
-    TABLE(md->Phi_sup, "Phi_sup", (size_t)m->ns * md->m);
-    TABLE(md->Q_sup, "Q_sup", (size_t)m->ns * md->nz);
-    TABLE(md->C_sup, "C_sup", (size_t)m->ns * md->nS);
+    TABLE(md->T_K, "T_K", pcs_mul(nd, K));
+    TABLE(md->Phi_sup, "Phi_sup", pcs_mul((size_t)m->ns, (size_t)md->m));
+    TABLE(md->Q_sup, "Q_sup", pcs_mul((size_t)m->ns, (size_t)md->nz));
+    TABLE(md->C_sup, "C_sup", pcs_mul((size_t)m->ns, nS));
     TABLE(m->q0, "q0", N);
-    TABLE(m->F0, "F0", m->np);
-    TABLE(m->x0, "x0", m->np);
-    TABLE(m->d_ka, "drop_ka", nd);
-    TABLE(m->d_N0, "drop_N0", nd);
-    m->d_tension = pcs_data_section(d, "drop_tension", PCS_TYPE_I32, (long)nd, NULL, err,
-                                    PCS_MSG);
-    if (!m->d_tension) goto fail;
-    TABLE(m->w_xs, "wire_xs", m->ne);
-    TABLE(m->w_xe, "wire_xe", m->ne);
-    TABLE(m->w_Ex, "wire_Ex", 4 * (size_t)m->ne);
-    TABLE(m->w_Le, "wire_Le", m->ne);
-    TABLE(m->w_zfix, "wire_zfix", 4 * (size_t)m->ne);
-    m->w_dof = pcs_data_section(d, "wire_dof", PCS_TYPE_I32, 4L * m->ne, NULL, err, PCS_MSG);
-    if (!m->w_dof) goto fail;
-    for (k = 0; k < 4 * m->ne; k++)
-        if (m->w_dof[k] < -1 || m->w_dof[k] >= md->nS) {
-            snprintf(err, PCS_MSG, "data file %.400s: section wire_dof: index %d outside "
-                     "0..%d", d->path, m->w_dof[k], md->nS - 1);
-            goto fail;
-        }
-    m->definition = (const char *)pcs_data_section(d, "definition", PCS_TYPE_I32, -1, &n_def,
-                                                   err, PCS_MSG);
-    if (!m->definition) goto fail;
-    if (n_def < 1 || m->definition[4 * n_def - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %.400s: section definition is not a string", d->path);
-        goto fail;
-    }
     m->state_len = 4 + 2 * NP + 4 * N + nd;
     md->nb = (md->K + SCREEN_BLOCK - 1) / SCREEN_BLOCK;
-    carve(m, &m->arena);
-    if (pcs_arena_open(&m->arena, mem) != 0 || (carve(m, &m->arena), pcs_arena_full(&m->arena))) {
-        snprintf(err, PCS_MSG, "no memory for a modal model of %d coordinates", md->N);
-        goto fail;
-    }
+    if (cat_arena(m, d, mem, carve, err) != 0) goto fail;
     md->U = md->inv_diag + K;
     md->gram = md->U + nd * K;
     md->Wcx = md->Wc + (size_t)m->np * N;
@@ -637,10 +602,7 @@ static int contact_forces(Catenary *m, const double *zp, const double *vp, doubl
             H[k * np + j] = m->c_v * G[k * np + j] + m->speed * row_dot(dw, wl, N);
         }
     }
-    pcs_penalty_forces(m, dz, dv, G, H, F);
-    for (k = 0; k < np; k++)
-        if (!isfinite(F[k])) return -1;
-    return 0;
+    return pcs_penalty_forces(m, dz, dv, G, H, F);
 }
 
 static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err)
@@ -685,8 +647,9 @@ static int modal_step(Catenary *m, double *F, const double *zp, const double *vp
             return PCS_DISCARD;
         }
         if (m->mode == 1 && contact_forces(m, zp, vp, F) != 0) {
-            snprintf(err, PCS_MSG, "modal catenary: the penalty contact is singular at t = "
-                     "%.6g s", *m->t + h);
+            snprintf(err, PCS_MSG, "modal catenary: the penalty contact has no solution at "
+                     "t = %.6g s (singular, or its active set does not settle in %d passes)",
+                     *m->t + h, 2 * np + 2);
             return PCS_DISCARD;
         }
         for (i = 0; i < N; i++) {       /* add_loads */

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "lumped_vars.h"
+#include "pcs_limits.h"
 
 typedef struct {
     int n;
@@ -33,7 +34,7 @@ typedef struct {
 
 #define SECTION(dst, name, type, count)                                                   \
     do {                                                                                  \
-        dst = pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG);          \
+        dst = pcs_data_section(d, name, type, count, NULL, err, PCS_MSG);                 \
         if (!dst) goto fail;                                                              \
     } while (0)
 
@@ -42,7 +43,6 @@ static void *lumped_new(const PcsData *d, const PcsMemory *mem, char *err)
     Lumped *m;
     const int *sizes;
     const double *sc;
-    long n_text = 0;
     size_t n;
     m = (Lumped *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
@@ -59,6 +59,11 @@ static void *lumped_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->hi = sc[5]; m->static_force = sc[6]; m->aero_c1 = sc[7]; m->aero_c2 = sc[8];
     m->speed_kmh = sc[9]; m->height0 = sc[10]; m->F0 = sc[11]; m->friction = sc[12];
     m->smoothing = sc[13];
+    if (!(m->h > 0.0) || !(m->hi >= m->lo)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s (> 0), "
+                 "heights %g .. %g m", d->path, m->h, m->lo, m->hi);
+        goto fail;
+    }
     SECTION(m->M, "M", PCS_TYPE_F64, n * n);
     SECTION(m->C, "C", PCS_TYPE_F64, n * n);
     SECTION(m->K, "K", PCS_TYPE_F64, n * n);
@@ -68,13 +73,8 @@ static void *lumped_new(const PcsData *d, const PcsMemory *mem, char *err)
     SECTION(m->a0, "a0", PCS_TYPE_F64, n);
     SECTION(m->f0, "f0", PCS_TYPE_F64, n);
     SECTION(m->S_inv_data, "S_inv", PCS_TYPE_F64, n * n);
-    m->preset = (const char *)pcs_data_section(d, "preset", PCS_TYPE_I32, -1, &n_text, err,
-                                               PCS_MSG);
+    m->preset = pcs_data_text(d, "preset", err, PCS_MSG);
     if (!m->preset) goto fail;
-    if (n_text < 1 || m->preset[4 * n_text - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %.400s: section preset is not a string", d->path);
-        goto fail;
-    }
     m->q = m->state + 4;
     m->v = m->q + n;
     m->a = m->v + n;
@@ -156,7 +156,7 @@ static int lumped_step(void *model, double t, double H, char *err)
 {
     Lumped *m = (Lumped *)model;
     int n_sub, i;
-    double ratio, F = m->force_in, F_prev = m->state[2], u = F, z;
+    double F = m->force_in, F_prev = m->state[2], u = F, z;
     double saved[4 + 4 * PAN_MAX_DOFS];
     if (!m->initialised) {
         snprintf(err, PCS_MSG, "doStep before the FMU was initialised");
@@ -166,17 +166,9 @@ static int lumped_step(void *model, double t, double H, char *err)
         snprintf(err, PCS_MSG, "doStep after a refused step: roll back with a saved FMU state");
         return PCS_DISCARD;
     }
-    ratio = H / m->h;
-    n_sub = (int)floor(ratio + 0.5);
-    if (!(H > 0.0) || n_sub < 1 || fabs(ratio - n_sub) > 1e-9 * (ratio > 1.0 ? ratio : 1.0)) {
-        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->h);
-        return PCS_ERROR;
-    }
-    if (!(isfinite(F) && F >= 0.0)) {
-        snprintf(err, PCS_MSG, "contact_force = %.17g: must be finite and >= 0", F);
+    if ((n_sub = (int)pcs_substeps(H, m->h, err)) < 0
+        || pcs_within("contact_force", F, 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
         return PCS_DISCARD;
-    }
     if (m->extrapolate) {
         if (m->state[0] == 0.0) u = m->state[3];
         F = 2.0 * u - m->state[3];

@@ -3,6 +3,16 @@
 
 #define ALIGN 16u
 
+size_t pcs_mul(size_t a, size_t b)
+{
+    return b && a > (size_t)-1 / b ? (size_t)-1 : a * b;
+}
+
+size_t pcs_add(size_t a, size_t b)
+{
+    return a > (size_t)-1 - b ? (size_t)-1 : a + b;
+}
+
 void *pcs_alloc(const PcsMemory *mem, size_t count, size_t size)
 {
     if (count == 0 || size == 0) count = size = 1;

@@ -20,6 +20,10 @@ typedef struct {
     void *ctx;                                               /* the host's, per instance */
 } PcsMemory;
 
+/* a * b and a + b, (size_t)-1 when they do not fit (a size no file or arena can hold) */
+size_t pcs_mul(size_t a, size_t b);
+size_t pcs_add(size_t a, size_t b);
+
 /* count * size zeroed bytes; NULL when the product overflows or the host has no memory */
 void *pcs_alloc(const PcsMemory *mem, size_t count, size_t size);
 /* give p back to the allocator it came from (NULL: nothing) */

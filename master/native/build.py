@@ -45,6 +45,14 @@ def value_references(header: str) -> dict[str, int]:
             for m in re.finditer(r"#define \w+?_VR_(\w+) (\d+)", text)}
 
 
+def header_numbers(header: str) -> dict[str, float]:
+    """The ``#define NAME number`` lines of a header in :data:`SOURCE_DIR` (limits, sizes):
+    {NAME: number}."""
+    text = (SOURCE_DIR / header).read_text()
+    return {m.group(1): float(m.group(2)) for m in
+            re.finditer(r"#define (\w+) (-?[0-9.]+(?:e[0-9]+)?)\b", text)}
+
+
 @dataclass
 class Variable:
     name: str
@@ -201,8 +209,9 @@ class NativeModel:
     tables: tuple          # its model tables, e.g. pcs_linear_catenary
 
 
-COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c")
-COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h")
+COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c", "pcs_limits.c")
+COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h",
+                  "pcs_limits.h")
 #: the generated list of a binary's models (pcs_model_table)
 TABLE_SOURCE = "model_table.c"
 

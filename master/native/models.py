@@ -17,7 +17,8 @@ from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
 from pantocosim.master.native import export as native_export
 from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
-from pantocosim.master.native.build import NativeModel, Variable, build_fmu, value_references
+from pantocosim.master.native.build import (NativeModel, Variable, build_fmu, header_numbers,
+                                             value_references)
 from pantocosim.master.run.setup import scenario_pantograph
 from pantocosim.pantograph.dsa380 import Dsa380Model
 from pantocosim.pantograph.dsa380_flexible import Dsa380FlexibleModel
@@ -26,7 +27,7 @@ from pantocosim.pantograph.lumped import LumpedPantograph
 CATENARY = NativeModel(("catenary.c", "catenary_linear.c", "catenary_modal.c"),
                        ("catenary_vars.h", "catenary.h"),
                        ("pcs_linear_catenary", "pcs_modal_catenary"))
-MAX_SUPPORTS = 64
+MAX_SUPPORTS = int(header_numbers("catenary_vars.h")["CAT_MAX_SUPPORTS"])
 
 
 FIXED = "fixed at export (pantocosim export-native)"
