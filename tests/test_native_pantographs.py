@@ -20,6 +20,8 @@ from pantocosim.master.scenario import load_scenario
 from test_native_fmus import DISCARD, ERROR, OK, STEPS, host, required, run_host  # noqa: F401
 from test_native_fmus import slave, status_of
 
+pytestmark = pytest.mark.slow      # the exports take 10-20 s
+
 DT = 0.001
 IDENTIFIER = "pantocosim_pantograph_native"
 

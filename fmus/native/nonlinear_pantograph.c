@@ -21,6 +21,7 @@
 #include "dsa380_rigid.h"
 #include "hht_dense.h"
 #include "nonlinear_pantograph_vars.h"
+#include "pcs_limits.h"
 #include "pcs_model.h"
 
 typedef struct {
@@ -45,21 +46,7 @@ typedef struct {
 } Pantograph;
 
 #define SECTION(d, name, type, count, err) \
-    pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG)
-
-static int text_section(const PcsData *d, const char *name, const char **out, char *err)
-{
-    long n = 0;
-    const char *s = (const char *)pcs_data_section(d, name, PCS_TYPE_I32, -1, &n, err,
-                                                   PCS_MSG);
-    if (!s) return -1;
-    if (n < 1 || s[4 * n - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %.400s: section %s is not a string", d->path, name);
-        return -1;
-    }
-    *out = s;
-    return 0;
-}
+    pcs_data_section(d, name, type, (size_t)(count), NULL, err, PCS_MSG)
 
 static void destroy(void *model, const PcsMemory *mem);
 
@@ -68,7 +55,8 @@ static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 {
     const double *sc = (const double *)SECTION(d, "scalars", PCS_TYPE_F64, NLP_S_COUNT, err);
     m->sc = sc;
-    if (!sc || text_section(d, "preset", &m->preset, err)) return -1;
+    m->preset = sc ? pcs_data_text(d, "preset", err, PCS_MSG) : NULL;
+    if (!m->preset) return -1;
     if (!(sc[NLP_S_STEP] > 0.0) || !isfinite(sc[NLP_S_STEP]) ||
         !(sc[NLP_S_HEIGHT_MIN] < sc[NLP_S_HEIGHT_MAX])) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, "
@@ -262,17 +250,6 @@ static void state_restore(void *model, const void *buffer)
 
 static void outputs(void *model) { (void)model; }
 
-/* the communication step as internal steps: their number, or 0 (not a whole number) */
-static int substeps(const Pantograph *m, double H)
-{
-    double ratio = H / m->sc[NLP_S_STEP];
-    int n = (int)floor(ratio + 0.5);
-    if (!(H > 0.0) || !isfinite(ratio) || n < 1 ||
-        fabs(ratio - n) > 1e-9 * (ratio > 1.0 ? ratio : 1.0))
-        return 0;
-    return n;
-}
-
 /* why the state just reached leaves the heights the model represents, or 0 */
 static int outside_range(const Pantograph *m, double t, double H, char *err)
 {
@@ -289,18 +266,16 @@ static int step(void *model, double t, double H, char *err)
 {
     Pantograph *m = (Pantograph *)model;
     char msg[HHT_MSG];
-    int n = substeps(m, H), i, iterations = 0;
+    int i, iterations = 0;
+    long n;
     double F = m->force_in, F0 = m->force[0], u = F;
-    if (!m->initialised) { snprintf(err, PCS_MSG, "doStep before initialisation"); return PCS_ERROR; }
-    if (!n) {
-        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->sc[NLP_S_STEP]);
-        return PCS_DISCARD;
+    if (!m->initialised) {
+        snprintf(err, PCS_MSG, "doStep before initialisation");
+        return PCS_ERROR;
     }
-    if (!(isfinite(F) && F >= 0.0)) {
-        snprintf(err, PCS_MSG, "contact_force = %.17g: must be finite and >= 0", F);
+    if ((n = pcs_substeps(H, m->sc[NLP_S_STEP], err)) < 0 ||
+        pcs_within("contact_force", F, 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
         return PCS_DISCARD;
-    }
     if (m->extrapolate) {
         if (m->engine.state.block[0] == 0.0) u = m->force[1];
         F = 2.0 * u - m->force[1];
