@@ -6,6 +6,7 @@ serialise; FMI 3.0 validates; in our master they give the Python pantograph FMU'
 force (slow)."""
 
 import dataclasses
+import json
 import zipfile
 
 import numpy as np
@@ -14,10 +15,12 @@ import pytest
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.interaction.pantograph_start import start_state
 from pantocosim.master.native.models import export_pantograph, export_scenario
-from pantocosim.master.run import prepare
+from pantocosim.master.results.files import read_csv
+from pantocosim.master.run import prepare, run_monolithic
 from pantocosim.master.run.setup import scenario_pantograph
 from pantocosim.master.scenario import load_scenario
 from test_native_fmus import DISCARD, ERROR, OK, STEPS, host, required, run_host  # noqa: F401
+from test_fmu_cosim import cli, scenario_with
 from test_native_fmus import slave, status_of
 
 pytestmark = pytest.mark.slow      # the exports take 10-20 s
@@ -216,3 +219,29 @@ def test_native_pantograph_in_our_master_gives_the_python_pantograph_fmus_force(
     py, nat = forces["python"], forces["native"]
     assert len(py) == len(nat) == prep.n_steps + 1
     assert np.max(np.abs(nat - py)) <= 1e-9 * np.mean(py), scheme
+
+
+def test_implicit_with_the_native_pantograph_equals_the_monolithic_run(tmp_path):
+    """`pantocosim run --coupling implicit --native-pantographs` on a short scenario with the
+    rigid DSA-380 and tight tolerances reproduces the monolithic run to the bar the Python
+    FMUs meet (tests/test_fmu_cosim.py: 1e-6 of the mean force)."""
+    required("gcc", "gcc")
+    scenario = scenario_with(tmp_path, "dsa380-rigid")
+    mono = run_monolithic(prepare(str(scenario)), None, progress=False)
+    out = tmp_path / "implicit"
+    proc = cli("run", scenario, "--coupling", "implicit", "--native-pantographs", "--out", out,
+               "--quiet", "--no-plots", "--json")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.stdout.startswith("pantograph 1 (dsa380-rigid): native FMU\n")
+    summary = json.loads(proc.stdout.split("\n", 1)[1])
+    assert summary["coupling"] == "implicit"
+    F = read_csv(out / "timeseries.csv")["contact_force_1"]
+    Fm = mono.columns["contact_force_1"]
+    assert np.max(np.abs(F - Fm)) < 1e-6 * Fm.mean()
+
+
+def test_native_pantographs_needs_a_co_simulation(capsys):
+    from pantocosim.master.cli import main
+
+    assert main(["run", "dsa380-ave-300", "--native-pantographs"]) == 2
+    assert "--native-pantographs" in capsys.readouterr().err
