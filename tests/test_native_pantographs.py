@@ -86,6 +86,25 @@ def test_in_a_c_host_the_pantograph_equals_the_python_fmu_stepper(exported, host
     assert counts["allocations outside doStep"] > 0
 
 
+def test_the_fmu_builds_from_its_own_sources(exported, host, tmp_path):
+    """sources/ alone, compiled with the export's C99 flags, gives the same numbers."""
+    import shutil
+    import subprocess
+
+    from pantocosim.master.native.build import CFLAGS
+
+    _, folder, _ = exported
+    copy = tmp_path / "rebuilt"
+    shutil.copytree(folder, copy)
+    lib = copy / "binaries" / "linux64" / f"{IDENTIFIER}.so"
+    lib.unlink()
+    sources = sorted((copy / "sources").glob("*.c"))
+    subprocess.run(["gcc", *CFLAGS, "-fPIC", "-shared", "-fvisibility=hidden",
+                    *map(str, sources), "-o", str(lib), "-lm"], check=True)
+    runs = [run_host(host, ["pantograph", f, 50, DT], tmp_path)[0] for f in (folder, copy)]
+    assert np.array_equal(runs[0], runs[1])
+
+
 def test_bad_inputs_get_the_python_fmus_statuses_and_keep_the_state(exported):
     _, folder, _ = exported
     fmu, vr = slave(folder, IDENTIFIER)
@@ -207,7 +226,8 @@ def test_native_pantograph_in_our_master_gives_the_python_pantograph_fmus_force(
     from pantocosim.master.fmu.check import FmuPlan
 
     required("gcc", "gcc")
-    sc = dataclasses.replace(load_scenario("dsa380-ave-300"), duration_s=0.2)
+    sc = dataclasses.replace(load_scenario("dsa380-ave-300"), duration_s=0.2,
+                             window_supports=None, window_m=(33.0, 40.0))
     prep = prepare(sc)
     native = export_pantograph(prep, 0, tmp_path / "dsa380-rigid.fmu", win64=False)
     forces = {}
