@@ -60,9 +60,7 @@ def probe(tmp_path_factory):
     so.probe_flex_setup.argtypes = [P, ctypes.c_long, *[P] * 7,
                                     ctypes.POINTER(ctypes.c_int), P, P, P, ctypes.c_char_p]
     so.probe_flex_evaluate.argtypes = so.probe_evaluate.argtypes
-    so.probe_flex_start.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double,
-                                    ctypes.c_int, ctypes.c_int, P, ctypes.c_double,
-                                    ctypes.c_char_p]
+    so.probe_flex_start.argtypes = so.probe_start.argtypes
     so.probe_step.argtypes = [ctypes.c_double, ctypes.c_double, P,
                               ctypes.POINTER(ctypes.c_int), ctypes.c_char_p]
     return so
@@ -161,14 +159,13 @@ def python_trajectory(model, settings, q0, F0, forces, h):
     return np.array(rows), its
 
 
-def native_trajectory(probe, model, settings, q0, F0, forces, h):
-    Native(probe, model)
-    n = model.n_dofs
+def native_trajectory(probe, start, n, settings, q0, F0, forces, h):
+    """The probe's engine started by ``start`` (probe_start, probe_flex_start) at q0 under
+    F0, stepped under ``forces``: rows (q, v, a) and the iteration counts."""
     msg = ctypes.create_string_buffer(512)
     q0 = np.ascontiguousarray(q0, float)
-    assert probe.probe_start(settings.alpha, settings.rtol, settings.etol,
-                             settings.max_iterations, int(settings.predictor == "linear"),
-                             0.0, ptr(q0), F0, msg) == 0, msg.value
+    assert start(settings.alpha, settings.rtol, settings.etol, settings.max_iterations,
+                 int(settings.predictor == "linear"), 0.0, ptr(q0), F0, msg) == 0, msg.value
     rows, its = [], []
     out, it = np.zeros(3 + 5 * n), ctypes.c_int()
     for F in forces:
@@ -178,6 +175,18 @@ def native_trajectory(probe, model, settings, q0, F0, forces, h):
     return np.array(rows), its
 
 
+def forcing(model, steps: int, h: float = 1e-3):
+    """(q0, F0, forces): F(t) = F0 (1 + 0.3 sin(2 pi 6 t)) from the static start (the ramp:
+    from the lowered start, no force for 40 ms)."""
+    F0 = model.options.mean_uplift
+    t = h * np.arange(1, steps + 1)
+    forces = F0 * (1.0 + 0.3 * np.sin(2.0 * np.pi * 6.0 * t))
+    if model.options.ramp is None:
+        return model.q_equilibrium, F0, forces
+    return (model.lowered_equilibrium(model.options.ramp.lowered_height), 0.0,
+            np.where(t > 0.04, forces, 0.0))
+
+
 @pytest.mark.parametrize("case", sorted(CASES))
 @pytest.mark.parametrize("predictor", ["constant", "linear"])
 def test_a_stepped_trajectory_equals_hht_integrators(probe, case, predictor):
@@ -185,16 +194,11 @@ def test_a_stepped_trajectory_equals_hht_integrators(probe, case, predictor):
     (HHT alpha -0.05, full Newton), from the static start (the ramp: lowered, no force)."""
     model = model_of(case)
     settings = HHTSettings(alpha=-0.05, predictor=predictor)
-    h, steps = 1e-3, 200
-    F0 = model.options.mean_uplift
-    t = h * np.arange(1, steps + 1)
-    forces = F0 * (1.0 + 0.3 * np.sin(2.0 * np.pi * 6.0 * t))
-    q0 = model.q_equilibrium
-    if model.options.ramp is not None:
-        q0, F0 = model.lowered_equilibrium(model.options.ramp.lowered_height), 0.0
-        forces = np.where(t > 0.04, forces, 0.0)
-    want, its_py = python_trajectory(model, settings, q0, F0, forces, h)
-    got, its_c = native_trajectory(probe, model, settings, q0, F0, forces, h)
+    q0, F0, forces = forcing(model, 200)
+    want, its_py = python_trajectory(model, settings, q0, F0, forces, 1e-3)
+    Native(probe, model)
+    got, its_c = native_trajectory(probe, probe.probe_start, model.n_dofs, settings, q0, F0,
+                                   forces, 1e-3)
     scale = np.max(np.abs(want), axis=0)
     assert np.all(np.abs(got - want) <= 1e-10 * scale), np.max(np.abs(got - want) / scale)
     assert its_c == its_py
@@ -304,28 +308,12 @@ def test_flexible_trajectory_equals_hht_integrators(probe, case):
     """100 steps of 1 ms under the prescribed force of the rigid model's test."""
     model = flexible_of(case)
     settings = HHTSettings(alpha=-0.05)
-    h, steps = 1e-3, 100
-    F0 = model.options.mean_uplift
-    t = h * np.arange(1, steps + 1)
-    forces = F0 * (1.0 + 0.3 * np.sin(2.0 * np.pi * 6.0 * t))
-    q0 = model.q_equilibrium
-    if model.options.ramp is not None:
-        q0, F0 = model.lowered_equilibrium(model.options.ramp.lowered_height), 0.0
-        forces = np.where(t > 0.04, forces, 0.0)
-    want, its_py = python_trajectory(model, settings, q0, F0, forces, h)
-    native = NativeFlexible(probe, model)
     n = model.n_dofs
-    msg = ctypes.create_string_buffer(512)
-    q0 = np.ascontiguousarray(q0, float)
-    assert probe.probe_flex_start(settings.alpha, settings.rtol, settings.etol,
-                                  settings.max_iterations, 0, ptr(q0), F0, msg) == 0, msg.value
-    rows, its = [], []
-    out, it = np.zeros(3 + 5 * n), ctypes.c_int()
-    for F in forces:
-        assert probe.probe_step(h, F, ptr(out), ctypes.byref(it), msg) == 0, msg.value
-        rows.append(out[3:3 + 3 * n].copy())
-        its.append(it.value)
-    got = np.array(rows)
+    q0, F0, forces = forcing(model, 100)
+    want, its_py = python_trajectory(model, settings, q0, F0, forces, 1e-3)
+    native = NativeFlexible(probe, model)
+    got, its = native_trajectory(probe, probe.probe_flex_start, n, settings, q0, F0, forces,
+                                 1e-3)
     assert native.n == n
     y10 = int(native.data["constants"][8])
     for block in range(3):          # q, v, a: each to 1e-10 of its largest entry

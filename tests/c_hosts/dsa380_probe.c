@@ -13,18 +13,12 @@ static Dsa380 model;
 static HhtDense engine;
 static double memory[60000];
 
-int probe_setup(const double *k, long count, char *msg)
+/* the residual pieces (f: f_inertia, f_rest) and tangents (mats: mass, inertia_q, damping,
+   stiffness) of a model of n unknowns at (t, q, v, a) under F */
+static int evaluate_into(HhtModelFn fn, void *data, int n, double t, const double *q,
+                         const double *v, const double *a, double F, double *f, double *mats,
+                         char *msg)
 {
-    return dsa380_setup(&model, k, count, msg);
-}
-
-int probe_n(void) { return model.n_dofs; }
-
-/* f_inertia, f_rest (n) and mass, inertia_q, damping, stiffness (4 n^2) */
-int probe_evaluate(double t, const double *q, const double *v, const double *a, double F,
-                   double *f, double *mats, char *msg)
-{
-    int n = model.n_dofs;
     HhtEval ev;
     ev.f_inertia = f;
     ev.f_rest = f + n;
@@ -32,7 +26,35 @@ int probe_evaluate(double t, const double *q, const double *v, const double *a, 
     ev.inertia_q = mats + n * n;
     ev.damping = mats + 2 * n * n;
     ev.stiffness = mats + 3 * n * n;
-    return dsa380_evaluate(&model, t, q, v, a, &F, 1, &ev, msg);
+    return fn(data, t, q, v, a, &F, 1, &ev, msg);
+}
+
+/* the engine on a model of n unknowns, started at (t0, q0) under F0 */
+static int start(HhtModelFn fn, void *data, int n, double alpha, double rtol, double etol,
+                 int max_iterations, int linear, double t0, const double *q0, double F0,
+                 char *msg)
+{
+    HhtSettings s;
+    s.alpha = alpha;
+    s.rtol = rtol;
+    s.etol = etol;
+    s.max_iterations = max_iterations;
+    s.linear_predictor = linear;
+    if (hht_dense_init(&engine, n, &s, fn, data, memory, sizeof memory, msg)) return -1;
+    return hht_dense_start(&engine, t0, q0, NULL, &F0, msg);
+}
+
+int probe_setup(const double *k, long count, char *msg)
+{
+    return dsa380_setup(&model, k, count, msg);
+}
+
+int probe_n(void) { return model.n_dofs; }
+
+int probe_evaluate(double t, const double *q, const double *v, const double *a, double F,
+                   double *f, double *mats, char *msg)
+{
+    return evaluate_into(dsa380_evaluate, &model, model.n_dofs, t, q, v, a, F, f, mats, msg);
 }
 
 double probe_mechanism(double theta, double *A, double *V, double *p5)
@@ -43,16 +65,8 @@ double probe_mechanism(double theta, double *A, double *V, double *p5)
 int probe_start(double alpha, double rtol, double etol, int max_iterations, int linear,
                 double t0, const double *q0, double F0, char *msg)
 {
-    HhtSettings s;
-    s.alpha = alpha;
-    s.rtol = rtol;
-    s.etol = etol;
-    s.max_iterations = max_iterations;
-    s.linear_predictor = linear;
-    if (hht_dense_init(&engine, model.n_dofs, &s, dsa380_evaluate, &model, memory,
-                       sizeof memory, msg))
-        return -1;
-    return hht_dense_start(&engine, t0, q0, NULL, &F0, msg);
+    return start(dsa380_evaluate, &model, model.n_dofs, alpha, rtol, etol, max_iterations,
+                 linear, t0, q0, F0, msg);
 }
 
 /* one step; the state (t, steps, has a_prev, q, v, a, a_prev, f_rest) after it in out */
@@ -82,27 +96,12 @@ int probe_flex_setup(const double *k, long count, const double *q_ref, const dou
 int probe_flex_evaluate(double t, const double *q, const double *v, const double *a,
                         double F, double *f, double *mats, char *msg)
 {
-    int n = flex.n;
-    HhtEval ev;
-    ev.f_inertia = f;
-    ev.f_rest = f + n;
-    ev.mass = mats;
-    ev.inertia_q = mats + n * n;
-    ev.damping = mats + 2 * n * n;
-    ev.stiffness = mats + 3 * n * n;
-    return dsf_evaluate(&flex, t, q, v, a, &F, 1, &ev, msg);
+    return evaluate_into(dsf_evaluate, &flex, flex.n, t, q, v, a, F, f, mats, msg);
 }
 
 int probe_flex_start(double alpha, double rtol, double etol, int max_iterations, int linear,
-                     const double *q0, double F0, char *msg)
+                     double t0, const double *q0, double F0, char *msg)
 {
-    HhtSettings s;
-    s.alpha = alpha;
-    s.rtol = rtol;
-    s.etol = etol;
-    s.max_iterations = max_iterations;
-    s.linear_predictor = linear;
-    if (hht_dense_init(&engine, flex.n, &s, dsf_evaluate, &flex, memory, sizeof memory, msg))
-        return -1;
-    return hht_dense_start(&engine, 0.0, q0, NULL, &F0, msg);
+    return start(dsf_evaluate, &flex, flex.n, alpha, rtol, etol, max_iterations, linear, t0,
+                 q0, F0, msg);
 }
