@@ -1,12 +1,15 @@
 """The native nonlinear pantograph FMUs of ``pantocosim export-native`` (the rigid and the
 flexible DSA-380, fmus/native/nonlinear_pantograph.c): in a C host with no Python they give the
-Python FMU's stepper's numbers and allocate nothing in doStep; in fmpy they refuse bad input
-with the Python FMU's statuses, keep their state through refused steps, roll back and
-serialise; FMI 3.0 validates; in our master they give the Python pantograph FMU's contact
-force (slow)."""
+Python FMU's stepper's numbers and allocate nothing in doStep, and build again from their own
+sources; a data file out of bounds is refused naming it; in fmpy they refuse bad input with the
+Python FMU's statuses, keep their state through refused steps, roll back and serialise; FMI
+3.0 validates; in our master they give the Python pantograph FMU's contact force, and the
+implicit coupling the monolithic run's (all slow: each export takes 10-20 s)."""
 
 import dataclasses
 import json
+import shutil
+import subprocess
 import zipfile
 
 import numpy as np
@@ -14,16 +17,18 @@ import pytest
 
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
 from pantocosim.interaction.pantograph_start import start_state
+from pantocosim.master.native.build import CFLAGS
+from pantocosim.master.native.data_file import pack_data, read_data
 from pantocosim.master.native.models import export_pantograph, export_scenario
 from pantocosim.master.results.files import read_csv
 from pantocosim.master.run import prepare, run_monolithic
 from pantocosim.master.run.setup import scenario_pantograph
 from pantocosim.master.scenario import load_scenario
-from test_native_fmus import DISCARD, ERROR, OK, STEPS, host, required, run_host  # noqa: F401
 from test_fmu_cosim import cli, scenario_with
-from test_native_fmus import slave, status_of
+from test_native_fmus import DISCARD, ERROR, OK, host, required, run_host  # noqa: F401
+from test_native_fmus import rewritten, slave, status_of
 
-pytestmark = pytest.mark.slow      # the exports take 10-20 s
+pytestmark = pytest.mark.slow
 
 DT = 0.001
 IDENTIFIER = "pantocosim_pantograph_native"
@@ -88,11 +93,6 @@ def test_in_a_c_host_the_pantograph_equals_the_python_fmu_stepper(exported, host
 
 def test_the_fmu_builds_from_its_own_sources(exported, host, tmp_path):
     """sources/ alone, compiled with the export's C99 flags, gives the same numbers."""
-    import shutil
-    import subprocess
-
-    from pantocosim.master.native.build import CFLAGS
-
     _, folder, _ = exported
     copy = tmp_path / "rebuilt"
     shutil.copytree(folder, copy)
@@ -122,6 +122,36 @@ def test_bad_inputs_get_the_python_fmus_statuses_and_keep_the_state(exported):
     assert status_of(fmu.doStep, DT, 1.5 * DT) == DISCARD     # not a whole number of steps
     assert status_of(fmu.doStep, DT, 2 * DT) == OK
     assert fmu.getReal([vr["newton_iterations"]])[0] >= 2.0
+
+
+def altered(sections: dict, name: str, index: int, value) -> dict:
+    """A copy of ``sections`` with entry ``index`` of section ``name`` set to ``value``."""
+    out = dict(sections)
+    out[name] = sections[name].copy()
+    out[name][index] = value
+    return out
+
+
+def test_a_data_file_out_of_bounds_is_refused_naming_it(exported, host, tmp_path):
+    """Sizes, indices and values are checked before anything is allocated: instantiation
+    fails with the file and what is wrong, no crash."""
+    _, folder, _ = exported
+    kind, sections = read_data(folder / "resources" / "model.pcsdata")
+    short = dict(sections, q0=sections["q0"][:-1])
+    cases = {"section q0": pack_data(kind, short),
+             "internal step": pack_data(kind, altered(sections, "scalars", 0, -1.0)),
+             "must be finite": pack_data(kind, altered(sections, "constants", 3, np.nan))}
+    if kind == "dsa380-flexible":
+        cases["sizes 1000000000 unknowns"] = pack_data(kind, altered(sections, "constants", 0,
+                                                                     1e9))
+        cases["pg[5] = 100000"] = pack_data(kind, altered(sections, "pg", 5, 100000))
+        cases["an index in"] = pack_data(kind, altered(sections, "constants", 8, 1e4))
+    for reason, data in cases.items():
+        bad = rewritten(folder, tmp_path, data)
+        proc = subprocess.run([str(host), "pantograph", str(bad), "1", str(DT)],
+                              capture_output=True, text=True, timeout=60)
+        assert proc.returncode != 0 and "Segmentation" not in proc.stderr, (reason, proc.stderr)
+        assert reason in proc.stderr and "model.pcsdata" in proc.stderr, (reason, proc.stderr)
 
 
 def test_fixed_parameters_accept_the_exported_value_and_refuse_another(exported):
