@@ -295,3 +295,28 @@ def test_native_pantographs_needs_a_co_simulation(capsys):
 
     assert main(["run", "dsa380-ave-300", "--native-pantographs"]) == 2
     assert "--native-pantographs" in capsys.readouterr().err
+
+
+def test_the_ssp_writer_takes_a_native_pantograph_and_libcosim_runs_it(fmus, tmp_path):
+    """`pantocosim ssp --pantograph` of the native rigid DSA-380: the SSP holds it beside the
+    Python catenary FMU (built-in penalty contact); libcosim runs it 0.3 s and the mean force
+    over 33-50 m is our master's with the same native FMU (explicit coupling) to 2 %."""
+    from pantocosim.master.cosim import run_cosim
+    from pantocosim.master.fmu.check import FmuPlan
+    from pantocosim.master.ssp import write_pantograph_ssp
+    from recipes import run_recipe
+
+    required("gcc", "gcc")
+    sc = dataclasses.replace(load_scenario("dsa380-ave-300"), duration_s=0.3,
+                             window_supports=None, window_m=(33.0, 50.0))
+    prep = prepare(sc)
+    native = export_pantograph(prep, 0, tmp_path / "dsa380-rigid.fmu", win64=False)
+    ssp, _ = write_pantograph_ssp(native, "dsa380-ave-300", tmp_path / "mix.ssp")
+    stats, _ = run_recipe("libcosim", "--ssp", ssp, "--stop", 0.3, "--window", 33, 50,
+                          "--out", tmp_path / "lc.csv")
+    ours = run_cosim(prep, None, "jacobi", plan=FmuPlan(fmus["catenary"], [native], [None]),
+                     progress=False)
+    assert ours.error is None, ours.error
+    mean = ours.statistics()[0].mean_n
+    assert stats["samples"] > 100
+    assert stats["mean_n"] == pytest.approx(mean, rel=0.02)
