@@ -320,3 +320,40 @@ def test_the_ssp_writer_takes_a_native_pantograph_and_libcosim_runs_it(fmus, tmp
     mean = ours.statistics()[0].mean_n
     assert stats["samples"] > 100
     assert stats["mean_n"] == pytest.approx(mean, rel=0.02)
+
+
+def test_a_ramp_start_is_the_python_fmus(tmp_path):
+    """start = "ramp" exports start_mode 1: lowered, no contact force at t0, the torque
+    ramped (thesis 3.3.1); 80 steps free of contact equal the Python FMU's stepper."""
+    from fmpy import read_model_description
+
+    from pantocosim.master.scenario import RampSpec
+
+    required("gcc", "gcc")
+    sc = with_model("dsa380-rigid")
+    pans = [dataclasses.replace(p, start="ramp", ramp=RampSpec(33.0, 4.0, 5.2))
+            for p in sc.pantographs]
+    prep = prepare(dataclasses.replace(sc, pantographs=pans))
+    fmu = export_pantograph(prep, 0, tmp_path / "ramp.fmu", win64=False)
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(tmp_path / "ramp")
+    md = read_model_description(str(tmp_path / "ramp" / "modelDescription.xml"))
+    var = {v.name: v for v in md.modelVariables}
+    assert int(var["start_mode"].start) == 1 and float(var["contact_force"].start) == 0.0
+    slave_, vr = slave(tmp_path / "ramp", IDENTIFIER)
+    model = scenario_pantograph(prep.scenario, 0)
+    ramp = model.options.ramp
+    q0, F0 = start_state(model, 1, height=float(prep.actuation.height[0]),
+                         force=model.options.mean_uplift, lowered_height=ramp.lowered_height)
+    assert F0 == 0.0
+    integ = HHTIntegrator(model, HHTSettings(alpha=prep.scenario.alpha))
+    integ.initialize(0.0, q0, np.zeros(model.n_dofs), np.array([0.0]))
+    got, want = [], []
+    for i in range(80):
+        slave_.doStep(i * DT, DT)
+        integ.step(DT, np.array([0.0]))
+        got.append(slave_.getReal([vr["contact_height"]])[0])
+        want.append(model.contact_height(integ.q))
+    got, want = np.array(got), np.array(want)
+    assert np.ptp(want) > 1e-3                      # the ramped torque raises it
+    assert np.max(np.abs(got - want)) <= 1e-12 * np.max(np.abs(want))
