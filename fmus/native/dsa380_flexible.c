@@ -16,7 +16,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-#define DSA_MSG 512
 
 size_t dsf_work_bytes(int n, int ne)
 {
@@ -29,7 +28,7 @@ static int index_of(const double *k, int which, int lo, int hi, char *msg)
 {
     double x = k[which];
     if (!(x >= lo && x <= hi) || x != floor(x)) {
-        snprintf(msg, DSA_MSG, "flexible DSA-380 constants: value %d = %g (an index in %d .. %d)",
+        snprintf(msg, HHT_MSG, "flexible DSA-380 constants: value %d = %g (an index in %d .. %d)",
                  which, x, lo, hi);
         return -1;
     }
@@ -41,7 +40,7 @@ static int finite_array(const double *x, size_t n, const char *name, char *msg)
     size_t i;
     for (i = 0; i < n; i++)
         if (!isfinite(x[i])) {
-            snprintf(msg, DSA_MSG, "flexible DSA-380: %s[%lu] = %g (must be finite)", name,
+            snprintf(msg, HHT_MSG, "flexible DSA-380: %s[%lu] = %g (must be finite)", name,
                      (unsigned long)i, x[i]);
             return -1;
         }
@@ -61,13 +60,13 @@ static int check_arrays(const Dsa380Flex *m, char *msg)
         return -1;
     for (i = 0; i < ne; i++)
         if (!(a->length[i] > 0.0) || !isfinite(a->length[i])) {
-            snprintf(msg, DSA_MSG, "flexible DSA-380: length[%lu] = %g (must be > 0)",
+            snprintf(msg, HHT_MSG, "flexible DSA-380: length[%lu] = %g (must be > 0)",
                      (unsigned long)i, a->length[i]);
             return -1;
         }
     for (i = 0; i < 4 * ne; i++)
         if (a->pg[i] < -1 || a->pg[i] > m->n - 2) {
-            snprintf(msg, DSA_MSG, "flexible DSA-380: pg[%lu] = %d (accepted -1 .. %d)",
+            snprintf(msg, HHT_MSG, "flexible DSA-380: pg[%lu] = %d (accepted -1 .. %d)",
                      (unsigned long)i, a->pg[i], m->n - 2);
             return -1;
         }
@@ -93,7 +92,7 @@ int dsf_setup(Dsa380Flex *m, const double *k, long count, const DsfArrays *array
     memset(m, 0, sizeof *m);
     if (count != DSF_K_COUNT || finite_array(k, DSF_K_COUNT, "constants", msg)) {
         if (count != DSF_K_COUNT)
-            snprintf(msg, DSA_MSG, "flexible DSA-380 constants: %ld values, this model takes %d",
+            snprintf(msg, HHT_MSG, "flexible DSA-380 constants: %ld values, this model takes %d",
                      count, DSF_K_COUNT);
         return -1;
     }
@@ -104,7 +103,7 @@ int dsf_setup(Dsa380Flex *m, const double *k, long count, const DsfArrays *array
     m->a = *arrays;
     if (check_arrays(m, msg)) return -1;
     if (!work || work_bytes < dsf_work_bytes(m->n, m->ne)) {
-        snprintf(msg, DSA_MSG, "flexible DSA-380: %lu bytes of work memory (needs %lu)",
+        snprintf(msg, HHT_MSG, "flexible DSA-380: %lu bytes of work memory (needs %lu)",
                  (unsigned long)work_bytes, (unsigned long)dsf_work_bytes(m->n, m->ne));
         return -1;
     }
@@ -120,7 +119,7 @@ int dsf_setup(Dsa380Flex *m, const double *k, long count, const DsfArrays *array
     m->act.ramp_start = k[DSF_K_RAMP_START];
     m->act.ramp_duration = k[DSF_K_RAMP_DURATION];
     if (m->friction_force > 0.0 && !(m->friction_smoothing > 0.0)) {
-        snprintf(msg, DSA_MSG, "flexible DSA-380: friction_smoothing = %g (must be > 0)",
+        snprintf(msg, HHT_MSG, "flexible DSA-380: friction_smoothing = %g (must be > 0)",
                  m->friction_smoothing);
         return -1;
     }

@@ -71,7 +71,7 @@ typedef struct {
 /* Bytes of work memory for n unknowns and ne elements (0: out of bounds). */
 size_t dsf_work_bytes(int n, int ne);
 /* Check the constants k (count DSF_K_COUNT) and the arrays, lay out the work memory; 0, or -1
-   with the reason in msg (DSA_MSG bytes). The arrays are the caller's, kept alive. */
+   with the reason in msg (HHT_MSG bytes). The arrays are the caller's, kept alive. */
 int dsf_setup(Dsa380Flex *m, const double *k, long count, const DsfArrays *arrays, void *work,
               size_t work_bytes, char *msg);
 /* The residual pieces and tangents at (t, q, v, a) under inputs[0] = F (an HhtModelFn). */

@@ -208,13 +208,13 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
 {
     int i;
     if (count != DSA_K_COUNT) {
-        snprintf(msg, DSA_MSG, "DSA-380 constants: %ld values, this model takes %d", count,
+        snprintf(msg, HHT_MSG, "DSA-380 constants: %ld values, this model takes %d", count,
                  DSA_K_COUNT);
         return -1;
     }
     for (i = 0; i < DSA_K_COUNT; i++)
         if (!isfinite(k[i])) {
-            snprintf(msg, DSA_MSG, "DSA-380 constants: value %d is %g (must be finite)", i,
+            snprintf(msg, HHT_MSG, "DSA-380 constants: value %d is %g (must be finite)", i,
                      k[i]);
             return -1;
         }
@@ -231,7 +231,7 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
     m->friction_smoothing = k[DSA_K_FRICTION_SMOOTHING];
     m->one_way = k[DSA_K_ONE_WAY_DAMPER] != 0.0;
     if (m->friction_force > 0.0 && !(m->friction_smoothing > 0.0)) {
-        snprintf(msg, DSA_MSG, "DSA-380 constants: friction_smoothing = %g (must be > 0)",
+        snprintf(msg, HHT_MSG, "DSA-380 constants: friction_smoothing = %g (must be > 0)",
                  m->friction_smoothing);
         return -1;
     }

@@ -55,7 +55,6 @@
 #define DSA_K_ONE_WAY_DAMPER 63
 #define DSA_K_COUNT 64
 
-#define DSA_MSG 512
 
 typedef struct {
     double P[DSA_P_NPAR];
@@ -67,7 +66,8 @@ typedef struct {
     double q4[4], v4[4], a4[4], vec[3][4], mat[4][4][4];
 } Dsa380;
 
-/* Fill m from the constants k (count DSA_K_COUNT); 0, or -1 with the reason in msg. */
+/* Fill m from the constants k (count DSA_K_COUNT); 0, or -1 with the reason in msg
+   (HHT_MSG bytes). */
 int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg);
 /* The residual pieces and tangents at (t, q, v, a) under inputs[0] = F (an HhtModelFn). */
 int dsa380_evaluate(void *model, double t, const double *q, const double *v, const double *a,

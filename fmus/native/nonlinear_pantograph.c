@@ -70,7 +70,7 @@ static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 /* the rigid DSA-380 from the section "constants" */
 static int rigid_body(Pantograph *m, const PcsData *d, char *err)
 {
-    char msg[DSA_MSG];
+    char msg[HHT_MSG];
     const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSA_K_COUNT, err);
     if (!k) return -1;
     if (dsa380_setup(&m->rigid, k, DSA_K_COUNT, msg)) {
@@ -131,7 +131,7 @@ static int rigid_bind(Pantograph *m, const PcsData *d, char *err)
 
 static int flexible_bind(Pantograph *m, const PcsData *d, char *err)
 {
-    char msg[DSA_MSG];
+    char msg[HHT_MSG];
     if (dsf_setup(&m->flexible, m->constants, DSF_K_COUNT, &m->arrays, m->body_work,
                   m->work_bytes, msg)) {
         snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
@@ -248,12 +248,14 @@ static void state_restore(void *model, const void *buffer)
     memcpy(m->engine.state.block, in + 2, state_bytes(model) - 2 * sizeof(double));
 }
 
+/* the outputs are read from the state when asked (get_real): nothing to recompute */
 static void outputs(void *model) { (void)model; }
 
 /* why the state just reached leaves the heights the model represents, or 0 */
 static int outside_range(const Pantograph *m, double t, double H, char *err)
 {
-    double z = m->height_offset + m->engine.state.q[m->height_index], lo = m->sc[NLP_S_HEIGHT_MIN], hi = m->sc[NLP_S_HEIGHT_MAX];
+    double z = m->height_offset + m->engine.state.q[m->height_index];
+    double lo = m->sc[NLP_S_HEIGHT_MIN], hi = m->sc[NLP_S_HEIGHT_MAX];
     if (z >= lo && z <= hi) return 0;
     snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g): the contact point would be at %.4g m, "
              "outside the heights pantograph '%s' represents (%.3g .. %.3g m): contact_force "
