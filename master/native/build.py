@@ -211,7 +211,7 @@ class NativeModel:
 
 COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c", "pcs_limits.c")
 COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h",
-                  "pcs_limits.h")
+                  "pcs_limits.h", "pcs_float.h")
 #: the generated list of a binary's models (pcs_model_table)
 TABLE_SOURCE = "model_table.c"
 
