@@ -199,12 +199,13 @@ def too_large(linear: bytes) -> bytes:
     """A consistent linear catenary file of 10 000 droppers: its dropper columns and Woodbury
     work would take 1.4 GiB (the file itself 2 MB)."""
     from pantocosim.master.native.data_file import pack_data, read_data
+    from pantocosim.master.native.headers import fields
 
     _, s = read_data_bytes(linear, read_data)
     nd = 10_000
     reps = -(-nd // s["drop_ka"].size)
     s = dict(s, sizes=s["sizes"].copy())
-    s["sizes"][3] = nd
+    s["sizes"][fields("LIN_SIZE").index("DROPPERS")] = nd
     for key, width in (("drop_idx", 6), ("drop_val", 6), ("drop_ka", 1), ("drop_N0", 1),
                        ("drop_tension", 1)):
         s[key] = np.tile(s[key], reps)[:nd * width]
