@@ -372,6 +372,7 @@ def rewritten(folder: Path, tmp_path: Path, data: bytes) -> Path:
 
 def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tmp_path):
     from pantocosim.master.native.data_file import pack_data, read_data
+    from pantocosim.master.native.headers import fields
 
     cat = exported["catenary"]
     path = cat / "resources" / "model.pcsdata"
@@ -380,9 +381,10 @@ def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tm
     damaged = bytearray(good)
     damaged[len(good) // 2] ^= 0x10
     sizes = dict(sections, sizes=sections["sizes"].copy())
-    sizes["sizes"][5] = 9                                      # pantographs
+    sizes["sizes"][fields("LIN_SIZE").index("PANTOGRAPHS")] = 9
     fast = dict(sections, scalars=sections["scalars"].copy())
-    fast["scalars"][6] = fast["scalars"][7]                    # speed = the wave speed
+    scalar = fields("CAT_SCALAR").index
+    fast["scalars"][scalar("SPEED")] = fast["scalars"][scalar("WAVE_SPEED")]
     pantograph = (exported["en50318-2mass"] / "resources" / "model.pcsdata").read_bytes()
     cases = {"checksum mismatch": bytes(damaged), "not a pantocosim data file": b"\x7fELF" * 40,
              "shorter than its": good[:20], "payload bytes": good[:-8],

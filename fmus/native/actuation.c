@@ -1,5 +1,6 @@
 /* The actuation torque (actuation.h): pantocosim.pantograph.base.TorqueActuatedPantograph. */
 #include "actuation.h"
+#include "pcs_float.h"
 
 double actuation_torque(const Actuation *a, double t)
 {

@@ -485,9 +485,20 @@ static int wire_dofs(const Catenary *m, const PcsData *d, int dofs, char *err)
 int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err)
 {
     size_t nd = (size_t)m->nd, np = (size_t)m->np, ne = (size_t)m->ne;
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
-    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
-    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12]; m->rtol = sc[13];
+    m->h = sc[CAT_SCALAR_STEP];
+    m->alpha = sc[CAT_SCALAR_ALPHA];
+    m->beta = sc[CAT_SCALAR_BETA];
+    m->gamma = sc[CAT_SCALAR_GAMMA];
+    m->ar = sc[CAT_SCALAR_RAYLEIGH_MASS];
+    m->br = sc[CAT_SCALAR_RAYLEIGH_STIFFNESS];
+    m->speed = sc[CAT_SCALAR_SPEED];
+    m->wave = sc[CAT_SCALAR_WAVE_SPEED];
+    m->k_h = sc[CAT_SCALAR_CONTACT_STIFFNESS];
+    m->c_h = sc[CAT_SCALAR_CONTACT_DAMPING];
+    m->x_min = sc[CAT_SCALAR_WIRE_START];
+    m->x_max = sc[CAT_SCALAR_WIRE_END];
+    m->cutoff = sc[CAT_SCALAR_MODAL_CUTOFF];
+    m->rtol = sc[CAT_SCALAR_NEWTON_RTOL];
     if (!(m->speed >= 0.0 && m->speed < m->wave)) {
         snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
                  "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "

@@ -9,6 +9,7 @@
 #define CATENARY_H
 
 #include "catenary_vars.h"
+#include "pcs_layout.h"
 #include "pcs_limits.h"
 #include "pcs_model.h"
 
@@ -81,8 +82,8 @@ int pcs_dense_solve(double *A, double *y, int n);
    singular or the active set does not settle in 2 np + 2 passes */
 int pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
                         const double *G, const double *H, double *F);
-/* reading: the sizes both models share within the limits (pcs_limits.h); the scalars'
-   first 14 and the sections both read (F0, x0, drop_ka, drop_N0, drop_tension, wire_*,
+/* reading: the sizes both models share within the limits (pcs_limits.h); the CAT_SCALAR_
+   fields of the scalars (pcs_layout.h) and the sections both read (F0, x0, drop_ka, drop_N0, drop_tension, wire_*,
    definition; master/native/export.py), the wire's DOFs below dofs; the work memory of
    carve (measured, bounded by PCS_MAX_BYTES, allocated, taken). 0, or -1 with err */
 int cat_check_sizes(const Catenary *m, const PcsData *d, char *err);

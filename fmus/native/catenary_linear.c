@@ -313,22 +313,28 @@ static void *linear_new(const PcsData *d, const PcsMemory *mem, char *err)
     int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    SECTION(sizes, "sizes", PCS_TYPE_I32, 10);
-    m->n = sizes[0]; m->bw_m = sizes[1]; m->bw_k = sizes[2]; m->nd = sizes[3];
-    m->np = sizes[5]; m->ne = sizes[6]; m->ns = sizes[7]; m->spans = sizes[8];
-    m->model_code = sizes[9];
+    SECTION(sizes, "sizes", PCS_TYPE_I32, LIN_SIZES);
+    m->n = sizes[LIN_SIZE_DOFS];
+    m->bw_m = sizes[LIN_SIZE_BAND_M];
+    m->bw_k = sizes[LIN_SIZE_BAND_K];
+    m->nd = sizes[LIN_SIZE_DROPPERS];
+    m->np = sizes[LIN_SIZE_PANTOGRAPHS];
+    m->ne = sizes[LIN_SIZE_WIRE_ELEMENTS];
+    m->ns = sizes[LIN_SIZE_SUPPORTS];
+    m->spans = sizes[LIN_SIZE_SPANS];
+    m->model_code = sizes[LIN_SIZE_MODEL_CODE];
     if (cat_check_sizes(m, d, err) != 0) goto fail;
     if (m->n < 1 || m->n > PCS_MAX_DOFS || m->bw_m < 0 || m->bw_m > PCS_MAX_BAND
-        || m->bw_k < 0 || m->bw_k > PCS_MAX_BAND || sizes[4] != DROPPER_WIDTH) {
+        || m->bw_k < 0 || m->bw_k > PCS_MAX_BAND || sizes[LIN_SIZE_DROPPER_WIDTH] != DROPPER_WIDTH) {
         snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d DOFs (1..%d), bands %d and "
                  "%d (0..%d), dropper width %d (%d)", d->path, m->n, PCS_MAX_DOFS, m->bw_m,
-                 m->bw_k, PCS_MAX_BAND, sizes[4], DROPPER_WIDTH);
+                 m->bw_k, PCS_MAX_BAND, sizes[LIN_SIZE_DROPPER_WIDTH], DROPPER_WIDTH);
         goto fail;
     }
     m->bw = m->bw_m > m->bw_k ? m->bw_m : m->bw_k;
     n = (size_t)m->n;
     nd = (size_t)m->nd;
-    SECTION(sc, "scalars", PCS_TYPE_F64, 16);
+    SECTION(sc, "scalars", PCS_TYPE_F64, LIN_SCALARS);
     if (cat_read_common(m, d, sc, m->n, err) != 0) goto fail;
     SECTION(m->M, "M_band", PCS_TYPE_F64, pcs_mul((size_t)m->bw_m + 1, n));
     SECTION(m->K, "K_band", PCS_TYPE_F64, pcs_mul((size_t)m->bw_k + 1, n));

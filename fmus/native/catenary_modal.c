@@ -122,11 +122,20 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     }
     m->modal = md;
     m->own = &MODAL;
-    sizes = pcs_data_section(d, "sizes", PCS_TYPE_I32, 12, NULL, err, PCS_MSG);
+    sizes = pcs_data_section(d, "sizes", PCS_TYPE_I32, MOD_SIZES, NULL, err, PCS_MSG);
     if (!sizes) goto fail;
-    md->N = sizes[0]; md->m = sizes[1]; md->nz = sizes[2]; md->nx = sizes[3]; m->nd = sizes[4];
-    m->np = sizes[5]; m->ne = sizes[6]; md->nsup = m->ns = sizes[7]; md->nS = sizes[8];
-    md->band = sizes[9]; m->spans = sizes[10]; m->model_code = sizes[11];
+    md->N = sizes[MOD_SIZE_COORDINATES];
+    md->m = sizes[MOD_SIZE_MODES];
+    md->nz = sizes[MOD_SIZE_DROPPER_COORDINATES];
+    md->nx = sizes[MOD_SIZE_PANTOGRAPH_COORDINATES];
+    m->nd = sizes[MOD_SIZE_DROPPERS];
+    m->np = sizes[MOD_SIZE_PANTOGRAPHS];
+    m->ne = sizes[MOD_SIZE_WIRE_ELEMENTS];
+    md->nsup = m->ns = sizes[MOD_SIZE_SUPPORTS];
+    md->nS = sizes[MOD_SIZE_WIRE_DOFS];
+    md->band = sizes[MOD_SIZE_BAND];
+    m->spans = sizes[MOD_SIZE_SPANS];
+    m->model_code = sizes[MOD_SIZE_MODEL_CODE];
     if (cat_check_sizes(m, d, err) != 0) goto fail;
     if (md->m < 1 || md->m > PCS_MAX_DOFS || md->nz < 0 || md->nz > PCS_MAX_DROPPERS
         || md->nx < 0 || md->nx > m->np || md->nS < 1 || md->nS > PCS_MAX_DOFS
@@ -143,8 +152,9 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     nd = (size_t)m->nd;
     K = (size_t)md->K;
     nS = (size_t)md->nS;
-    TABLE(sc, "scalars", 18);
-    md->kbar = sc[16]; md->beta_r = sc[17];
+    TABLE(sc, "scalars", MOD_SCALARS);
+    md->kbar = sc[MOD_SCALAR_DROPPER_STIFFNESS];
+    md->beta_r = sc[CAT_SCALAR_RAYLEIGH_STIFFNESS];
     if (md->nz > 0 && !(md->kbar > 0.0)) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: dropper stiffness scale %g "
                  "(must be > 0)", d->path, md->kbar);

@@ -7,6 +7,7 @@
  * and kappa = (r_x x r_xx) / |r_x|^3, measured from the straight reference E0, 5 Gauss points.
  */
 #include "dsa380_flexible.h"
+#include "pcs_float.h"
 
 #include <math.h>
 #include <stdio.h>

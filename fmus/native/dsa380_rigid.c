@@ -10,6 +10,7 @@
  * the actuation torque (2.14) and the contact force and aerodynamic uplift on point 10.
  */
 #include "dsa380_rigid.h"
+#include "pcs_float.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -108,14 +108,14 @@ fmi2Status fmi2Reset(fmi2Component comp) { RETURN(pcs_reset(C, "fmi2Reset")); }
 /* ------------------------------------------------------------------ variables */
 
 #define GET(NAME, PCS, TYPE, FROM)                                                        \
-    fmi2Status NAME(fmi2Component comp, const fmi2ValueReference vr[], size_t n,           \
+    fmi2Status NAME(fmi2Component comp, const fmi2ValueReference vr[], size_t n,          \
                     TYPE value[])                                                         \
     {                                                                                     \
         size_t i;                                                                         \
         PcsValue v;                                                                       \
         if (pcs_values(C, #NAME, 0, n, vr, value) != PCS_OK) return fmi2Error;            \
         for (i = 0; i < n; i++) {                                                         \
-            if (pcs_get(C, PCS, vr[i], &v) != PCS_OK) return fmi2Error;                   \
+            if (pcs_get(C, #NAME, PCS, vr[i], &v) != PCS_OK) return fmi2Error;            \
             value[i] = FROM;                                                              \
         }                                                                                 \
         return fmi2OK;                                                                    \
@@ -127,7 +127,7 @@ GET(fmi2GetBoolean, PCS_BOOLEAN, fmi2Boolean, v.integer ? fmi2True : fmi2False)
 GET(fmi2GetString, PCS_STRING, fmi2String, v.string)
 
 #define SET(NAME, PCS, TYPE, FIELD, TO)                                                   \
-    fmi2Status NAME(fmi2Component comp, const fmi2ValueReference vr[], size_t n,           \
+    fmi2Status NAME(fmi2Component comp, const fmi2ValueReference vr[], size_t n,          \
                     const TYPE value[])                                                   \
     {                                                                                     \
         size_t i;                                                                         \
@@ -135,7 +135,7 @@ GET(fmi2GetString, PCS_STRING, fmi2String, v.string)
         if (pcs_values(C, #NAME, 1, n, vr, value) != PCS_OK) return fmi2Error;            \
         for (i = 0; i < n; i++) {                                                         \
             v.FIELD = TO;                                                                 \
-            if (pcs_set(C, PCS, vr[i], &v) != PCS_OK) return fmi2Error;                   \
+            if (pcs_set(C, #NAME, PCS, vr[i], &v) != PCS_OK) return fmi2Error;            \
         }                                                                                 \
         return fmi2OK;                                                                    \
     }

@@ -145,7 +145,7 @@ static int arrays(fmi3Instance instance, const char *call, int set, size_t nvr,
 }
 
 #define GET(NAME, PCS, BASE, TYPE, FROM)                                                  \
-    fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,      \
+    fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,     \
                     TYPE values[], size_t n_values)                                       \
     {                                                                                     \
         size_t i;                                                                         \
@@ -156,7 +156,7 @@ static int arrays(fmi3Instance instance, const char *call, int set, size_t nvr,
             if (PCS == PCS_REAL && vr[i] == 0) {                                          \
                 v.real = C->time;                                                         \
             } else if (model_vr(instance, #NAME, vr[i], BASE, &r) != 0                    \
-                       || pcs_get(C, PCS, r, &v) != PCS_OK) {                             \
+                       || pcs_get(C, #NAME, PCS, r, &v) != PCS_OK) {                      \
                 return fmi3Error;                                                         \
             }                                                                             \
             values[i] = FROM;                                                             \
@@ -170,7 +170,7 @@ GET(fmi3GetBoolean, PCS_BOOLEAN, PCS_FMI3_BOOLEAN_BASE, fmi3Boolean, v.integer !
 GET(fmi3GetString, PCS_STRING, PCS_FMI3_STRING_BASE, fmi3String, v.string)
 
 #define SET(NAME, PCS, BASE, TYPE, FIELD, TO)                                             \
-    fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,      \
+    fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,     \
                     const TYPE values[], size_t n_values)                                 \
     {                                                                                     \
         size_t i;                                                                         \
@@ -180,7 +180,7 @@ GET(fmi3GetString, PCS_STRING, PCS_FMI3_STRING_BASE, fmi3String, v.string)
         for (i = 0; i < nvr; i++) {                                                       \
             v.FIELD = TO;                                                                 \
             if (model_vr(instance, #NAME, vr[i], BASE, &r) != 0                           \
-                || pcs_set(C, PCS, r, &v) != PCS_OK)                                      \
+                || pcs_set(C, #NAME, PCS, r, &v) != PCS_OK)                               \
                 return fmi3Error;                                                         \
         }                                                                                 \
         return fmi3OK;                                                                    \

@@ -3,6 +3,7 @@
  * pantocosim.core.hht.HHTIntegrator.step, term by term.
  */
 #include "hht_dense.h"
+#include "pcs_float.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "lumped_vars.h"
+#include "pcs_layout.h"
 #include "pcs_limits.h"
 
 typedef struct {
@@ -46,19 +47,29 @@ static void *lumped_new(const PcsData *d, const PcsMemory *mem, char *err)
     size_t n;
     m = (Lumped *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    SECTION(sizes, "sizes", PCS_TYPE_I32, 2);
-    m->n = sizes[0];
+    SECTION(sizes, "sizes", PCS_TYPE_I32, PAN_SIZES);
+    m->n = sizes[PAN_SIZE_MASSES];
     if (m->n < 1 || m->n > PAN_MAX_DOFS) {
         snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d masses, this FMU takes "
                  "1..%d", d->path, m->n, PAN_MAX_DOFS);
         goto fail;
     }
     n = (size_t)m->n;
-    SECTION(sc, "scalars", PCS_TYPE_F64, 16);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->lo = sc[4];
-    m->hi = sc[5]; m->static_force = sc[6]; m->aero_c1 = sc[7]; m->aero_c2 = sc[8];
-    m->speed_kmh = sc[9]; m->height0 = sc[10]; m->F0 = sc[11]; m->friction = sc[12];
-    m->smoothing = sc[13];
+    SECTION(sc, "scalars", PCS_TYPE_F64, PAN_SCALARS);
+    m->h = sc[PAN_SCALAR_STEP];
+    m->alpha = sc[PAN_SCALAR_ALPHA];
+    m->beta = sc[PAN_SCALAR_BETA];
+    m->gamma = sc[PAN_SCALAR_GAMMA];
+    m->lo = sc[PAN_SCALAR_HEIGHT_MIN];
+    m->hi = sc[PAN_SCALAR_HEIGHT_MAX];
+    m->static_force = sc[PAN_SCALAR_STATIC_FORCE];
+    m->aero_c1 = sc[PAN_SCALAR_AERO_C1];
+    m->aero_c2 = sc[PAN_SCALAR_AERO_C2];
+    m->speed_kmh = sc[PAN_SCALAR_SPEED_KMH];
+    m->height0 = sc[PAN_SCALAR_INITIAL_HEIGHT];
+    m->F0 = sc[PAN_SCALAR_INITIAL_FORCE];
+    m->friction = sc[PAN_SCALAR_FRICTION_FORCE];
+    m->smoothing = sc[PAN_SCALAR_FRICTION_SMOOTHING];
     if (!(m->h > 0.0) || !(m->hi >= m->lo)) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s (> 0), "
                  "heights %g .. %g m", d->path, m->h, m->lo, m->hi);

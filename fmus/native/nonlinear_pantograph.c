@@ -21,6 +21,7 @@
 #include "dsa380_rigid.h"
 #include "hht_dense.h"
 #include "nonlinear_pantograph_vars.h"
+#include "pcs_layout.h"
 #include "pcs_limits.h"
 #include "pcs_model.h"
 
@@ -53,15 +54,15 @@ static void destroy(void *model, const PcsMemory *mem);
 /* the stepping, the start and the fixed parameters; -1 with the reason in err */
 static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 {
-    const double *sc = (const double *)SECTION(d, "scalars", PCS_TYPE_F64, NLP_S_COUNT, err);
+    const double *sc = (const double *)SECTION(d, "scalars", PCS_TYPE_F64, NLP_SCALARS, err);
     m->sc = sc;
     m->preset = sc ? pcs_data_text(d, "preset", err, PCS_MSG) : NULL;
     if (!m->preset) return -1;
-    if (!(sc[NLP_S_STEP] > 0.0) || !isfinite(sc[NLP_S_STEP]) ||
-        !(sc[NLP_S_HEIGHT_MIN] < sc[NLP_S_HEIGHT_MAX])) {
+    if (!(sc[NLP_SCALAR_STEP] > 0.0) || !isfinite(sc[NLP_SCALAR_STEP]) ||
+        !(sc[NLP_SCALAR_HEIGHT_MIN] < sc[NLP_SCALAR_HEIGHT_MAX])) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, "
                  "heights %g .. %g m (a positive step and an increasing range)", d->path,
-                 sc[NLP_S_STEP], sc[NLP_S_HEIGHT_MIN], sc[NLP_S_HEIGHT_MAX]);
+                 sc[NLP_SCALAR_STEP], sc[NLP_SCALAR_HEIGHT_MIN], sc[NLP_SCALAR_HEIGHT_MAX]);
         return -1;
     }
     return 0;
@@ -174,17 +175,17 @@ static void *create(const PcsData *d, const PcsMemory *mem, char *err, const Bod
         if (pcs_arena_full(&m->arena)) snprintf(err, PCS_MSG, "work memory miscounted");
         goto fail;
     }
-    s.alpha = m->sc[NLP_S_ALPHA];
-    s.rtol = m->sc[NLP_S_RTOL];
-    s.etol = m->sc[NLP_S_ETOL];
-    s.max_iterations = (int)m->sc[NLP_S_MAX_ITERATIONS];
-    s.linear_predictor = m->sc[NLP_S_LINEAR_PREDICTOR] != 0.0;
+    s.alpha = m->sc[NLP_SCALAR_ALPHA];
+    s.rtol = m->sc[NLP_SCALAR_RTOL];
+    s.etol = m->sc[NLP_SCALAR_ETOL];
+    s.max_iterations = (int)m->sc[NLP_SCALAR_MAX_ITERATIONS];
+    s.linear_predictor = m->sc[NLP_SCALAR_LINEAR_PREDICTOR] != 0.0;
     if (hht_dense_init(&m->engine, m->n, &s, m->evaluate, m->body, m->memory,
                        hht_dense_bytes(m->n), msg)) {
         snprintf(err, PCS_MSG, "data file %.400s: %s", d->path, msg);
         goto fail;
     }
-    m->force_in = m->sc[NLP_S_START_FORCE];
+    m->force_in = m->sc[NLP_SCALAR_START_FORCE];
     return m;
 fail:
     destroy(m, mem);
@@ -213,7 +214,7 @@ static int initialize(void *model, char *err)
 {
     Pantograph *m = (Pantograph *)model;
     char msg[HHT_MSG];
-    double F0 = m->sc[NLP_S_START_FORCE];
+    double F0 = m->sc[NLP_SCALAR_START_FORCE];
     if (hht_dense_start(&m->engine, 0.0, m->q0, NULL, &F0, msg)) {
         snprintf(err, PCS_MSG, "the start state: %s", msg);
         return PCS_ERROR;
@@ -255,12 +256,12 @@ static void outputs(void *model) { (void)model; }
 static int outside_range(const Pantograph *m, double t, double H, char *err)
 {
     double z = m->height_offset + m->engine.state.q[m->height_index];
-    double lo = m->sc[NLP_S_HEIGHT_MIN], hi = m->sc[NLP_S_HEIGHT_MAX];
+    double lo = m->sc[NLP_SCALAR_HEIGHT_MIN], hi = m->sc[NLP_SCALAR_HEIGHT_MAX];
     if (z >= lo && z <= hi) return 0;
     snprintf(err, PCS_MSG, "doStep(t = %.6g, h = %.3g): the contact point would be at %.4g m, "
              "outside the heights pantograph '%s' represents (%.3g .. %.3g m): contact_force "
              "= %.6g N and speed_kmh = %.6g km/h are beyond what it can take", t, H, z,
-             m->preset, lo, hi, m->force_in, m->sc[NLP_S_SPEED_KMH]);
+             m->preset, lo, hi, m->force_in, m->sc[NLP_SCALAR_SPEED_KMH]);
     return 1;
 }
 
@@ -275,7 +276,7 @@ static int step(void *model, double t, double H, char *err)
         snprintf(err, PCS_MSG, "doStep before initialisation");
         return PCS_ERROR;
     }
-    if ((n = pcs_substeps(H, m->sc[NLP_S_STEP], err)) < 0 ||
+    if ((n = pcs_substeps(H, m->sc[NLP_SCALAR_STEP], err)) < 0 ||
         pcs_within("contact_force", F, 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
         return PCS_DISCARD;
     if (m->extrapolate) {
@@ -307,19 +308,19 @@ static int step(void *model, double t, double H, char *err)
 
 /* the Real parameters fixed at export: value reference, name, index in scalars */
 static const struct { unsigned vr; const char *name; int index; } FIXED[] = {
-    {NLP_VR_STATIC_FORCE, "static_force", NLP_S_STATIC_FORCE},
-    {NLP_VR_AERO_C1, "aero_c1", NLP_S_AERO_C1},
-    {NLP_VR_AERO_C2, "aero_c2", NLP_S_AERO_C2},
-    {NLP_VR_SPEED_KMH, "speed_kmh", NLP_S_SPEED_KMH},
-    {NLP_VR_FRICTION_FORCE, "friction_force", NLP_S_FRICTION_FORCE},
-    {NLP_VR_FRICTION_SMOOTHING, "friction_smoothing", NLP_S_FRICTION_SMOOTHING},
-    {NLP_VR_HHT_ALPHA, "hht_alpha", NLP_S_ALPHA},
-    {NLP_VR_INITIAL_HEIGHT, "initial_height", NLP_S_INITIAL_HEIGHT},
-    {NLP_VR_INITIAL_CONTACT_FORCE, "initial_contact_force", NLP_S_INITIAL_CONTACT_FORCE},
-    {NLP_VR_RAMP_START_TIME, "ramp_start_time", NLP_S_RAMP_START_TIME},
-    {NLP_VR_RAMP_DURATION, "ramp_duration", NLP_S_RAMP_DURATION},
-    {NLP_VR_LOWERED_HEIGHT, "lowered_height", NLP_S_LOWERED_HEIGHT},
-    {NLP_VR_INTERNAL_STEP, "internal_step", NLP_S_STEP},
+    {NLP_VR_STATIC_FORCE, "static_force", NLP_SCALAR_STATIC_FORCE},
+    {NLP_VR_AERO_C1, "aero_c1", NLP_SCALAR_AERO_C1},
+    {NLP_VR_AERO_C2, "aero_c2", NLP_SCALAR_AERO_C2},
+    {NLP_VR_SPEED_KMH, "speed_kmh", NLP_SCALAR_SPEED_KMH},
+    {NLP_VR_FRICTION_FORCE, "friction_force", NLP_SCALAR_FRICTION_FORCE},
+    {NLP_VR_FRICTION_SMOOTHING, "friction_smoothing", NLP_SCALAR_FRICTION_SMOOTHING},
+    {NLP_VR_HHT_ALPHA, "hht_alpha", NLP_SCALAR_ALPHA},
+    {NLP_VR_INITIAL_HEIGHT, "initial_height", NLP_SCALAR_INITIAL_HEIGHT},
+    {NLP_VR_INITIAL_CONTACT_FORCE, "initial_contact_force", NLP_SCALAR_INITIAL_CONTACT_FORCE},
+    {NLP_VR_RAMP_START_TIME, "ramp_start_time", NLP_SCALAR_RAMP_START_TIME},
+    {NLP_VR_RAMP_DURATION, "ramp_duration", NLP_SCALAR_RAMP_DURATION},
+    {NLP_VR_LOWERED_HEIGHT, "lowered_height", NLP_SCALAR_LOWERED_HEIGHT},
+    {NLP_VR_INTERNAL_STEP, "internal_step", NLP_SCALAR_STEP},
 };
 #define N_FIXED (sizeof FIXED / sizeof FIXED[0])
 
@@ -377,7 +378,7 @@ static int set_real(void *model, unsigned vr, double value, int initialised, cha
         return PCS_ERROR;
     }
     if (vr == NLP_VR_INITIAL_CONTACT_FORCE && value < 0.0 &&
-        m->sc[NLP_S_INITIAL_CONTACT_FORCE] < 0.0)
+        m->sc[NLP_SCALAR_INITIAL_CONTACT_FORCE] < 0.0)
         return PCS_OK;             /* < 0: the mean uplift, as exported */
     return fixed_value(FIXED[i].name, m->sc[FIXED[i].index], value, err);
 }
@@ -385,7 +386,7 @@ static int set_real(void *model, unsigned vr, double value, int initialised, cha
 static int get_integer(void *model, unsigned vr, int *value, char *err)
 {
     Pantograph *m = (Pantograph *)model;
-    if (vr == NLP_VR_START_MODE) { *value = (int)m->sc[NLP_S_START_MODE]; return PCS_OK; }
+    if (vr == NLP_VR_START_MODE) { *value = (int)m->sc[NLP_SCALAR_START_MODE]; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Integer variable of value reference %u", vr);
     return PCS_ERROR;
 }
@@ -393,7 +394,7 @@ static int get_integer(void *model, unsigned vr, int *value, char *err)
 static int set_integer(void *model, unsigned vr, int value, int initialised, char *err)
 {
     Pantograph *m = (Pantograph *)model;
-    int mode = (int)m->sc[NLP_S_START_MODE];
+    int mode = (int)m->sc[NLP_SCALAR_START_MODE];
     if (vr != NLP_VR_START_MODE) {
         snprintf(err, PCS_MSG, "no Integer parameter of value reference %u", vr);
         return PCS_ERROR;
@@ -410,7 +411,7 @@ static int get_boolean(void *model, unsigned vr, int *value, char *err)
 {
     Pantograph *m = (Pantograph *)model;
     if (vr == NLP_VR_ONE_WAY_DAMPER) {
-        *value = m->sc[NLP_S_ONE_WAY_DAMPER] != 0.0;
+        *value = m->sc[NLP_SCALAR_ONE_WAY_DAMPER] != 0.0;
         return PCS_OK;
     }
     if (vr == NLP_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
@@ -421,7 +422,7 @@ static int get_boolean(void *model, unsigned vr, int *value, char *err)
 static int set_boolean(void *model, unsigned vr, int value, int initialised, char *err)
 {
     Pantograph *m = (Pantograph *)model;
-    int one_way = m->sc[NLP_S_ONE_WAY_DAMPER] != 0.0;
+    int one_way = m->sc[NLP_SCALAR_ONE_WAY_DAMPER] != 0.0;
     if (vr != NLP_VR_ONE_WAY_DAMPER && vr != NLP_VR_FORCE_EXTRAPOLATION) {
         snprintf(err, PCS_MSG, "no Boolean parameter of value reference %u", vr);
         return PCS_ERROR;

@@ -131,8 +131,10 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
     }
     if (read_u32(d->bytes + 12) != 0x01020304u) {
         pcs_data_free(d, mem);
-        snprintf(err, n_err, "data file %s: written with another byte order than this "
-                 "machine's (re-export it on a little-endian host or convert it)", path);
+        snprintf(err, n_err, "data file %s: its byte-order mark reads 0x%08x: pantocosim "
+                 "writes data files little-endian, and this FMU runs on a big-endian machine "
+                 "(native FMUs take little-endian hosts only) or the file is damaged", path,
+                 read_u32(d->bytes + 12));
         return -1;
     }
     if (read_u32(d->bytes + 8) != PCS_DATA_VERSION) {

@@ -97,6 +97,7 @@ static void unload(PcsInstance *c)
 {
     if (c->model) c->type->destroy(c->model, &c->mem);
     c->model = NULL;
+    c->initialised = 0;
     pcs_data_free(&c->data, &c->mem);
 }
 
@@ -172,6 +173,7 @@ int pcs_exit_initialisation(PcsInstance *c, const char *call)
 {
     if (ready(c, call, BIT(PCS_INITIALISATION)) != PCS_OK) return PCS_ERROR;
     if (c->type->initialize(c->model, c->msg) != PCS_OK) return pcs_report(c, PCS_ERROR, c->msg);
+    c->initialised = 1;
     c->phase = PCS_STEPPING;
     return PCS_OK;
 }
@@ -212,7 +214,7 @@ int pcs_values(PcsInstance *c, const char *call, int set, size_t n, const void *
     return PCS_OK;
 }
 
-int pcs_get(PcsInstance *c, PcsType type, unsigned vr, PcsValue *v)
+int pcs_get(PcsInstance *c, const char *call, PcsType type, unsigned vr, PcsValue *v)
 {
     const PcsModelType *t = c->type;
     int status = PCS_ERROR;
@@ -222,10 +224,10 @@ int pcs_get(PcsInstance *c, PcsType type, unsigned vr, PcsValue *v)
     case PCS_BOOLEAN: status = t->get_boolean(c->model, vr, &v->integer, c->msg); break;
     case PCS_STRING: status = t->get_string(c->model, vr, &v->string, c->msg); break;
     }
-    return status == PCS_OK ? PCS_OK : pcs_report(c, PCS_ERROR, c->msg);
+    return status == PCS_OK ? PCS_OK : pcs_refuse(c, call, c->msg);
 }
 
-int pcs_set(PcsInstance *c, PcsType type, unsigned vr, const PcsValue *v)
+int pcs_set(PcsInstance *c, const char *call, PcsType type, unsigned vr, const PcsValue *v)
 {
     const PcsModelType *t = c->type;
     int init = c->phase == PCS_STEPPING, status = PCS_ERROR;
@@ -235,7 +237,7 @@ int pcs_set(PcsInstance *c, PcsType type, unsigned vr, const PcsValue *v)
     case PCS_BOOLEAN: status = t->set_boolean(c->model, vr, v->integer, init, c->msg); break;
     case PCS_STRING: status = t->set_string(c->model, vr, v->string, init, c->msg); break;
     }
-    return status == PCS_OK ? PCS_OK : pcs_report(c, PCS_ERROR, c->msg);
+    return status == PCS_OK ? PCS_OK : pcs_refuse(c, call, c->msg);
 }
 
 /* ------------------------------------------------------------------ FMU states */
@@ -284,6 +286,9 @@ int pcs_state_set(PcsInstance *c, const char *call, const void *state)
     if (ready(c, call, BIT(PCS_STEPPING) | BIT(PCS_TERMINATED) | BIT(PCS_FAILED)) != PCS_OK)
         return PCS_ERROR;
     if (own_state(c, call, s) != PCS_OK) return PCS_ERROR;
+    if (!c->initialised)
+        return pcs_refuse(c, call, "the model is not initialised since it was read (a state is "
+                          "set in step mode)");
     if (!isfinite(s->time)) return pcs_refuse(c, call, "the FMU state's time is not finite");
     if (s->phase != PCS_STEPPING && s->phase != PCS_TERMINATED)
         return pcs_refuse(c, call, "a state saved before initialisation cannot be set");

@@ -36,6 +36,7 @@ typedef struct {
     void *model;               /* NULL after a failed load */
     PcsData data;
     PcsPhase phase;
+    int initialised;           /* the model was initialised since it was read */
     double time;
     char name[128];
     char data_path[512];
@@ -64,8 +65,12 @@ int pcs_refuse(PcsInstance *c, const char *call, const char *text);
 /* before n values are read (set = 0) or written: the phase, the model and the arrays */
 int pcs_values(PcsInstance *c, const char *call, int set, size_t n, const void *vr,
                const void *values);
-int pcs_get(PcsInstance *c, PcsType type, unsigned vr, PcsValue *value);
-int pcs_set(PcsInstance *c, PcsType type, unsigned vr, const PcsValue *value);
+/* one value; a value reference the model does not have, or a value it refuses, is an Error
+   that keeps the phase */
+int pcs_get(PcsInstance *c, const char *call, PcsType type, unsigned vr,
+            PcsValue *value);
+int pcs_set(PcsInstance *c, const char *call, PcsType type, unsigned vr,
+            const PcsValue *value);
 
 /* FMU states: taken with the host's allocator, checked on the way back (this instance,
    this export, the size, a finite time) */

@@ -13,6 +13,7 @@
 #include <stddef.h>
 
 #include "pcs_data.h"
+#include "pcs_float.h"
 
 #define PCS_OK 0
 #define PCS_DISCARD 1

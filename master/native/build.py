@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import re
 import shutil
 import subprocess
 import tempfile
@@ -16,41 +15,21 @@ from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-import pantocosim
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.native.data_file import DATA_FILE, write_data
+from pantocosim.master.native.headers import SOURCE_DIR, header_numbers
 
-#: the C sources of the native models (installed with the package as pantocosim/native)
-SOURCE_DIR = Path(pantocosim.__file__).resolve().parent / "native"
 #: warnings are errors: the sources compile clean with any C99 compiler
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 MINGW = "x86_64-w64-mingw32-gcc"
 
 
-#: FMI 3.0 value references are unique across types: the offsets of the model's Integer,
-#: Boolean and String references (pcs_model.h)
 def fmi3_bases() -> dict[str, int]:
-    text = (SOURCE_DIR / "pcs_model.h").read_text()
-    bases = {m.group(1): int(m.group(2))
-             for m in re.finditer(r"#define PCS_FMI3_(\w+)_BASE (\d+)u", text)}
-    return {"Integer": bases["INT32"], "Boolean": bases["BOOLEAN"], "String": bases["STRING"],
-            "Real": 0}
-
-
-def value_references(header: str) -> dict[str, int]:
-    """The ``#define PREFIX_VR_NAME number`` lines of a model's header in
-    :data:`SOURCE_DIR`: {NAME: number} (the one place the value references are numbered)."""
-    text = (SOURCE_DIR / header).read_text()
-    return {m.group(1): int(m.group(2))
-            for m in re.finditer(r"#define \w+?_VR_(\w+) (\d+)", text)}
-
-
-def header_numbers(header: str) -> dict[str, float]:
-    """The ``#define NAME number`` lines of a header in :data:`SOURCE_DIR` (limits, sizes):
-    {NAME: number}."""
-    text = (SOURCE_DIR / header).read_text()
-    return {m.group(1): float(m.group(2)) for m in
-            re.finditer(r"#define (\w+) (-?[0-9.]+(?:e[0-9]+)?)\b", text)}
+    """FMI 3.0 value references are unique across types: the offsets of the model's Integer,
+    Boolean and String references (pcs_model.h)."""
+    n = header_numbers("pcs_model.h")
+    return {"Integer": int(n["PCS_FMI3_INT32_BASE"]), "Boolean": int(n["PCS_FMI3_BOOLEAN_BASE"]),
+            "String": int(n["PCS_FMI3_STRING_BASE"]), "Real": 0}
 
 
 @dataclass
@@ -211,7 +190,7 @@ class NativeModel:
 
 COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c", "pcs_limits.c")
 COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h",
-                  "pcs_limits.h")
+                  "pcs_limits.h", "pcs_float.h", "pcs_layout.h")
 #: the generated list of a binary's models (pcs_model_table)
 TABLE_SOURCE = "model_table.c"
 

@@ -17,8 +17,8 @@ from pantocosim.fmi.catenary_ports import VARIABLES as CATENARY_VARIABLES
 from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
 from pantocosim.master.native import export as native_export
 from pantocosim.master.fmu.build import CATENARY_CLASS, PANTOGRAPH_FMUS
-from pantocosim.master.native.build import (NativeModel, Variable, build_fmu, header_numbers,
-                                             value_references)
+from pantocosim.master.native.build import NativeModel, Variable, build_fmu
+from pantocosim.master.native.headers import fields, header_numbers, unpack, value_references
 from pantocosim.master.run.setup import scenario_pantograph
 from pantocosim.pantograph.dsa380 import Dsa380Model
 from pantocosim.pantograph.dsa380_flexible import Dsa380FlexibleModel
@@ -47,22 +47,26 @@ def declared(table, name: str, vr: int, start=None, fixed: bool = False,
                     meaning)
 
 
-def catenary_variables(sections: dict) -> list[Variable]:
+SIZE_FIELDS = {"linear": "LIN_SIZE", "modal": "MOD_SIZE"}
+
+
+def catenary_variables(sections: dict, model_name: str) -> list[Variable]:
     """The native catenary's variables: the Python catenary FMU's (fmus/fmi/catenary_ports.py),
     the export's values as fixed parameters."""
     table = CATENARY_VARIABLES
     vr = value_references(CATENARY.headers[0])
-    sizes, sc = sections["sizes"], sections["scalars"]
-    n_p = int(sizes[5])
+    sizes = unpack(sections["sizes"], SIZE_FIELDS[model_name])
+    sc = dict(zip(fields("CAT_SCALAR"), sections["scalars"].tolist()))
+    n_p = int(sizes["PANTOGRAPHS"])
     name = bytes(sections["definition"].tobytes()).split(b"\0")[0].decode()
     out = [declared(table, key, vr[key.upper()], value, fixed=True) for key, value in (
-        ("catenary_definition", name), ("n_pantographs", n_p), ("spans", int(sizes[-2])),
-        ("catenary_model", int(sizes[-1])), ("speed_kmh", sc[6] * 3.6), ("hht_alpha", sc[1]),
-        ("contact_stiffness", sc[8]), ("contact_damping", sc[9]),
-        ("modal_cutoff_hz", sc[12]))]
+        ("catenary_definition", name), ("n_pantographs", n_p), ("spans", sizes["SPANS"]),
+        ("catenary_model", sizes["MODEL_CODE"]), ("speed_kmh", sc["SPEED"] * 3.6),
+        ("hht_alpha", sc["ALPHA"]), ("contact_stiffness", sc["CONTACT_STIFFNESS"]),
+        ("contact_damping", sc["CONTACT_DAMPING"]), ("modal_cutoff_hz", sc["MODAL_CUTOFF"]))]
     out += [declared(table, "contact_mode", vr["CONTACT_MODE"], 0),
             declared(table, "extrapolate_heights", vr["EXTRAPOLATE_HEIGHTS"], True),
-            declared(table, "newton_rtol", vr["NEWTON_RTOL"], sc[13],
+            declared(table, "newton_rtol", vr["NEWTON_RTOL"], sc["NEWTON_RTOL"],
                      note="accepted; the closed-form step has no Newton iteration")]
     for k in range(1, n_p + 1):
         out += [declared(table, f"position_{k}", vr["POSITION"] + k - 1, sections["x0"][k - 1],
@@ -81,7 +85,7 @@ def catenary_variables(sections: dict) -> list[Variable]:
     out += [declared(table, key, vr[key.upper()])
             for key in ("n_supports", "train_speed_kmh", "newton_iterations")]
     out.append(Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
-                        float(sc[0]), "s", "the fixed internal step: a communication step is "
+                        sc["STEP"], "s", "the fixed internal step: a communication step is "
                         "a whole number of it"))
     return out
 
@@ -103,7 +107,7 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
 
     return build_fmu(out, CATENARY, "pantocosim_catenary_native", CATENARY_CLASS,
                      f"pantocosim {model_name} catenary '{sc.catenary}' at {sc.speed_kmh:g} km/h "
-                     f"(native C, internal step {sc.dt:g} s)", catenary_variables(sections),
+                     f"(native C, internal step {sc.dt:g} s)", catenary_variables(sections, model_name),
                      model_name, sections, sc.dt, fmi=fmi, win64=win64)
 
 
@@ -116,20 +120,21 @@ def pantograph_variables(sections: dict) -> list[Variable]:
     (fmus/fmi/pantograph_ports.py), the export's values as fixed parameters."""
     table = PANTOGRAPH_VARIABLES
     vr = value_references(LUMPED.headers[0])
-    sc = sections["scalars"]
-    out = [declared(table, "contact_force", vr["CONTACT_FORCE"], sc[11])]
+    sc = unpack(sections["scalars"], "PAN_SCALAR")
+    out = [declared(table, "contact_force", vr["CONTACT_FORCE"], sc["INITIAL_FORCE"])]
     out += [declared(table, key, vr[key.upper()]) for key in ("contact_height",
                                                               "contact_velocity")]
-    out += [declared(table, key, vr[key.upper()], sc[i], fixed=True) for key, i in (
-        ("static_force", 6), ("aero_c1", 7), ("aero_c2", 8), ("speed_kmh", 9),
-        ("friction_force", 12), ("friction_smoothing", 13), ("hht_alpha", 1),
-        ("initial_height", 10), ("initial_contact_force", 11))]
+    out += [declared(table, key, vr[key.upper()], sc[field], fixed=True) for key, field in (
+        ("static_force", "STATIC_FORCE"), ("aero_c1", "AERO_C1"), ("aero_c2", "AERO_C2"),
+        ("speed_kmh", "SPEED_KMH"), ("friction_force", "FRICTION_FORCE"),
+        ("friction_smoothing", "FRICTION_SMOOTHING"), ("hht_alpha", "ALPHA"),
+        ("initial_height", "INITIAL_HEIGHT"), ("initial_contact_force", "INITIAL_FORCE"))]
     out += [declared(table, "start_mode", vr["START_MODE"], 0, fixed=True),
             declared(table, "one_way_damper", vr["ONE_WAY_DAMPER"], False, fixed=True),
             declared(table, "force_extrapolation", vr["FORCE_EXTRAPOLATION"], False),
             declared(table, "newton_iterations", vr["NEWTON_ITERATIONS"]),
             Variable("internal_step", "Real", vr["INTERNAL_STEP"], "local", "constant",
-                     float(sc[0]), "s", "the fixed internal step: a communication step is a "
+                     sc["STEP"], "s", "the fixed internal step: a communication step is a "
                      "whole number of it")]
     return out
 
@@ -175,11 +180,10 @@ def nonlinear_variables(sections: dict) -> list[Variable]:
     (fmus/fmi/pantograph_ports.py), the export's values as fixed parameters."""
     table = PANTOGRAPH_VARIABLES
     vr = value_references(NONLINEAR.headers[0])
-    index = native_export.header_constants(NONLINEAR.headers[0], "NLP_S_")
-    sc = sections["scalars"]
+    scalars = unpack(sections["scalars"], "NLP_SCALAR")
 
     def value(name):
-        return float(sc[index[name.upper()]])
+        return float(scalars[name.upper()])
 
     out = [declared(table, "contact_force", vr["CONTACT_FORCE"], value("start_force"))]
     out += [declared(table, key, vr[key.upper()]) for key in ("contact_height",
