@@ -61,6 +61,8 @@ def test_the_kinds_and_limits_are_the_headers():
     data = header_numbers("pcs_data.h")
     assert KINDS == {"linear": data["PCS_KIND_LINEAR_CATENARY"],
                      "modal": data["PCS_KIND_MODAL_CATENARY"],
-                     "lumped": data["PCS_KIND_LUMPED_PANTOGRAPH"]}
+                     "lumped": data["PCS_KIND_LUMPED_PANTOGRAPH"],
+                     "dsa380-rigid": data["PCS_KIND_DSA380_RIGID"],
+                     "dsa380-flexible": data["PCS_KIND_DSA380_FLEXIBLE"]}
     assert header_numbers("pcs_limits.h")["PCS_MAX_DOFS"] == MAX_DOFS
     assert MAX_SUPPORTS == header_numbers("catenary_vars.h")["CAT_MAX_SUPPORTS"]
