@@ -41,7 +41,8 @@ def probe(tmp_path_factory):
     out = tmp_path_factory.mktemp("probe")
     table = out / "model_table.c"
     table.write_text(model_table(NativeModel((), (), (
-        "pcs_linear_catenary", "pcs_modal_catenary", "pcs_lumped_pantograph"))))
+        "pcs_linear_catenary", "pcs_modal_catenary", "pcs_lumped_pantograph",
+        "pcs_dsa380_rigid", "pcs_dsa380_flexible"))))
     sources = [p for p in sorted(SOURCE_DIR.glob("*.c")) if p.name != "realtime_host.c"]
     flags = [f for f in CFLAGS if not f.startswith("-O")]
     exe = out / "native_probe"
@@ -54,8 +55,10 @@ def probe(tmp_path_factory):
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory):
     """Unpacked native FMUs of en50318-300 on six spans (the modal model below 20 Hz): linear
-    catenary, pantograph, modal catenary."""
-    from pantocosim.master.native.models import export_catenary, export_scenario
+    catenary, pantograph, modal catenary; and the rigid and the flexible DSA-380 of
+    dsa380-ave-300."""
+    from pantocosim.master.native.models import (export_catenary, export_pantograph,
+                                                 export_scenario)
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
 
@@ -68,6 +71,12 @@ def folders(tmp_path_factory):
     written.append(export_catenary(prepare(dataclasses.replace(scenario, catenary_model="modal")),
                                    out / "modal.fmu", "modal", win64=False))
     names = ["linear", "pantograph", "modal"]
+    for model in ("dsa380-rigid", "dsa380-flexible"):
+        dsa = load_scenario("dsa380-ave-300")
+        pans = [dataclasses.replace(p, model=model) for p in dsa.pantographs]
+        prep = prepare(dataclasses.replace(dsa, pantographs=pans, catenary_model="linear"))
+        written.append(export_pantograph(prep, 0, out / f"{model}.fmu", win64=False))
+        names.append(model)
     result = {}
     for name, fmu in zip(names, written):
         with zipfile.ZipFile(fmu) as z:
@@ -156,11 +165,11 @@ def crafted(good: dict, rng: random.Random):
             yield kind, f"section count {count}", with_field(data, pos + 32, "<Q", count)
             yield kind, "section type", with_field(data, pos + 24, "<I", rng.choice([0, 3, 1, 2]))
         name, sections = parsed[kind]
-        n_sizes = sections["sizes"].size
+        sized = "sizes" if "sizes" in sections else "constants"   # the DSA-380: constants
         for i in range(24):                                   # sizes, consistent checksum
-            s = dict(sections, sizes=sections["sizes"].copy())
-            s["sizes"][rng.randrange(n_sizes)] = rng.choice(SIZES)
-            yield kind, f"sizes {s['sizes'].tolist()}", pack_data(name, s)
+            s = dict(sections, **{sized: sections[sized].copy()})
+            s[sized][rng.randrange(s[sized].size)] = rng.choice(SIZES)
+            yield kind, f"{sized} {s[sized].tolist()[:12]}", pack_data(name, s)
         floats = [k for k, a in sections.items() if a.dtype == np.float64]
         for i in range(12):                                   # values
             key = rng.choice(floats + ["scalars"] * 4)
@@ -170,7 +179,7 @@ def crafted(good: dict, rng: random.Random):
         ints = [k for k, a in sections.items() if a.dtype == np.int32
                 and k not in ("sizes", "definition", "preset")]
         for key in ints:                                      # indices
-            for value in (-2, 2**31 - 1, sections["sizes"][0]):
+            for value in (-2, 2**31 - 1, int(sections[sized][0])):
                 s = dict(sections, **{key: sections[key].copy()})
                 if s[key].size:
                     s[key][rng.randrange(s[key].size)] = value
