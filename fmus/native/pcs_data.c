@@ -130,11 +130,12 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
         return -1;
     }
     if (read_u32(d->bytes + 12) != 0x01020304u) {
+        unsigned mark = read_u32(d->bytes + 12);
         pcs_data_free(d, mem);
         snprintf(err, n_err, "data file %s: its byte-order mark reads 0x%08x: pantocosim "
                  "writes data files little-endian, and this FMU runs on a big-endian machine "
                  "(native FMUs take little-endian hosts only) or the file is damaged", path,
-                 read_u32(d->bytes + 12));
+                 mark);
         return -1;
     }
     if (read_u32(d->bytes + 8) != PCS_DATA_VERSION) {

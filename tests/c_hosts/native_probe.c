@@ -287,6 +287,43 @@ static void failed_reset2(const char *dir)
     fmi2FreeInstance(c);
 }
 
+/* FNV-1a 64, as the FMU checks its serialised states */
+static unsigned long long fnv1a(const unsigned char *p, size_t n)
+{
+    unsigned long long h = 14695981039346656037ULL;
+    size_t i;
+    for (i = 0; i < n; i++) h = (h ^ p[i]) * 1099511628211ULL;
+    return h;
+}
+
+/* a pantograph's serialised state into the catenary; a catenary state with a NaN time and
+   a checksum that matches it */
+static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
+                            fmi2FMUstate sb)
+{
+    size_t na = 0, nb = 0;
+    fmi2Byte *ba, *bb;
+    fmi2FMUstate got = NULL;
+    double nan = NAN;
+    unsigned long long sum;
+    fmi2SerializedFMUstateSize(a, sa, &na);
+    fmi2SerializedFMUstateSize(b, sb, &nb);
+    ba = (fmi2Byte *)calloc(na, 1);
+    bb = (fmi2Byte *)calloc(nb, 1);
+    fmi2SerializeFMUstate(a, sa, ba, na);
+    fmi2SerializeFMUstate(b, sb, bb, nb);
+    check(fmi2DeSerializeFMUstate(a, bb, nb, &got), fmi2Error, "fmi2 DeSerializeFMUstate of "
+          "another model's state");
+    memcpy(ba + 40, &nan, 8);          /* the time (serialised layout: pcs_instance.c) */
+    sum = fnv1a((const unsigned char *)ba + 40, na - 40);
+    memcpy(ba + 32, &sum, 8);
+    check(fmi2DeSerializeFMUstate(a, ba, na, &got), fmi2Error, "fmi2 DeSerializeFMUstate of a "
+          "state with a NaN time");
+    check_true(got == NULL, "fmi2 no state from a refused one");
+    free(ba);
+    free(bb);
+}
+
 static void two_instances2(const char *cat, const char *pan)
 {
     fmi2Component a = instantiate2(cat, &CB_A), b = instantiate2(pan, &CB_B);
@@ -304,6 +341,7 @@ static void two_instances2(const char *cat, const char *pan)
     }
     fmi2GetFMUstate(a, &sa);
     fmi2GetFMUstate(b, &sb);
+    foreign_states2(a, sa, b, sb);
     check(fmi2SetFMUstate(a, sb), fmi2Error, "fmi2 SetFMUstate of another instance's state");
     check(fmi2FreeFMUstate(a, &sb), fmi2Error, "fmi2 FreeFMUstate of another instance's state");
     fmi2FreeFMUstate(a, &sa);
