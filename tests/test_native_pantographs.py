@@ -142,7 +142,7 @@ def test_a_data_file_out_of_bounds_is_refused_naming_it(exported, host, tmp_path
              "internal step": pack_data(kind, altered(sections, "scalars", 0, -1.0)),
              "must be finite": pack_data(kind, altered(sections, "constants", 3, np.nan))}
     if kind == "dsa380-flexible":
-        cases["sizes 1000000000 unknowns"] = pack_data(kind, altered(sections, "constants", 0,
+        cases["sizes 1e+09 unknowns"] = pack_data(kind, altered(sections, "constants", 0,
                                                                      1e9))
         cases["pg[5] = 100000"] = pack_data(kind, altered(sections, "pg", 5, 100000))
         cases["an index in"] = pack_data(kind, altered(sections, "constants", 8, 1e4))

@@ -60,9 +60,11 @@ static int check_arrays(const Dsa380Flex *m, char *msg)
         finite_array(a->w_g, (size_t)m->ng, "w_g", msg))
         return -1;
     for (i = 0; i < ne; i++)
-        if (!(a->length[i] > 0.0) || !isfinite(a->length[i])) {
-            snprintf(msg, HHT_MSG, "flexible DSA-380: length[%lu] = %g (must be > 0)",
-                     (unsigned long)i, a->length[i]);
+        if (!(a->length[i] > 0.0 && a->EA[i] > 0.0 && a->EI[i] > 0.0) ||
+            !isfinite(a->length[i])) {
+            snprintf(msg, HHT_MSG, "flexible DSA-380: element %lu: length %g m, EA %g N, EI %g "
+                     "N m^2 (each must be > 0)", (unsigned long)i, a->length[i], a->EA[i],
+                     a->EI[i]);
             return -1;
         }
     for (i = 0; i < 4 * ne; i++)
@@ -119,8 +121,12 @@ int dsf_setup(Dsa380Flex *m, const double *k, long count, const DsfArrays *array
     m->act.torque_lowered = k[DSF_K_TORQUE_LOWERED];
     m->act.ramp_start = k[DSF_K_RAMP_START];
     m->act.ramp_duration = k[DSF_K_RAMP_DURATION];
-    if (m->friction_force > 0.0 && !(m->friction_smoothing > 0.0)) {
-        snprintf(msg, HHT_MSG, "flexible DSA-380: friction_smoothing = %g (must be > 0)",
+    if (!(m->kl > 0.0 && m->l0 >= 0.0 && m->c >= 0.0 && m->kr >= 0.0 &&
+          m->friction_force >= 0.0) ||
+        (m->friction_force > 0.0 && !(m->friction_smoothing > 0.0))) {
+        snprintf(msg, HHT_MSG, "flexible DSA-380: springs k_l = %g N/m (> 0), l0 = %g m (>= 0), "
+                 "damper c = %g N s/m (>= 0), k_r = %g N m/rad (>= 0), friction %g N (>= 0) "
+                 "smoothed over %g m/s (> 0)", m->kl, m->l0, m->c, m->kr, m->friction_force,
                  m->friction_smoothing);
         return -1;
     }

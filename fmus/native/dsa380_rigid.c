@@ -205,6 +205,35 @@ double dsa380_mechanism(const double *P, double theta, double *A, double *V, dou
     return ok;
 }
 
+/* the physical ranges of the parameter set (dsa380.Dsa380Parameters.validate): 0 or -1 with
+   the value named in msg */
+static int check_ranges(const double *k, char *msg)
+{
+    static const struct { int index, count; double lo; int open; const char *name; } R[] = {
+        {DSA_P_L1, 7, 0.0, 1, "bar length"}, {DSA_P_M_, 7, 0.0, 1, "bar mass"},
+        {DSA_P_I_, 7, 0.0, 0, "bar inertia"}, {DSA_P_LG_, 7, 0.0, 0, "centre-of-gravity offset"},
+        {DSA_P_R6, 1, 0.0, 1, "links.r"}, {DSA_P_L1P, 1, 0.0, 1, "damper.L1p"},
+        {DSA_P_KR, 1, 0.0, 0, "springs.k_r"}, {DSA_P_KL, 1, 0.0, 1, "springs.k_l"},
+        {DSA_P_LL0, 1, 0.0, 0, "springs.l0"}, {DSA_P_CDAMP, 1, 0.0, 0, "damper.c"},
+        {DSA_P_GRAV, 1, 0.0, 0, "g"}, {DSA_K_FRICTION_FORCE, 1, 0.0, 0, "friction_force"}};
+    size_t r;
+    int i;
+    for (r = 0; r < sizeof R / sizeof R[0]; r++)
+        for (i = R[r].index; i < R[r].index + R[r].count; i++)
+            if (R[r].open ? !(k[i] > R[r].lo) : !(k[i] >= R[r].lo)) {
+                snprintf(msg, HHT_MSG, "DSA-380 constants: %s (value %d) = %g (must be %s %g)",
+                         R[r].name, i, k[i], R[r].open ? ">" : ">=", R[r].lo);
+                return -1;
+            }
+    for (i = DSA_P_SIG_LO; i <= DSA_P_SIG_UP; i++)
+        if (k[i] != 1.0 && k[i] != -1.0) {
+            snprintf(msg, HHT_MSG, "DSA-380 constants: assembly mode (value %d) = %g (must be "
+                     "+1 or -1)", i, k[i]);
+            return -1;
+        }
+    return 0;
+}
+
 int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
 {
     int i;
@@ -219,6 +248,7 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg)
                      k[i]);
             return -1;
         }
+    if (check_ranges(k, msg)) return -1;
     memset(m, 0, sizeof *m);
     memcpy(m->P, k, sizeof m->P);
     m->n_dofs = k[DSA_K_PITCH_LOCK] != 0.0 ? 3 : 4;

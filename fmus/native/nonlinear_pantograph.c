@@ -54,12 +54,27 @@ static void destroy(void *model, const PcsMemory *mem);
 /* the stepping, the start and the fixed parameters; -1 with the reason in err */
 static int read_scalars(Pantograph *m, const PcsData *d, char *err)
 {
+    int i;
+    double it;
     const double *sc = (const double *)SECTION(d, "scalars", PCS_TYPE_F64, NLP_SCALARS, err);
     m->sc = sc;
     m->preset = sc ? pcs_data_text(d, "preset", err, PCS_MSG) : NULL;
     if (!m->preset) return -1;
-    if (!(sc[NLP_SCALAR_STEP] > 0.0) || !isfinite(sc[NLP_SCALAR_STEP]) ||
-        !(sc[NLP_SCALAR_HEIGHT_MIN] < sc[NLP_SCALAR_HEIGHT_MAX])) {
+    for (i = 0; i < NLP_SCALARS; i++)
+        if (!isfinite(sc[i])) {
+            snprintf(err, PCS_MSG, "data file %.400s: section scalars: value %d is %g (must be "
+                     "finite)", d->path, i, sc[i]);
+            return -1;
+        }
+    it = sc[NLP_SCALAR_MAX_ITERATIONS];
+    if (!(it >= 1.0 && it <= 1000.0 && it == floor(it)) ||
+        (sc[NLP_SCALAR_START_MODE] != 0.0 && sc[NLP_SCALAR_START_MODE] != 1.0)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: %g Newton iterations "
+                 "(accepted 1 .. 1000), start mode %g (0 or 1)", d->path, it,
+                 sc[NLP_SCALAR_START_MODE]);
+        return -1;
+    }
+    if (!(sc[NLP_SCALAR_STEP] > 0.0) || !(sc[NLP_SCALAR_HEIGHT_MIN] < sc[NLP_SCALAR_HEIGHT_MAX])) {
         snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, "
                  "heights %g .. %g m (a positive step and an increasing range)", d->path,
                  sc[NLP_SCALAR_STEP], sc[NLP_SCALAR_HEIGHT_MIN], sc[NLP_SCALAR_HEIGHT_MAX]);
@@ -94,16 +109,16 @@ static int flexible_body(Pantograph *m, const PcsData *d, char *err)
     long n, ne, ng;
     const double *k = (const double *)SECTION(d, "constants", PCS_TYPE_F64, DSF_K_COUNT, err);
     if (!k) return -1;
+    if (!(k[DSF_K_N] >= 2 && k[DSF_K_N] <= DSF_MAX_N && k[DSF_K_NE] >= 1 &&
+          k[DSF_K_NE] <= DSF_MAX_NE && k[DSF_K_NG] >= 1 && k[DSF_K_NG] <= DSF_MAX_NG)) {
+        snprintf(err, PCS_MSG, "data file %.400s: the flexible model's sizes %g unknowns, "
+                 "%g elements, %g Gauss points (accepted 2..%d, 1..%d, 1..%d)", d->path,
+                 k[DSF_K_N], k[DSF_K_NE], k[DSF_K_NG], DSF_MAX_N, DSF_MAX_NE, DSF_MAX_NG);
+        return -1;
+    }
     n = (long)k[DSF_K_N];
     ne = (long)k[DSF_K_NE];
     ng = (long)k[DSF_K_NG];
-    if (!(n >= 2 && n <= DSF_MAX_N && ne >= 1 && ne <= DSF_MAX_NE && ng >= 1 &&
-          ng <= DSF_MAX_NG)) {
-        snprintf(err, PCS_MSG, "data file %.400s: the flexible model's sizes %ld unknowns, "
-                 "%ld elements, %ld Gauss points (accepted 2..%d, 1..%d, 1..%d)", d->path, n,
-                 ne, ng, DSF_MAX_N, DSF_MAX_NE, DSF_MAX_NG);
-        return -1;
-    }
     if (!(a->q_ref = SECTION(d, "q_ref", PCS_TYPE_F64, n, err)) ||
         !(a->M = SECTION(d, "M", PCS_TYPE_F64, n * n, err)) ||
         !(a->Qg = SECTION(d, "Qg", PCS_TYPE_F64, n, err)) ||
@@ -186,6 +201,11 @@ static void *create(const PcsData *d, const PcsMemory *mem, char *err, const Bod
         goto fail;
     }
     m->force_in = m->sc[NLP_SCALAR_START_FORCE];
+    if (hht_dense_start(&m->engine, 0.0, m->q0, NULL, &m->force_in, msg)) {
+        snprintf(err, PCS_MSG, "data file %.400s: its start state q0 cannot be taken: %s",
+                 d->path, msg);
+        goto fail;
+    }
     return m;
 fail:
     destroy(m, mem);
