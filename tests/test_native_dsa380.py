@@ -51,7 +51,6 @@ def probe(tmp_path_factory):
     subprocess.run([cc, *CFLAGS, "-fPIC", "-shared", f"-I{SOURCE_DIR}", "-o", str(lib),
                     str(PROBE), *map(str, sources), "-lm"], check=True)
     so = ctypes.CDLL(str(lib))
-    so.probe_mechanism.restype = ctypes.c_double
     so.probe_evaluate.argtypes = [ctypes.c_double, P, P, P, ctypes.c_double, P, P,
                                   ctypes.c_char_p]
     so.probe_start.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double, ctypes.c_int,

@@ -166,7 +166,10 @@ static double mechanism_jets(const double *P, double theta, Jet *px, Jet *py, Je
 /* start point (index into the points) of bars 1..6 */
 static const int BAR_START[6] = {0, 1, 2, 3, 5, 6};
 
-double dsa380_mechanism(const double *P, double theta, double *A, double *V, double *p5)
+/* inertia A(theta) (A.7), gravity + torsional-spring potential (A.10) and point 5:
+   A = (A, A', A''), V = (V, V', V''), p5 = (x5, y5, x5', y5', x5'', y5''); returns min h^2 of
+   the loops (<= 0: they do not close) */
+static double mechanism(const double *P, double theta, double *A, double *V, double *p5)
 {
     Jet px[8], py[8], ang[6];
     double ok = mechanism_jets(P, theta, px, py, ang), g = P[DSA_P_GRAV], dth;
@@ -293,8 +296,8 @@ static void inertia(Dsa380 *m, const double *A, double sg, double cg)
 }
 
 /* Coriolis and centrifugal terms of T = 1/2 qdot^T M qdot, gravity and the torsional spring
-   (A.10); returns the potential */
-static double motion_terms(Dsa380 *m, const double *A, const double *V, double sg, double cg)
+   (A.10) */
+static void motion_terms(Dsa380 *m, const double *A, const double *V, double sg, double cg)
 {
     double *fr = m->vec[1], (*Cd)[4] = m->mat[2], (*Ks)[4] = m->mat[3];
     double m7 = m->P[DSA_P_M_ + 6], LG7 = m->P[DSA_P_LG_ + 6], g = m->P[DSA_P_GRAV];
@@ -313,16 +316,14 @@ static double motion_terms(Dsa380 *m, const double *A, const double *V, double s
     fr[2] += m7 * g;
     fr[3] += m7 * g * LG7 * cg;
     Ks[3][3] += -m7 * g * LG7 * sg;
-    return V[0] + m7 * g * (m->q4[2] + LG7 * sg);
 }
 
-/* the collector springs from point 5 to the ends 11, 12 (A.11), Hessian (B.19); returns
-   their potential */
-static double collector_springs(Dsa380 *m, const double *p5)
+/* the collector springs from point 5 to the ends 11, 12 (A.11), Hessian (B.19) */
+static void collector_springs(Dsa380 *m, const double *p5)
 {
     double *fr = m->vec[1], (*Ks)[4] = m->mat[3];
     double half = 0.5 * m->P[DSA_P_L1 + 6], kl = m->P[DSA_P_KL], l0 = m->P[DSA_P_LL0];
-    double c7 = cos(m->q4[3]), s7 = sin(m->q4[3]), x10 = m->q4[1], y10 = m->q4[2], Vs = 0.0;
+    double c7 = cos(m->q4[3]), s7 = sin(m->q4[3]), x10 = m->q4[1], y10 = m->q4[2];
     double D[2][4], gl[4], se;
     int k, j, side;
     for (side = 0; side < 2; side++) {
@@ -343,7 +344,6 @@ static double collector_springs(Dsa380 *m, const double *p5)
         D[1][3] = -se * half * c7;
         for (j = 0; j < 4; j++) gl[j] = ux * D[0][j] + uy * D[1][j];
         tension = kl * (ll - l0);
-        Vs += 0.5 * kl * (ll - l0) * (ll - l0);
         for (k = 0; k < 4; k++) {
             fr[k] += tension * gl[k];
             for (j = 0; j < 4; j++) {
@@ -354,7 +354,6 @@ static double collector_springs(Dsa380 *m, const double *p5)
         Ks[0][0] += tension * (ux * p5[4] + uy * p5[5]);
         Ks[3][3] += tension * se * half * (ux * c7 + uy * s7);
     }
-    return Vs;
 }
 
 /* damper length l_a and its theta-derivatives (A.14), (A.20) */
@@ -403,7 +402,7 @@ static void damper_and_friction(Dsa380 *m, const double *p5)
    and m->mat; returns the loop-closure measure */
 static double kernel(Dsa380 *m, double F, double M_act)
 {
-    double A[3], V[3], p5[6], ok = dsa380_mechanism(m->P, m->q4[0], A, V, p5);
+    double A[3], V[3], p5[6], ok = mechanism(m->P, m->q4[0], A, V, p5);
     double th7 = m->q4[3], sg, cg;
     memset(m->vec, 0, sizeof m->vec);
     memset(m->mat, 0, sizeof m->mat);
@@ -411,8 +410,8 @@ static double kernel(Dsa380 *m, double F, double M_act)
     sg = sin(th7 - m->P[DSA_P_THG_ + 6]);
     cg = cos(th7 - m->P[DSA_P_THG_ + 6]);
     inertia(m, A, sg, cg);
-    m->vec[2][1] = motion_terms(m, A, V, sg, cg);
-    m->vec[2][1] += collector_springs(m, p5);
+    motion_terms(m, A, V, sg, cg);
+    collector_springs(m, p5);
     damper_and_friction(m, p5);
     m->vec[1][0] -= M_act;
     m->vec[1][2] += F - m->aero_force;

@@ -63,7 +63,7 @@ typedef struct {
     Actuation act;
     double aero_force, friction_force, friction_smoothing;
     /* work of an evaluation (4 coordinates; the locked pitch is 0) */
-    double q4[4], v4[4], a4[4], vec[3][4], mat[4][4][4];
+    double q4[4], v4[4], a4[4], vec[2][4], mat[4][4][4];
 } Dsa380;
 
 /* Fill m from the constants k (count DSA_K_COUNT); 0, or -1 with the reason in msg
@@ -72,8 +72,5 @@ int dsa380_setup(Dsa380 *m, const double *k, long count, char *msg);
 /* The residual pieces and tangents at (t, q, v, a) under inputs[0] = F (an HhtModelFn). */
 int dsa380_evaluate(void *model, double t, const double *q, const double *v, const double *a,
                     const double *inputs, int tangent, HhtEval *out, char *msg);
-/* Mechanism terms (A.7), (A.10): A = (A, A', A''), V = (V, V', V''), p5 = (x5, y5, x5', y5',
-   x5'', y5''); returns min h^2 of the loops (<= 0: they do not close). */
-double dsa380_mechanism(const double *P, double theta, double *A, double *V, double *p5);
 
 #endif

@@ -57,11 +57,6 @@ int probe_evaluate(double t, const double *q, const double *v, const double *a, 
     return evaluate_into(dsa380_evaluate, &model, model.n_dofs, t, q, v, a, F, f, mats, msg);
 }
 
-double probe_mechanism(double theta, double *A, double *V, double *p5)
-{
-    return dsa380_mechanism(model.P, theta, A, V, p5);
-}
-
 int probe_start(double alpha, double rtol, double etol, int max_iterations, int linear,
                 double t0, const double *q0, double F0, char *msg)
 {
