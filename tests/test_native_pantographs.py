@@ -246,22 +246,24 @@ def test_a_lumped_chain_with_friction_stays_python_with_the_reason(tmp_path):
 
 
 # ---------------------------------------------------------------------- in our master
-@pytest.mark.slow
+@pytest.mark.parametrize("model", ["dsa380-rigid", "dsa380-flexible"])
 @pytest.mark.parametrize("scheme", ["jacobi", "implicit"])
 def test_native_pantograph_in_our_master_gives_the_python_pantograph_fmus_force(
-        scheme, fmus, tmp_path):
-    """dsa380-ave-300 (0.2 s) with the Python nonlinear catenary FMU: the native rigid
-    DSA-380 FMU and the Python one give the same contact force to 1e-9 of the mean."""
+        scheme, model, fmus, tmp_path):
+    """dsa380-ave-300 (0.2 s) with the Python nonlinear catenary FMU: the native DSA-380 FMU
+    and the Python one give the same contact force to 1e-9 of the mean."""
     from pantocosim.master.cosim import run_cosim
     from pantocosim.master.fmu.check import FmuPlan
 
     required("gcc", "gcc")
-    sc = dataclasses.replace(load_scenario("dsa380-ave-300"), duration_s=0.2,
-                             window_supports=None, window_m=(33.0, 40.0))
+    sc = load_scenario("dsa380-ave-300")
+    pans = [dataclasses.replace(p, model=model) for p in sc.pantographs]
+    sc = dataclasses.replace(sc, pantographs=pans, duration_s=0.2, window_supports=None,
+                             window_m=(33.0, 40.0))
     prep = prepare(sc)
-    native = export_pantograph(prep, 0, tmp_path / "dsa380-rigid.fmu", win64=False)
+    native = export_pantograph(prep, 0, tmp_path / f"{model}.fmu", win64=False)
     forces = {}
-    for label, pantograph in (("python", fmus["dsa380-rigid"]), ("native", native)):
+    for label, pantograph in (("python", fmus[model]), ("native", native)):
         res = run_cosim(prep, None, scheme, plan=FmuPlan(fmus["catenary"], [pantograph],
                                                          [None]), progress=False)
         assert res.error is None, res.error
