@@ -273,26 +273,31 @@ def do_step_line(label: str, e: dict) -> str:
 
 
 #: the native DSA-380 figure: scenario (its catenary as the linear model, native too),
-#: simulated seconds
-NATIVE_DSA380 = ("dsa380-ave-300", 2.0)
+#: simulated seconds, pantograph models
+NATIVE_DSA380 = ("dsa380-ave-300", 2.0, ("dsa380-rigid", "dsa380-flexible"))
 
 
 def native_dsa380(tmp: Path, printer=print) -> dict:
-    """The native rigid DSA-380 FMU's doStep (p50 / p99 / max) in the C loop of
-    :func:`native_loop` on dsa380-ave-300 (the native linear catenary beside it), and the
-    Python DSA-380 FMU's in the same loop in fmpy (with the Python catenary FMU)."""
-    scenario, seconds = NATIVE_DSA380
+    """The native rigid and flexible DSA-380 FMUs' doStep (p50 / p99 / max) in the C loop of
+    :func:`native_loop` on dsa380-ave-300 (the native linear catenary beside them), and the
+    Python DSA-380 FMUs' in the same loop in fmpy (with the Python catenary FMU)."""
+    scenario, seconds, models = NATIVE_DSA380
     host = compile_host(tmp)
-    sc = dataclasses.replace(load_scenario(scenario), catenary_model="linear")
-    prep = prepare(sc)
-    steps = int(round(seconds / sc.dt))
-    text = native_coupled(host, prep, tmp / "native-dsa380", steps)
-    out = {"native_pantograph": _host_percentiles(text, "pantograph"),
-           "python_pantograph_fmu": python_fmu_loop(prep, steps, sc.dt)["pantograph"]}
-    out["python_p99_over_native_p99"] = (out["python_pantograph_fmu"]["p99_ms"]
-                                         / out["native_pantograph"]["p99_ms"])
-    for label in ("native_pantograph", "python_pantograph_fmu"):
-        printer(do_step_line(f"{scenario} rigid DSA-380: {label}", out[label]))
+    out = {}
+    for model in models:
+        sc = load_scenario(scenario)
+        pans = [dataclasses.replace(p, model=model) for p in sc.pantographs]
+        sc = dataclasses.replace(sc, pantographs=pans, catenary_model="linear")
+        prep = prepare(sc)
+        steps = int(round(seconds / sc.dt))
+        text = native_coupled(host, prep, tmp / f"native-{model}", steps)
+        entry = {"native_pantograph": _host_percentiles(text, "pantograph"),
+                 "python_pantograph_fmu": python_fmu_loop(prep, steps, sc.dt)["pantograph"]}
+        entry["python_p99_over_native_p99"] = (entry["python_pantograph_fmu"]["p99_ms"]
+                                               / entry["native_pantograph"]["p99_ms"])
+        out[model] = entry
+        for label in ("native_pantograph", "python_pantograph_fmu"):
+            printer(do_step_line(f"{scenario} {model}: {label}", entry[label]))
     return out
 
 

@@ -22,7 +22,7 @@ def add_parser(sub):
                    "instantiate-to-first-step time in fmpy, cold and warm, native-loop: the "
                    "native C FMUs of export-native stepped from a C loop beside the Python "
                    "catenary FMU and the floor solve, native-dsa380: the native rigid "
-                   "DSA-380 FMU's doStep in that loop beside the Python DSA-380 FMU's); skips the cold first run and the span "
+                   "and flexible DSA-380 FMUs' doStep in that loop beside the Python FMUs'); skips the cold first run and the span "
                    "scaling")
     return p
 
