@@ -1,44 +1,22 @@
 """Numerical stability of a run: checked before it starts, watched while it runs, judged
 after it ends.
 
-Before. The explicit (Jacobi) and Gauss-Seidel couplings exchange the penalty force once per
-step: each side steps under the force of the previous exchange, a lag of one step plus the
-half step of the held force. Around the contact the catenary is a taut wire, whose point
-receptance is that of a dashpot, ``1 / (i w Z_w)`` with the wire impedance
-``Z_w = 2 sqrt(T rho)`` (contact-wire tension and mass per length, waves leaving both ways),
-and the pantograph is its contact mass ``m_p`` (receptance ``-1 / (m_p w^2)``; the mass seen
-at the contact point, ``1 / (g^T M^-1 g)`` of the model's linearisation, ``g`` the gradient of
-its contact height). The lag of ``1.5 dt`` turns the dashpot's -90 degrees into -180 degrees at
-``w* = pi / (3 dt)``; the exchange is stable while the loop gain there is below 1::
+Before. The staggered couplings (Jacobi, Gauss-Seidel) exchange the penalty force once per
+step; two loop gains bound them, derived and measured in docs/stability.md ("Before a run"):
+the wave gain of the wire's dashpot and the pantograph's contact mass under the exchange's lag
+of ``1.5 dt`` (:func:`exchange_gain`)::
 
-    G_w = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2) < 1.
+    G_w = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2),  w* = pi / (3 dt)
 
-Measured on en50318 (3 spans, 250 km/h, en50318-2mass; ``scripts/stability_breakpoints.py``,
-checked in ``tests/test_stability.py``):
-the Jacobi and Gauss-Seidel couplings break between k_c = 3e5 (G = 0.87) and 4e5 N/m
-(G = 1.16) at 1 ms, between 8e4 (G = 1.2) and 1.2e5 N/m at 5 ms and between 8e4 (G = 2.6)
-and 1e5 N/m at 10 ms: at longer steps the catenary is stiffer than a wire alone, so the limit
-errs on the safe side there.
+and the gain through a catenary's instantaneous compliance ``s`` at the contact (a modal
+model's static correction; :func:`feedthrough_gain`)::
 
-A catenary that answers a force within the instant it is applied (a modal model's static
-correction, a massless spring of compliance ``s`` in series with the contact; each model
-declares it, ``contact_compliance``) closes an algebraic loop through the exchange. At the
-Nyquist frequency the force alternates from step to step: the first-order hold of the
-exchange, ``2 F_n - F_(n-1)``, triples it, and the HHT-alpha velocity of a displacement that
-alternates is ``4 / (|alpha| dt)`` times it, in phase (Newmark with ``gamma = 1/2 - alpha``,
-``beta = (1 - alpha)^2 / 4``), so the exchange is stable while::
+    G_s = 3 s (k_c + 4 c_c / (|alpha| dt))
 
-    G_s = 3 s (k_c + 4 c_c / (|alpha| dt)) < 1
-
-(with ``c_c = 0``: ``F_(n+1) = -k_c s (2 F_n - F_(n-1))``, whose roots stay inside the unit
-circle while ``3 k_c s < 1``, at any step); ``s`` is the largest compliance the pantograph
-meets on its run. The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` is
-refused, one with ``G >= 0.5`` warned.
-
-Any coupling, the monolithic one too, warns when the step does not resolve the contact
-frequency ``f_c = sqrt(k_c / m_p) / (2 pi)``: above ``1 / (10 dt)`` the contact force chatters
-at a frequency the step only aliases (loss-of-contact figures are then the step's, not the
-system's).
+The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` (:data:`GAIN_LIMIT`) is
+refused, one with ``G >= 0.5`` (:data:`GAIN_WARNING`) warned. Any coupling, the monolithic
+one too, warns when the step does not resolve the contact frequency
+``f_c = sqrt(k_c / m_p) / (2 pi)`` (above ``1 / (10 dt)``).
 
 During. :class:`Monitor` stops a run whose contact force is not finite or exceeds
 :data:`FORCE_CAP_FACTOR` times the pantograph's static force (its mean uplift when larger),

@@ -233,6 +233,49 @@ def test_compare_flexible_rigid(tmp_path):
 
 
 
+def readings_module():
+    sys.path.insert(0, str(SCRIPTS))
+    try:
+        import en50318_readings
+    finally:
+        sys.path.remove(str(SCRIPTS))
+    return en50318_readings
+
+
+def test_en50318_reading_inputs(tmp_path):
+    """Each reading is the validation scenario with its changes (``from`` first): the
+    inputs it writes load, and carry the changes and nothing else."""
+    import dataclasses
+
+    from pantocosim.catenary.definition import load_catenary
+    from pantocosim.master.scenario import load_scenario
+
+    R = readings_module()
+    readings = R.load_readings()
+    by_name = {r["name"]: r for r in readings}
+    run = [r for r in readings if "of" not in r]
+    assert len(run) == 18 and len(readings) == 24
+    loaded = {(r["name"], v): load_scenario(R.scenario_file(r, by_name, v, tmp_path))
+              for r in run for v in R.SPEEDS}
+    assert len(loaded) == 36
+    base = load_scenario("en50318-300")
+    same = ("name", "description", "source")
+    assert dataclasses.replace(loaded["preset", 300], **{k: getattr(base, k) for k in same}) \
+        == base
+    sc = loaded["csup300-lumped-constraint-dt0.25", 300]
+    assert (sc.dt, sc.alpha, sc.contact_law, sc.speed_kmh) == (0.00025, -0.05, "constraint",
+                                                               300.0)
+    raw = load_catenary(sc.catenary).raw
+    assert raw["contact_support"] == {"type": "spring", "stiffness": 300.0, "mass": 1.0}
+    assert raw["messenger_support"] == {"type": "spring", "stiffness": 5.0e4}
+    preset = load_catenary("en50318").raw
+    assert {k: v for k, v in raw.items() if "support" not in k and k != "name"} == \
+        {k: v for k, v in preset.items() if "support" not in k and k != "name"}
+    k5 = loaded["preset-k5e5", 250]
+    assert (k5.contact_law, k5.contact_stiffness, k5.catenary) == ("penalty", 5e5, "en50318")
+    assert loaded["preset-constraint-newmark", 250].alpha == 0.0
+
+
 @pytest.mark.slow
 def test_en50318_readings(tmp_path, short_ref):
     page = page_copy("en50318-validation.md", tmp_path)
@@ -253,11 +296,7 @@ def test_en50318_readings(tmp_path, short_ref):
     assert "c: preset-constraint" in text.split("<!-- readings:start -->")[1]
     assert (tmp_path / "figures" / "en50318-spectrum.png").stat().st_size > 10_000
     # the zero-phase filter of a reading is that of every run (master/results/statistics.py)
-    sys.path.insert(0, str(SCRIPTS))
-    try:
-        import en50318_readings as R
-    finally:
-        sys.path.remove(str(SCRIPTS))
+    R = readings_module()
     import numpy as np
 
     from pantocosim.master.results.statistics import contact_statistics

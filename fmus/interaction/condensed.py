@@ -23,7 +23,7 @@ from numba import njit
 
 from ..core.hht import HHTIntegrator
 from ..core.model import Evaluation, SecondOrderModel
-from ..core.stepper_contract import StepReport, StructureStep
+from ..core.stepper_contract import StepReport, ClosedFormStep
 from .penalty_contact import condensed_forces
 
 
@@ -327,13 +327,13 @@ def bodies_solver(bodies, contact, settings):
 class CondensedStepper:
     """One HHT-alpha step of structure + bodies + contacts: the structure's free response,
     the bodies' step on the condensed interface, the structure's step with the forces (a
-    :class:`~.stepper.Stepper`; the structure's constant step data are those of
-    :attr:`structure`)."""
+    :class:`~pantocosim.core.stepper_contract.Stepper`; the structure's constant step data
+    are those of :attr:`structure`)."""
 
     #: the bodies' Newton iterations may fail half-way through a step
     closed_form = False
 
-    def __init__(self, structure: StructureStep, points, bodies, contact, settings,
+    def __init__(self, structure: ClosedFormStep, points, bodies, contact, settings,
                  speed: float = 0.0):
         #: ``points(t)``: the structure's contact points at t (dofs, weights, offset,
         #: dweights_dx, doffset_dx), one per body

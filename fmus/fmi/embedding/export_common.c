@@ -1,5 +1,5 @@
 /*
- * The version-neutral part of pantocosim's FMI export libraries (export_common.h):
+ * The version-neutral part of pantocosim's FMI embedding libraries (export_common.h):
  *
  * - it finds a Python runtime itself: the host's interpreter when the host is a Python
  *   process, else the executable named by $PANTOCOSIM_PYTHON, else the interpreter that
