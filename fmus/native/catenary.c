@@ -524,6 +524,8 @@ int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, c
     READ(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * ne);
     m->definition = pcs_data_text(d, "definition", err, PCS_MSG);
     if (!m->definition) return -1;
+    m->extrapolate = 1;
+    memcpy(m->u_force, m->F0, np * sizeof(double));
     return wire_dofs(m, d, dofs, err);
 }
 

@@ -111,7 +111,6 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     const int *sizes;
     const double *sc;
     size_t N, nd, K, nS;
-    int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     md = (struct Modal *)pcs_alloc(mem, 1, sizeof *md);
     if (!m || !md) {
@@ -194,8 +193,6 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->synced = m->state + 3; m->prev = m->state + 4;
     m->q = m->prev + 2 * NP; m->v = m->q + N; m->a = m->v + N; m->f = m->a + N;
     m->committed = m->f + N;
-    m->extrapolate = 1;
-    for (k = 0; k < m->np; k++) m->u_force[k] = m->F0[k];
     return m;
 fail:
     modal_free(m, mem);
