@@ -91,6 +91,10 @@ int cat_check_sizes(const Catenary *m, const PcsData *d, char *err);
 int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err);
 int cat_arena(Catenary *m, const PcsData *d, const PcsMemory *mem,
               void (*carve)(Catenary *m, PcsArena *a), char *err);
+/* the end of a model's initialisation, its outputs at the start computed: the inputs and
+   the contact forces of the static start (contact_mode 1: the pantographs F0 / k_H above
+   the wire) */
+void cat_start(Catenary *m);
 /* the model table's entries both models share */
 int cat_step(void *model, double t, double h, char *err);
 void cat_outputs(void *model);
