@@ -13,7 +13,8 @@ import zipfile
 
 import pytest
 
-from test_native_fmus import required, run_host
+from test_native_fmus import run_host
+from tooling import required
 
 pytestmark = pytest.mark.slow
 

@@ -6,7 +6,6 @@ with the system's C compiler, win64 with mingw-w64)."""
 from __future__ import annotations
 
 import hashlib
-import os
 import shutil
 import subprocess
 import tempfile
