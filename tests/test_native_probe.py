@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_native_fmus import required
+from tooling import required
 
 pytestmark = pytest.mark.slow
 

@@ -450,6 +450,26 @@ int cat_set_string(void *model, unsigned vr, const char *value, int initialised,
     return PCS_ERROR;
 }
 
+void cat_start(Catenary *m)
+{
+    int k;
+    for (k = 0; k < m->np; k++) {
+        m->out_F[k] = m->F0[k];
+        m->z_start[k] = m->out_z[k] + m->F0[k] / m->k_h;
+        if (m->mode == 0) {
+            m->prev[2 * k] = m->F0[k];
+            m->u_force[k] = m->F0[k];
+        } else {
+            m->prev[2 * k] = m->z_start[k];
+            m->prev[2 * k + 1] = 0.0;
+            m->u_z[k] = m->z_start[k];
+            m->u_v[k] = 0.0;
+        }
+    }
+    m->iterations = 0.0;
+    m->initialised = 1;
+}
+
 /* ------------------------------------------------------------------ reading */
 
 int cat_check_sizes(const Catenary *m, const PcsData *d, char *err)
@@ -524,6 +544,8 @@ int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, c
     READ(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * ne);
     m->definition = pcs_data_text(d, "definition", err, PCS_MSG);
     if (!m->definition) return -1;
+    m->extrapolate = 1;
+    memcpy(m->u_force, m->F0, np * sizeof(double));
     return wire_dofs(m, d, dofs, err);
 }
 

@@ -84,12 +84,17 @@ int pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
                         const double *G, const double *H, double *F);
 /* reading: the sizes both models share within the limits (pcs_limits.h); the CAT_SCALAR_
    fields of the scalars (pcs_layout.h) and the sections both read (F0, x0, drop_ka, drop_N0, drop_tension, wire_*,
-   definition; master/native/export.py), the wire's DOFs below dofs; the work memory of
+   definition; master/native/export.py), the wire's DOFs below dofs, the inputs' start
+   (contact forces F0, extrapolated heights); the work memory of
    carve (measured, bounded by PCS_MAX_BYTES, allocated, taken). 0, or -1 with err */
 int cat_check_sizes(const Catenary *m, const PcsData *d, char *err);
 int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err);
 int cat_arena(Catenary *m, const PcsData *d, const PcsMemory *mem,
               void (*carve)(Catenary *m, PcsArena *a), char *err);
+/* the end of a model's initialisation, its outputs at the start computed: the inputs and
+   the contact forces of the static start (contact_mode 1: the pantographs F0 / k_H above
+   the wire) */
+void cat_start(Catenary *m);
 /* the model table's entries both models share */
 int cat_step(void *model, double t, double h, char *err);
 void cat_outputs(void *model);

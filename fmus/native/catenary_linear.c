@@ -310,7 +310,6 @@ static void *linear_new(const PcsData *d, const PcsMemory *mem, char *err)
     const int *sizes;
     const double *sc;
     size_t n, nd, i;
-    int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
     SECTION(sizes, "sizes", PCS_TYPE_I32, LIN_SIZES);
@@ -373,8 +372,6 @@ static void *linear_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->bx = m->Np + nd; m->sl = m->bx + nd; m->sl_new = m->sl + nd; m->s = m->sl_new + nd;
     m->y = m->s + nd; m->zs = m->y + nd; m->small = m->zs + nd; m->bW = m->small + nd * nd;
     m->own = &LINEAR;
-    m->extrapolate = 1;
-    for (k = 0; k < m->np; k++) m->u_force[k] = m->F0[k];
     return m;
 fail:
     linear_free(m, mem);
@@ -444,22 +441,7 @@ static int linear_initialize(void *model, char *err)
     }
     form_products(m);
     linear_outputs(m);
-    for (k = 0; k < m->np; k++) {
-        double zw = m->out_z[k];
-        m->out_F[k] = m->F0[k];
-        m->z_start[k] = zw + m->F0[k] / m->k_h;
-        if (m->mode == 0) {
-            m->prev[2 * k] = m->F0[k];
-            m->u_force[k] = m->F0[k];
-        } else {
-            m->prev[2 * k] = m->z_start[k];
-            m->prev[2 * k + 1] = 0.0;
-            m->u_z[k] = m->z_start[k];
-            m->u_v[k] = 0.0;
-        }
-    }
-    m->iterations = 0.0;
-    m->initialised = 1;
+    cat_start(m);
     return PCS_OK;
 }
 

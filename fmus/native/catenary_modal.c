@@ -111,7 +111,6 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     const int *sizes;
     const double *sc;
     size_t N, nd, K, nS;
-    int k;
     m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
     md = (struct Modal *)pcs_alloc(mem, 1, sizeof *md);
     if (!m || !md) {
@@ -194,8 +193,6 @@ static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->synced = m->state + 3; m->prev = m->state + 4;
     m->q = m->prev + 2 * NP; m->v = m->q + N; m->a = m->v + N; m->f = m->a + N;
     m->committed = m->f + N;
-    m->extrapolate = 1;
-    for (k = 0; k < m->np; k++) m->u_force[k] = m->F0[k];
     return m;
 fail:
     modal_free(m, mem);
@@ -494,21 +491,7 @@ static int modal_initialize(void *model, char *err)
     m->c_f = 1.0 + m->alpha;
     woodbury_base(m);
     modal_outputs(m);
-    for (k = 0; k < m->np; k++) {
-        m->out_F[k] = m->F0[k];
-        m->z_start[k] = m->out_z[k] + m->F0[k] / m->k_h;
-        if (m->mode == 0) {
-            m->prev[2 * k] = m->F0[k];
-            m->u_force[k] = m->F0[k];
-        } else {
-            m->prev[2 * k] = m->z_start[k];
-            m->prev[2 * k + 1] = 0.0;
-            m->u_z[k] = m->z_start[k];
-            m->u_v[k] = 0.0;
-        }
-    }
-    m->iterations = 0.0;
-    m->initialised = 1;
+    cat_start(m);
     return PCS_OK;
 }
 

@@ -21,14 +21,14 @@ unsigned long long pcs_fnv1a(const unsigned char *p, size_t n)
     return h;
 }
 
-static unsigned read_u32(const unsigned char *p)
+unsigned pcs_read_u32(const unsigned char *p)
 {
     unsigned v;
     memcpy(&v, p, 4);
     return v;
 }
 
-static unsigned long long read_u64(const unsigned char *p)
+unsigned long long pcs_read_u64(const unsigned char *p)
 {
     unsigned long long v;
     memcpy(&v, p, 8);
@@ -44,8 +44,8 @@ static int section_at(const PcsData *d, size_t pos, char name[25], unsigned *typ
     if (d->size - pos < SECTION_HEADER_BYTES) return -1;
     memcpy(name, d->bytes + pos, 24);
     name[24] = '\0';
-    *type = read_u32(d->bytes + pos + 24);
-    n = read_u64(d->bytes + pos + 32);
+    *type = pcs_read_u32(d->bytes + pos + 24);
+    n = pcs_read_u64(d->bytes + pos + 32);
     if (*type != PCS_TYPE_F64 && *type != PCS_TYPE_I32) return -1;
     width = *type == PCS_TYPE_F64 ? 8u : 4u;
     if (n > (unsigned long long)(d->size - pos - SECTION_HEADER_BYTES) / width) return -1;
@@ -129,8 +129,8 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
         snprintf(err, n_err, "data file %s: not a pantocosim data file (no PCSDATA magic)", path);
         return -1;
     }
-    if (read_u32(d->bytes + 12) != 0x01020304u) {
-        unsigned mark = read_u32(d->bytes + 12);
+    if (pcs_read_u32(d->bytes + 12) != 0x01020304u) {
+        unsigned mark = pcs_read_u32(d->bytes + 12);
         pcs_data_free(d, mem);
         snprintf(err, n_err, "data file %s: its byte-order mark reads 0x%08x: pantocosim "
                  "writes data files little-endian, and this FMU runs on a big-endian machine "
@@ -138,16 +138,16 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
                  mark);
         return -1;
     }
-    if (read_u32(d->bytes + 8) != PCS_DATA_VERSION) {
-        unsigned v = read_u32(d->bytes + 8);
+    if (pcs_read_u32(d->bytes + 8) != PCS_DATA_VERSION) {
+        unsigned v = pcs_read_u32(d->bytes + 8);
         pcs_data_free(d, mem);
         snprintf(err, n_err, "data file %s: format version %u, this FMU reads version %u",
                  path, v, PCS_DATA_VERSION);
         return -1;
     }
-    d->kind = read_u32(d->bytes + 16);
-    d->n_sections = read_u32(d->bytes + 20);
-    payload = read_u64(d->bytes + 24);
+    d->kind = pcs_read_u32(d->bytes + 16);
+    d->n_sections = pcs_read_u32(d->bytes + 20);
+    payload = pcs_read_u64(d->bytes + 24);
     if (payload != (unsigned long long)(d->size - HEADER_BYTES)) {
         pcs_data_free(d, mem);
         snprintf(err, n_err, "data file %s: the header announces %llu payload bytes, the "
@@ -156,7 +156,7 @@ int pcs_data_load(PcsData *d, const char *path, const PcsMemory *mem, char *err,
         return -1;
     }
     sum = pcs_fnv1a(d->bytes + HEADER_BYTES, d->size - HEADER_BYTES);
-    if (sum != read_u64(d->bytes + 32)) {
+    if (sum != pcs_read_u64(d->bytes + 32)) {
         pcs_data_free(d, mem);
         snprintf(err, n_err, "data file %s: checksum mismatch (damaged)", path);
         return -1;

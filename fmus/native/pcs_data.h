@@ -46,6 +46,9 @@ const void *pcs_data_section(const PcsData *d, const char *name, unsigned type, 
                              size_t *found, char *err, size_t n_err);
 /* The NUL-terminated string of section name (int32 words); NULL with the reason in err. */
 const char *pcs_data_text(const PcsData *d, const char *name, char *err, size_t n_err);
+/* A little-endian uint32 / uint64 at p (the data file's and the FMU states' integers). */
+unsigned pcs_read_u32(const unsigned char *p);
+unsigned long long pcs_read_u64(const unsigned char *p);
 /* The 64-bit FNV-1a hash of n bytes (the payload checksum; also used by FMU states). */
 unsigned long long pcs_fnv1a(const unsigned char *p, size_t n);
 /* file:// URI (FMI resource location) to a path; 0 on success */

@@ -325,20 +325,6 @@ int pcs_state_size(PcsInstance *c, const char *call, const void *state, size_t *
 static void put_u32(unsigned char *p, unsigned v) { memcpy(p, &v, 4); }
 static void put_u64(unsigned char *p, unsigned long long v) { memcpy(p, &v, 8); }
 
-static unsigned get_u32(const unsigned char *p)
-{
-    unsigned v;
-    memcpy(&v, p, 4);
-    return v;
-}
-
-static unsigned long long get_u64(const unsigned char *p)
-{
-    unsigned long long v;
-    memcpy(&v, p, 8);
-    return v;
-}
-
 int pcs_state_serialize(PcsInstance *c, const char *call, const void *state,
                         unsigned char *out, size_t size)
 {
@@ -366,14 +352,14 @@ int pcs_state_deserialize(PcsInstance *c, const char *call, const unsigned char 
     if (ready(c, call, ANY) != PCS_OK) return PCS_ERROR;
     if (!in || !state) return pcs_refuse(c, call, "NULL arguments");
     want = c->type->state_bytes(c->model);
-    if (size < SER_HEAD || memcmp(in, "PCSSTATE", 8) != 0 || get_u32(in + 8) != SER_VERSION)
+    if (size < SER_HEAD || memcmp(in, "PCSSTATE", 8) != 0 || pcs_read_u32(in + 8) != SER_VERSION)
         return pcs_refuse(c, call, "not a serialized state of a pantocosim native FMU (of this "
                       "version)");
-    if (get_u32(in + 12) != c->type->kind || get_u64(in + 16) != c->data.checksum)
+    if (pcs_read_u32(in + 12) != c->type->kind || pcs_read_u64(in + 16) != c->data.checksum)
         return pcs_refuse(c, call, "a state of another model or export (its data file differs)");
-    if (get_u64(in + 24) != (unsigned long long)want || size - SER_HEAD != want)
+    if (pcs_read_u64(in + 24) != (unsigned long long)want || size - SER_HEAD != want)
         return pcs_refuse(c, call, "a state of another size (truncated or of another model)");
-    if (get_u64(in + 32) != pcs_fnv1a(in + 40, 8 + want))
+    if (pcs_read_u64(in + 32) != pcs_fnv1a(in + 40, 8 + want))
         return pcs_refuse(c, call, "checksum mismatch (damaged state)");
     memcpy(&time, in + 40, 8);
     if (!isfinite(time)) return pcs_refuse(c, call, "the state's time is not finite");

@@ -6,7 +6,6 @@ with the system's C compiler, win64 with mingw-w64)."""
 from __future__ import annotations
 
 import hashlib
-import os
 import shutil
 import subprocess
 import tempfile
@@ -18,7 +17,11 @@ from xml.sax.saxutils import escape
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.fmu.embedding import compiler
 from pantocosim.master.native.data_file import DATA_FILE, write_data
-from pantocosim.master.native.headers import SOURCE_DIR, header_numbers
+# value_references stays importable from here (the models' exporters read it)
+from pantocosim.master.native.headers import SOURCE_DIR, header_numbers, value_references
+
+__all__ = ["SOURCE_DIR", "CFLAGS", "NativeModel", "Variable", "build_fmu", "model_table",
+           "value_references"]
 
 #: warnings are errors: the sources compile clean with any C99 compiler
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
