@@ -10,11 +10,13 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from test_native_fmus import run_host
-from tooling import required
+from tooling import missing, required
 
 pytestmark = pytest.mark.slow
 
@@ -106,3 +108,153 @@ def host_exe(tmp_path):
         subprocess.run([required("gcc", "gcc"), *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o",
                         str(exe), str(HOST_SOURCE), "-ldl", "-lm"], check=True)
     return exe
+
+
+# ----------------------------------------------- the binaries this machine runs, bit for bit
+#: the coupled runs: scenario -> its pantograph's FMU
+PAIRS = {"en50318-300": "en50318-2mass", "dsa380-ave-300": "dsa380-rigid"}
+STEPS, DT = 300, 0.001
+AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")
+HOST_FLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+LIB_FLAGS = [*HOST_FLAGS, "-shared"]
+SSE = ["-msse2", "-mfpmath=sse"]          # a 32-bit x86 build: doubles in SSE registers
+
+
+@pytest.fixture(scope="module")
+def coupled_fmus(tmp_path_factory):
+    """The FMI 2.0 native catenary and pantograph FMUs of en50318-300 (2-mass pantograph)
+    and dsa380-ave-300 (rigid DSA-380) on six spans, with their shipped linux64 and win64
+    binaries, unpacked: {scenario: (catenary folder, pantograph folder)}."""
+    from pantocosim.master.native.models import export_scenario
+    from pantocosim.master.run import prepare
+    from pantocosim.master.scenario import load_scenario
+
+    required("gcc", "gcc")
+    required("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64")
+    out = tmp_path_factory.mktemp("coupled")
+    pairs = {}
+    for scenario, pantograph in PAIRS.items():
+        prep = prepare(dataclasses.replace(load_scenario(scenario), catenary_model="linear",
+                                           spans=6, window_supports=(1, 3)))
+        written, kept = export_scenario(prep, out / scenario, fmi=2, win64=True)
+        assert [p.stem for p in written] == ["catenary", pantograph] and kept == []
+        for fmu in written:
+            with zipfile.ZipFile(fmu) as z:
+                z.extractall(out / scenario / fmu.stem)
+        pairs[scenario] = (out / scenario / "catenary", out / scenario / pantograph)
+    return pairs
+
+
+@pytest.fixture(scope="module")
+def linux_rows(coupled_fmus, tmp_path_factory):
+    """The linux64 coupled run of each pair: {scenario: rows t F z_pantograph z_wire}."""
+    tmp = tmp_path_factory.mktemp("linux64")
+    return {scenario: run_host(host_exe(tmp), ["coupled", *folders, STEPS, DT], tmp)[0]
+            for scenario, folders in coupled_fmus.items()}
+
+
+def zig_build(target):
+    def build(sources, out, host=False):
+        pytest.importorskip("ziglang")
+        cmd = [sys.executable, "-m", "ziglang", "cc", "-target", target]
+        if host:
+            cmd += [*HOST_FLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(out), str(sources),
+                    "-ldl", "-lm"]
+        else:
+            cmd += [*LIB_FLAGS, "-fPIC", "-fvisibility=hidden", f"-I{sources}",
+                    *map(str, sorted(sources.glob("*.c"))), "-o", str(out), "-lm"]
+        subprocess.run(cmd, check=True, capture_output=True, timeout=600)
+    return build
+
+
+def mingw_build(compiler, package, extra=()):
+    def build(sources, out, host=False):
+        cc = required(compiler, package)
+        if host:
+            cmd = [cc, *HOST_FLAGS, *extra, "-o", str(out), str(sources)]
+        else:
+            cmd = [cc, *LIB_FLAGS, *extra, f"-I{sources}", *map(str, sorted(sources.glob("*.c"))),
+                   "-o", str(out), "-static-libgcc"]
+        subprocess.run(cmd, check=True, capture_output=True, timeout=600)
+    return build
+
+
+def qemu_aarch64():
+    qemu = required("qemu-aarch64", "qemu-user")
+    if not (AARCH64_ROOT / "lib" / "ld-linux-aarch64.so.1").exists():
+        missing("the aarch64 C library in /usr/aarch64-linux-gnu",
+                "apt-get install -y libc6-arm64-cross")
+    return (qemu, "-L", str(AARCH64_ROOT))
+
+
+def wine():
+    return (shutil.which("wine") or required("wine", "wine"),)
+
+
+def windows_path(path) -> str:
+    return "Z:" + str(path).replace("/", "\\")
+
+
+#: platform: (builder, runner, the folder the C host loads from, library suffix, a path as
+#: the host sees it, rebuilt from sources/: False for the binaries export-native ships).
+#: The C host loads binaries/linux64/*.so on Linux and binaries/win64/*.dll on Windows, so
+#: the aarch64 and win32 libraries are built into those folders of a copy of the FMU.
+PLATFORMS = {
+    "aarch64-linux": (zig_build("aarch64-linux-gnu"), qemu_aarch64, "linux64", ".so", str,
+                      True),
+    "win64": (mingw_build("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64"), wine, "win64",
+              ".dll", windows_path, False),
+    "win32": (mingw_build("i686-w64-mingw32-gcc", "gcc-mingw-w64-i686", SSE), wine, "win64",
+              ".dll", windows_path, True),
+}
+MISSING_32BIT_WINE = ("32-bit wine", "dpkg --add-architecture i386 && apt-get update && "
+                      "apt-get install -y wine32")
+
+
+@pytest.fixture(scope="module", params=sorted(PLATFORMS))
+def platform(request, coupled_fmus, tmp_path_factory):
+    """A platform's C host and the pairs' libraries, built once: (name, host, runner,
+    {scenario: (catenary folder, pantograph folder) as the host sees them})."""
+    from test_native_fmus import HOST_SOURCE
+
+    name = request.param
+    build, runner, folder, suffix, seen, rebuilt = PLATFORMS[name]
+    wrapper = runner()
+    out = tmp_path_factory.mktemp(name)
+    host = out / ("realtime_host" + (".exe" if suffix == ".dll" else ""))
+    build(HOST_SOURCE, host, host=True)
+    probe = subprocess.run([*wrapper, str(host)], capture_output=True, text=True, timeout=300,
+                           env={"PATH": "/usr/bin:/bin", "HOME": str(out), "WINEDEBUG": "-all",
+                                "WINEPREFIX": str(tmp_path_factory.getbasetemp() /
+                                                  "wineprefix")})
+    if "usage" not in probe.stderr:
+        missing(*MISSING_32BIT_WINE) if name == "win32" else pytest.fail(
+            f"the {name} host does not start: {probe.stderr[-2000:]}")
+    pairs = {}
+    for scenario, folders in coupled_fmus.items():
+        copies = []
+        for fmu in folders:
+            copy = shutil.copytree(fmu, out / scenario / fmu.name)
+            identifier = next((copy / "binaries" / "linux64").glob("*.so")).stem
+            if rebuilt:
+                shutil.rmtree(copy / "binaries")
+                (copy / "binaries" / folder).mkdir(parents=True)
+                build(copy / "sources", copy / "binaries" / folder / (identifier + suffix))
+            assert (copy / "binaries" / folder / (identifier + suffix)).exists()
+            copies.append(seen(copy))
+        pairs[scenario] = tuple(copies)
+    return name, host, wrapper, pairs
+
+
+@pytest.mark.parametrize("scenario", sorted(PAIRS))
+def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_rows, scenario,
+                                                             tmp_path):
+    name, host, wrapper, pairs = platform
+    linux = linux_rows[scenario]
+    got, counts = run_host(host, ["coupled", *pairs[scenario], STEPS, DT], tmp_path,
+                           wrapper=wrapper)
+    assert linux.shape == got.shape == (STEPS, 4)
+    assert np.all(linux[:, 1] > 0.0) and linux[:, 1].mean() > 50.0    # in contact throughout
+    assert got.tobytes() == linux.tobytes(), (
+        f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+    assert counts["allocations in doStep"] == 0
