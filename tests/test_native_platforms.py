@@ -6,7 +6,9 @@ forbid them) and gives the gcc linux64 binaries' coupled run bit for bit. The ma
 are checked for their format and exports only (untested on Apple hardware)."""
 
 import dataclasses
+import hashlib
 import shutil
+import struct
 import subprocess
 import sys
 import zipfile
@@ -258,3 +260,106 @@ def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_row
     assert got.tobytes() == linux.tobytes(), (
         f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
     assert counts["allocations in doStep"] == 0
+
+
+# ------------------------------------------------------- macOS: the Mach-O load commands
+#: zig target with its minimum macOS: (CPU type, minimum version)
+MACOS = {"aarch64-macos.11.0": (0x0100000C, (11, 0, 0)),
+         "x86_64-macos.10.15": (0x01000007, (10, 15, 0))}
+LIBSYSTEM = "/usr/lib/libSystem.B.dylib"
+LC_SYMTAB, LC_CODE_SIGNATURE, LC_VERSION_MIN_MACOSX, LC_BUILD_VERSION = 0x2, 0x1D, 0x24, 0x32
+#: the commands that link a dynamic library: load, weak, reexport, lazy, upward
+LC_DYLIBS = {0xC, 0x80000018, 0x8000001F, 0x20, 0x80000023}
+CS_ADHOC, CS_SHA256 = 0x2, 2
+
+
+def macho(data: bytes) -> dict:
+    """What a 64-bit Mach-O library says of itself: CPU, file type, linked libraries,
+    platform and minimum OS (LC_BUILD_VERSION, else LC_VERSION_MIN_MACOSX), its code
+    signature's bytes (LC_CODE_SIGNATURE), defined and undefined external symbols."""
+    magic, cpu, _, filetype, ncmds = struct.unpack_from("<5I", data, 0)
+    assert magic == 0xFEEDFACF
+    info = {"cpu": cpu, "filetype": filetype, "dylibs": [], "platform": None, "minos": None,
+            "signature": None, "signature_offset": None, "exports": set(), "imports": set()}
+    pos = 32
+    for _ in range(ncmds):
+        cmd, size = struct.unpack_from("<2I", data, pos)
+        if cmd in LC_DYLIBS:
+            (name,) = struct.unpack_from("<I", data, pos + 8)
+            info["dylibs"].append(data[pos + name:pos + size].split(b"\0")[0].decode())
+        elif cmd == LC_BUILD_VERSION:
+            info["platform"], minos = struct.unpack_from("<2I", data, pos + 8)
+            info["minos"] = (minos >> 16, (minos >> 8) & 0xFF, minos & 0xFF)
+        elif cmd == LC_VERSION_MIN_MACOSX:
+            (minos,) = struct.unpack_from("<I", data, pos + 8)
+            info["platform"], info["minos"] = 1, (minos >> 16, (minos >> 8) & 0xFF, minos & 0xFF)
+        elif cmd == LC_CODE_SIGNATURE:
+            offset, n = struct.unpack_from("<2I", data, pos + 8)
+            info["signature"], info["signature_offset"] = data[offset:offset + n], offset
+        elif cmd == LC_SYMTAB:
+            symoff, nsyms, stroff, _ = struct.unpack_from("<4I", data, pos + 8)
+            for k in range(nsyms):
+                strx, ntype, _, desc = struct.unpack_from("<IBBH", data, symoff + 16 * k)
+                name = data[stroff + strx:].split(b"\0")[0].decode()
+                if ntype & 0xE0 or not ntype & 0x01:
+                    continue                          # a debugging or a private symbol
+                kind = ntype & 0x0E
+                if kind == 0x0E:
+                    info["exports"].add(name)         # defined in a section
+                elif kind == 0x0:
+                    info["imports"].add((name, desc >> 8))  # from the library of this
+                    # ordinal (two-level namespace: 1 is the first LC_LOAD_DYLIB)
+        pos += size
+    return info
+
+
+def code_directory(signature: bytes) -> bytes:
+    """The CodeDirectory blob of a code signature's SuperBlob."""
+    magic, _, count = struct.unpack_from(">3I", signature, 0)
+    assert magic == 0xFADE0CC0
+    for k in range(count):
+        slot, offset = struct.unpack_from(">2I", signature, 12 + 8 * k)
+        if slot == 0:
+            assert struct.unpack_from(">I", signature, offset)[0] == 0xFADE0C02
+            return signature[offset:]
+    raise AssertionError("no CodeDirectory")
+
+
+def test_macos_binaries_link_libsystem_only_with_their_minimum_os_and_signature(fmus,
+                                                                              tmp_path):
+    """Untested on Apple hardware: the libraries' load commands as macOS's loader reads
+    them."""
+    for fmi in (2, 3):
+        sources = fmus["catenary", fmi] / "sources"
+        for target, (cpu, minos) in MACOS.items():
+            lib = tmp_path / f"{target}-{fmi}.dylib"
+            zig_cc(target, sources, lib, ["-fvisibility=hidden"])
+            data = lib.read_bytes()
+            info = macho(data)
+            assert (info["cpu"], info["filetype"]) == (cpu, 6), target    # MH_DYLIB
+            assert info["dylibs"] == [LIBSYSTEM], target
+            assert (info["platform"], info["minos"]) == (1, minos), target  # PLATFORM_MACOS
+            fmi_exports = {s for s in info["exports"] if s.startswith(f"_fmi{fmi}")}
+            assert {"_fmi2Instantiate" if fmi == 2 else "_fmi3InstantiateCoSimulation",
+                    f"_fmi{fmi}DoStep", f"_fmi{fmi}FreeInstance",
+                    f"_fmi{fmi}GetFMUstate" if fmi == 2 else "_fmi3GetFMUState",
+                    f"_fmi{fmi}GetVersion"} <= fmi_exports, target
+            assert info["exports"] - fmi_exports <= {"__mh_dylib_header", "___dso_handle"}
+            names = {name for name, _ in info["imports"]}
+            assert {"_fopen", "_fread", "_snprintf"} <= names, target     # the C library
+            assert {ordinal for _, ordinal in info["imports"]} == {1}, target  # all libSystem
+            if target.startswith("aarch64"):
+                # arm64 macOS runs signed code only: an ad-hoc signature whose page hashes
+                # are those of the file as written
+                cd = code_directory(info["signature"])
+                _, _, _, flags, hash_offset, _, n_special, n_code, code_limit = \
+                    struct.unpack_from(">9I", cd, 0)
+                hash_size, hash_type, _, page_log2 = struct.unpack_from(">4B", cd, 36)
+                assert flags & CS_ADHOC and hash_type == CS_SHA256 and hash_size == 32
+                assert code_limit == info["signature_offset"]
+                page = 1 << page_log2
+                assert n_code == -(-code_limit // page) and n_special >= 0
+                for k in range(n_code):
+                    digest = hashlib.sha256(data[k * page:min((k + 1) * page, code_limit)])
+                    slot = cd[hash_offset + 32 * k:hash_offset + 32 * (k + 1)]
+                    assert digest.digest() == slot, (target, k)
