@@ -249,11 +249,10 @@ class CatenaryModel(SecondOrderModel):
         f, K, slack_now = S.internal(S.full(q), tangent)
         slack_now = slack_now[self.mesh.dropper_bars]
         C = self._damping(self._slack_committed)
-        # M a on M's own (sparser) pattern; C v on the shared pattern
-        Ma = self._M_own @ a
-        f_rest = C @ v
-        f_rest += f[S.free]
-        f_rest -= self.weight
+        # M a on M's own (sparser) pattern; C v + f - weight on the shared pattern
+        M = self._M_own
+        Ma, f_rest = _inertia_and_rest(M.data, M.indices, M.indptr, a, C.data, C.indices,
+                                       C.indptr, v, f, S.free, self.weight)
         if inputs is not None:
             f_rest -= self.input_vector(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
@@ -266,17 +265,17 @@ class CatenaryModel(SecondOrderModel):
 
     def effective_matrix(self, ev, c_a, c_v, c_f):
         """c_a M + c_f (c_v C + K) on the shared pattern (adds data arrays only)."""
-        data = c_a * ev.mass.data + c_f * (c_v * ev.damping.data + ev.stiffness.data)
-        return self.structure.csr(data)
+        return self.structure.csr(_newton_data(ev.mass.data, ev.damping.data,
+                                               ev.stiffness.data, c_a, c_v, c_f))
 
     def factorize(self, S):
-        """Banded Cholesky (LAPACK dpbtrf, :class:`BandedCholesky`, which caches unit-vector
-        solves) of a matrix on the model's pattern: the DOF numbering keeps the bandwidth at
-        a few stations whatever the line length. Falls back to sparse LU if the matrix is
-        not positive definite."""
+        """Banded Cholesky (one compiled pass, :class:`BandedCholesky`, which caches
+        unit-vector solves) of a matrix on the model's pattern: the DOF numbering keeps the
+        bandwidth at a few stations whatever the line length. Falls back to sparse LU if the
+        matrix is not positive definite."""
         st = self.structure
         if sp.issparse(S) and S.shape == (st.n_free, st.n_free) and S.nnz == st.nnz:
-            solve = BandedCholesky.factor(st.lower_band(sp.csr_matrix(S).data))
+            solve = BandedCholesky.factor_columns(st.lower_columns(S.tocsr().data))
             if solve is not None:
                 return solve
         lu = spla.splu(sp.csc_matrix(S))
@@ -309,3 +308,31 @@ def _wire_point(dofs, w, dw, q, v):
         vz += w[i] * v[j]
         slope += dw[i] * q[j]
     return z, vz, slope
+
+
+@njit(cache=True)
+def _inertia_and_rest(M, M_idx, M_ptr, a, C, C_idx, C_ptr, v, f_full, free, weight):
+    """(M a, C v + f_full[free] - weight) of (3.25)-(3.26) in one pass over the rows of the
+    CSR matrices M and C (each row's products summed in the order of its entries)."""
+    n = free.shape[0]
+    Ma = np.empty(n)
+    rest = np.empty(n)
+    for i in range(n):
+        s = 0.0
+        for jj in range(M_ptr[i], M_ptr[i + 1]):
+            s += M[jj] * a[M_idx[jj]]
+        Ma[i] = s
+        s = 0.0
+        for jj in range(C_ptr[i], C_ptr[i + 1]):
+            s += C[jj] * v[C_idx[jj]]
+        rest[i] = (s + f_full[free[i]]) - weight[i]
+    return Ma, rest
+
+
+@njit(cache=True)
+def _newton_data(M, C, K, c_a, c_v, c_f):
+    """c_a M + c_f (c_v C + K), entry by entry, of matrices on one pattern."""
+    out = np.empty(M.shape[0])
+    for i in range(M.shape[0]):
+        out[i] = c_a * M[i] + c_f * (c_v * C[i] + K[i])
+    return out

@@ -24,6 +24,8 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
+from ..core.band_factor import lower_columns
+
 
 @njit(cache=True)
 def scatter_add(out, idx, vals):
@@ -135,6 +137,7 @@ class Structure:
         self.bandwidth = int(np.max(ur - uc)) if uk.size else 0
         self.band_src = np.flatnonzero(low)
         self.band_dst = ((ur[low] - uc[low]) * n + uc[low]).astype(np.int64)
+        self.column_dst = (uc[low] * (self.bandwidth + 1) + ur[low] - uc[low]).astype(np.int64)
         ends = np.cumsum([0] + [r.size for r, _ in pairs])
         return [pos[a:b] for a, b in zip(ends[:-1], ends[1:])]
 
@@ -157,6 +160,12 @@ class Structure:
         ab = np.zeros((self.bandwidth + 1) * self.n_free)
         ab[self.band_dst] = data[self.band_src]
         return ab.reshape(self.bandwidth + 1, self.n_free)
+
+    def lower_columns(self, data) -> np.ndarray:
+        """(n, bandwidth + 1) band columns as rows, ``LT[j, k] = A[j + k, j]``, of pattern
+        data (:func:`~pantocosim.core.band_factor.factor_columns` factorizes it)."""
+        return lower_columns(data, self.band_src, self.column_dst, self.n_free,
+                             self.bandwidth + 1)
 
     @property
     def mass(self) -> sp.csr_matrix:

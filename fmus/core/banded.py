@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg.lapack import dpbtrf, dpbtrs
 
-from . import band_window
+from . import band_factor, band_window
 
 #: solution entries below this are set to zero in :func:`band_solve`: the solve of a unit
 #: vector decays geometrically away from its entry and would otherwise run into subnormal
@@ -141,17 +141,6 @@ def _sum_columns(store, span, slots, values, out):
             out[i] += c * col[i]
 
 
-def _rows(LT: np.ndarray) -> np.ndarray:
-    """The factor's rows R[j, k] = L[j, j - k] (zero for j < k) from its columns as rows
-    LT[j, k] = L[j + k, j]; the reciprocal diagonal stays in column 0."""
-    n, w = LT.shape
-    R = np.zeros_like(LT)
-    R[:, 0] = LT[:, 0]
-    for k in range(1, min(w, n)):
-        R[k:, k] = LT[:n - k, k]
-    return R
-
-
 @dataclass
 class SparseBand:
     """A symmetric band matrix (lower band storage) for products: the diagonals below the
@@ -195,20 +184,24 @@ class BandedCholesky:
     """``solve = BandedCholesky.factor(ab)``; ``solve(r)``, ``solve.solve_sparse(dofs, w)``.
 
     ``ab``: (bandwidth + 1, n) lower band storage (LAPACK 'L'); overwritten.
-    ``factor`` returns None when the matrix is not positive definite."""
+    ``factor`` and ``factor_columns`` return None when the matrix is not positive
+    definite."""
 
     #: unit-vector solves kept (each n floats)
     cache_size = 48
 
-    def __init__(self, cb: np.ndarray):
-        self.cb = cb
-        self.n = cb.shape[1]
-        self.LT = np.array(cb.T, order="C")         # factor columns as rows (band_solve)
-        self.LT[:, 0] = 1.0 / self.LT[:, 0]
+    def __init__(self, LT: np.ndarray, cb: np.ndarray | None = None):
+        self.n = LT.shape[0]
+        self._cb = cb
+        #: the factor's columns as rows, LT[j, 0] = 1 / L[j, j], LT[j, k] = L[j + k, j]
+        self.LT = LT
         #: the substitution with the pending sums in registers (:mod:`.band_window`), which
         #: also needs the factor's rows R[j, k] = L[j, j - k]; None: :func:`band_solve`
         self._window = band_window.solver(self.LT.shape[1])
-        self.R = _rows(self.LT) if self._window is not None else None
+        self.R = None
+        if self._window is not None:
+            self.R = np.empty_like(LT)
+            band_factor.factor_rows(LT, self.R)
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
@@ -219,8 +212,27 @@ class BandedCholesky:
 
     @classmethod
     def factor(cls, ab: np.ndarray) -> "BandedCholesky | None":
+        """By LAPACK (dpbtrf) from the lower band storage ``ab`` (overwritten)."""
         cb, info = dpbtrf(ab, lower=1, overwrite_ab=1)
-        return cls(cb) if info == 0 else None
+        if info != 0:
+            return None
+        LT = np.array(cb.T, order="C")
+        LT[:, 0] = 1.0 / LT[:, 0]
+        return cls(LT, cb)
+
+    @classmethod
+    def factor_columns(cls, LT: np.ndarray) -> "BandedCholesky | None":
+        """In one compiled pass (:func:`.band_factor.factor_columns`) from the band's
+        columns as rows ``LT[j, k] = A[j + k, j]`` (overwritten)."""
+        return cls(LT) if band_factor.factor_columns(LT) else None
+
+    @property
+    def cb(self) -> np.ndarray:
+        """The factor in LAPACK's lower band storage (for dpbtrs)."""
+        if self._cb is None:
+            self._cb = np.array(self.LT.T, order="C")
+            self._cb[0] = 1.0 / self._cb[0]
+        return self._cb
 
     def __call__(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=float)
