@@ -249,10 +249,11 @@ class CatenaryModel(SecondOrderModel):
         f, K, slack_now = S.internal(S.full(q), tangent)
         slack_now = slack_now[self.mesh.dropper_bars]
         C = self._damping(self._slack_committed)
-        # M a on M's own (sparser) pattern; C v + f - weight on the shared pattern
-        M = self._M_own
-        Ma, f_rest = _inertia_and_rest(M.data, M.indices, M.indptr, a, C.data, C.indices,
-                                       C.indptr, v, f, S.free, self.weight)
+        # M a on M's own (sparser) pattern; C v on the shared pattern
+        Ma = self._M_own @ a
+        f_rest = C @ v
+        f_rest += f[S.free]
+        f_rest -= self.weight
         if inputs is not None:
             f_rest -= self.input_vector(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
@@ -308,25 +309,6 @@ def _wire_point(dofs, w, dw, q, v):
         vz += w[i] * v[j]
         slope += dw[i] * q[j]
     return z, vz, slope
-
-
-@njit(cache=True)
-def _inertia_and_rest(M, M_idx, M_ptr, a, C, C_idx, C_ptr, v, f_full, free, weight):
-    """(M a, C v + f_full[free] - weight) of (3.25)-(3.26) in one pass over the rows of the
-    CSR matrices M and C (each row's products summed in the order of its entries)."""
-    n = free.shape[0]
-    Ma = np.empty(n)
-    rest = np.empty(n)
-    for i in range(n):
-        s = 0.0
-        for jj in range(M_ptr[i], M_ptr[i + 1]):
-            s += M[jj] * a[M_idx[jj]]
-        Ma[i] = s
-        s = 0.0
-        for jj in range(C_ptr[i], C_ptr[i + 1]):
-            s += C[jj] * v[C_idx[jj]]
-        rest[i] = (s + f_full[free[i]]) - weight[i]
-    return Ma, rest
 
 
 @njit(cache=True)
