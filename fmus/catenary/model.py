@@ -29,7 +29,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numba import njit
 
-from ..core.banded import BandedCholesky
+from ..core.affine_kernels import sym_product
+from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
 from .contact_point import ContactLocator, ContactPoint
@@ -95,6 +96,11 @@ class CatenaryModel(SecondOrderModel):
         # for the residual: M on its own (sparser) pattern
         self._M_own = S.mass.copy()
         self._M_own.eliminate_zeros()
+        # ... and M, C (all droppers taut) as symmetric sparse bands, the slack droppers'
+        # share of C taken out block by block (:func:`_inertia_and_rest`)
+        self._M_band = SparseBand.from_band(S.lower_band(S.M_data)).parts
+        self._C_band = SparseBand.from_band(S.lower_band(self._C_base)).parts
+        self._dropper_free = S.fmap[S.bars.dofs[db]]
         self._cp_cache: tuple | None = None
         self._support_free = None
 
@@ -249,11 +255,9 @@ class CatenaryModel(SecondOrderModel):
         f, K, slack_now = S.internal(S.full(q), tangent)
         slack_now = slack_now[self.mesh.dropper_bars]
         C = self._damping(self._slack_committed)
-        # M a on M's own (sparser) pattern; C v on the shared pattern
-        Ma = self._M_own @ a
-        f_rest = C @ v
-        f_rest += f[S.free]
-        f_rest -= self.weight
+        Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v, self._slack_committed,
+                                       self._dropper_free, self._dropper_C, f, S.free,
+                                       self.weight)
         if inputs is not None:
             f_rest -= self.input_vector(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
@@ -309,6 +313,36 @@ def _wire_point(dofs, w, dw, q, v):
         vz += w[i] * v[j]
         slope += dw[i] * q[j]
     return z, vz, slope
+
+
+@njit(cache=True)
+def _inertia_and_rest(M, a, C, v, slack, d_free, d_C, f_full, free, weight):
+    """(M a, C v + f_full[free] - weight) of (3.25)-(3.26): M and C are symmetric sparse
+    bands (:class:`SparseBand` parts, C with every dropper taut); the Rayleigh share of the
+    ``slack`` droppers (their 6 x 6 blocks ``d_C`` on the free DOFs ``d_free``, -1: fixed)
+    is taken out of C v."""
+    n = free.shape[0]
+    Ma = np.empty(n)
+    rest = np.empty(n)
+    below = np.empty(n)
+    sym_product(M, a, Ma, below)
+    sym_product(C, v, rest, below)
+    for d in range(slack.shape[0]):
+        if not slack[d]:
+            continue
+        for i in range(6):
+            r = d_free[d, i]
+            if r < 0:
+                continue
+            s = 0.0
+            for j in range(6):
+                c = d_free[d, j]
+                if c >= 0:
+                    s += d_C[d, 6 * i + j] * v[c]
+            rest[r] -= s
+    for i in range(n):
+        rest[i] = (rest[i] + f_full[free[i]]) - weight[i]
+    return Ma, rest
 
 
 @njit(cache=True)
