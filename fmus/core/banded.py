@@ -205,7 +205,7 @@ class BandedCholesky:
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
-        self._store = np.zeros((self.cache_size, self.n))
+        self._store = np.empty((self.cache_size, self.n))   # a row is zeroed when taken
         self._span = np.zeros((self.cache_size, 2), dtype=np.int64)
         self._solved = 0                  # columns solved so far (a row may have changed)
         self._last_slots = None           # ((dofs, _solved), rows) of the last solve_sparse
