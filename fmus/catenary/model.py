@@ -254,17 +254,16 @@ class CatenaryModel(SecondOrderModel):
         S = self.structure
         f, K, slack_now = S.internal(S.full(q), tangent)
         slack_now = slack_now[self.mesh.dropper_bars]
-        C = self._damping(self._slack_committed)
         Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v, self._slack_committed,
                                        self._dropper_free, self._dropper_C, f, S.free,
                                        self.weight)
         if inputs is not None:
             f_rest -= self.input_vector(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
-                        structure_key=(slack_now.tobytes(), self._C_key))
+                        structure_key=(slack_now.tobytes(), self._slack_committed.tobytes()))
         if tangent:
             ev.mass = self.M
-            ev.damping = C
+            ev.damping = self._damping(self._slack_committed)
             ev.stiffness = S.csr(K)
         return ev
 
