@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from pantocosim.core import band_factor, band_window
+from pantocosim.core import band_window
 from pantocosim.core.banded import BandedCholesky
 
 
@@ -61,58 +61,27 @@ def test_not_positive_definite_gives_none():
     assert BandedCholesky.factor(ab) is None
 
 
-def _columns(ab):
-    """The band ``ab`` (lower band storage) as columns as rows, LT[j, k] = A[j + k, j]."""
-    return np.ascontiguousarray(ab.T)
-
-
-def test_compiled_factorization_agrees_with_lapack():
-    """factor_columns and dpbtrf give the same factor to round-off, on sizes below, at and
-    above the band width, and the same solves; the factor's rows are its columns moved."""
+def test_factor_layout_rows_and_several_right_hand_sides():
+    """The kept factor: LT[j, 0] = 1 / L[j, j], LT[j, k] = L[j + k, j], and its rows
+    R[j, k] = L[j, j - k] for the back substitution, on sizes below, at and above the band
+    width; a block of right-hand sides is solved as each alone."""
     rng = np.random.default_rng(5)
     for n, kd in ((1, 0), (2, 1), (7, 3), (60, 4), (300, 18)):
         A, ab = _spd_band(n, kd, seed=n)
-        lapack = BandedCholesky.factor(ab.copy())
-        compiled = BandedCholesky.factor_columns(_columns(ab))
+        solve = BandedCholesky.factor(ab)
         L = np.linalg.cholesky(A)
-        scale = np.abs(L).max()
-        assert np.abs(compiled.LT - lapack.LT).max() <= 1e-13 * np.abs(lapack.LT).max()
-        for j in range(n):          # LT[j, k] = L[j + k, j], 1 / L[j, j] in column 0
-            assert abs(1.0 / compiled.LT[j, 0] - L[j, j]) <= 1e-13 * scale
+        tol = 1e-13 * np.abs(L).max()
+        for j in range(n):
+            assert abs(1.0 / solve.LT[j, 0] - L[j, j]) <= tol
             k = min(kd, n - 1 - j)
-            assert np.abs(compiled.LT[j, 1:k + 1] - L[j + 1:j + k + 1, j]).max(
-                initial=0.0) <= 1e-13 * scale
-        if compiled.R is not None:
-            for j in range(n):
-                for k in range(1, min(j, kd) + 1):
-                    assert compiled.R[j, k] == compiled.LT[j - k, k]
-        r = rng.standard_normal(n)
-        assert same_solution(compiled(r), sla.solve(A, r), A, kd)
-        R2 = rng.standard_normal((n, 3))            # several right-hand sides (dpbtrs)
-        assert same_solution(compiled(R2), sla.solve(A, R2), A, kd)
-
-
-def test_compiled_factorization_refuses_what_is_not_positive_definite():
-    A, ab = _spd_band()
-    bad = ab.copy()
-    bad[0, 5] = -100.0
-    assert BandedCholesky.factor_columns(_columns(bad)) is None
-    bad[0, 5] = np.nan
-    assert BandedCholesky.factor_columns(_columns(bad)) is None
-    # positive diagonal, indefinite matrix: a later pivot fails
-    A2 = np.array([[1.0, 2.0], [2.0, 1.0]])
-    assert BandedCholesky.factor_columns(np.array([[1.0, 2.0], [1.0, 0.0]])) is None
-    assert np.linalg.eigvalsh(A2).min() < 0
-
-
-def test_lower_columns_places_pattern_entries():
-    """Entries given on a sparse pattern land at LT[j, k] = A[j + k, j], zero elsewhere."""
-    data = np.array([4.0, -1.0, 5.0, -2.0])
-    # A[0,0] = 4, A[1,0] = -1, A[1,1] = 5, A[2,1] = -2 (n = 3, bandwidth 1)
-    src = np.arange(4)
-    dst = np.array([0 * 2 + 0, 0 * 2 + 1, 1 * 2 + 0, 1 * 2 + 1])
-    LT = band_factor.lower_columns(data, src, dst, 3, 2)
-    assert LT.tolist() == [[4.0, -1.0], [5.0, -2.0], [0.0, 0.0]]
+            assert np.abs(solve.LT[j, 1:k + 1] - L[j + 1:j + k + 1, j]).max(initial=0.0) <= tol
+            if solve.R is not None:
+                m = min(j, kd)
+                expected = np.array([L[j, j - k] for k in range(1, m + 1)])
+                assert np.abs(solve.R[j, 1:m + 1] - expected).max(initial=0.0) <= tol
+                assert not solve.R[j, m + 1:].any()
+        R2 = rng.standard_normal((n, 3))
+        assert same_solution(solve(R2), sla.solve(A, R2), A, kd)
 
 
 def test_band_solve_every_shape_against_lapack():

@@ -273,13 +273,13 @@ class CatenaryModel(SecondOrderModel):
                                                ev.stiffness.data, c_a, c_v, c_f))
 
     def factorize(self, S):
-        """Banded Cholesky (one compiled pass, :class:`BandedCholesky`, which caches
-        unit-vector solves) of a matrix on the model's pattern: the DOF numbering keeps the
+        """Banded Cholesky (LAPACK dpbtrf, :class:`BandedCholesky`, which caches unit-vector
+        solves) of a matrix on the model's pattern: the DOF numbering keeps the
         bandwidth at a few stations whatever the line length. Falls back to sparse LU if the
         matrix is not positive definite."""
         st = self.structure
         if sp.issparse(S) and S.shape == (st.n_free, st.n_free) and S.nnz == st.nnz:
-            solve = BandedCholesky.factor_columns(st.lower_columns(S.tocsr().data))
+            solve = BandedCholesky.factor(st.lower_band(S.tocsr().data))
             if solve is not None:
                 return solve
         lu = spla.splu(sp.csc_matrix(S))

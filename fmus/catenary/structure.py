@@ -24,8 +24,6 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from ..core.band_factor import lower_columns
-
 
 @njit(cache=True)
 def scatter_add(out, idx, vals):
@@ -34,6 +32,15 @@ def scatter_add(out, idx, vals):
         k = idx[i]
         if k >= 0:
             out[k] += vals[i]
+
+
+@njit(cache=True)
+def _band_storage(data, src, dst, rows, n):
+    """(rows, n) band storage holding data[src[i]] at flat position dst[i], zero elsewhere."""
+    out = np.zeros(rows * n)
+    for i in range(src.shape[0]):
+        out[dst[i]] = data[src[i]]
+    return out.reshape(rows, n)
 
 
 class Element(Protocol):
@@ -137,7 +144,6 @@ class Structure:
         self.bandwidth = int(np.max(ur - uc)) if uk.size else 0
         self.band_src = np.flatnonzero(low)
         self.band_dst = ((ur[low] - uc[low]) * n + uc[low]).astype(np.int64)
-        self.column_dst = (uc[low] * (self.bandwidth + 1) + ur[low] - uc[low]).astype(np.int64)
         ends = np.cumsum([0] + [r.size for r, _ in pairs])
         return [pos[a:b] for a, b in zip(ends[:-1], ends[1:])]
 
@@ -157,15 +163,8 @@ class Structure:
 
     def lower_band(self, data) -> np.ndarray:
         """(bandwidth + 1, n) lower band storage (LAPACK 'L') of pattern data."""
-        ab = np.zeros((self.bandwidth + 1) * self.n_free)
-        ab[self.band_dst] = data[self.band_src]
-        return ab.reshape(self.bandwidth + 1, self.n_free)
-
-    def lower_columns(self, data) -> np.ndarray:
-        """(n, bandwidth + 1) band columns as rows, ``LT[j, k] = A[j + k, j]``, of pattern
-        data (:func:`~pantocosim.core.band_factor.factor_columns` factorizes it)."""
-        return lower_columns(data, self.band_src, self.column_dst, self.n_free,
-                             self.bandwidth + 1)
+        return _band_storage(data, self.band_src, self.band_dst, self.bandwidth + 1,
+                             self.n_free)
 
     @property
     def mass(self) -> sp.csr_matrix:

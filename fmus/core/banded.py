@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg.lapack import dpbtrf, dpbtrs
 
-from . import band_factor, band_window
+from . import band_window
 
 #: solution entries below this are set to zero in :func:`band_solve`: the solve of a unit
 #: vector decays geometrically away from its entry and would otherwise run into subnormal
@@ -141,6 +141,17 @@ def _sum_columns(store, span, slots, values, out):
             out[i] += c * col[i]
 
 
+@njit(cache=True)
+def _factor_rows(LT, R):
+    """The factor's rows R[j, k] = L[j, j - k] (zero for j < k) from its columns as rows
+    LT[j, k] = L[j + k, j]; the reciprocal diagonal stays in column 0."""
+    n, w = LT.shape
+    for j in range(n):
+        R[j, 0] = LT[j, 0]
+        for k in range(1, w):
+            R[j, k] = LT[j - k, k] if j >= k else 0.0
+
+
 @dataclass
 class SparseBand:
     """A symmetric band matrix (lower band storage) for products: the diagonals below the
@@ -184,8 +195,7 @@ class BandedCholesky:
     """``solve = BandedCholesky.factor(ab)``; ``solve(r)``, ``solve.solve_sparse(dofs, w)``.
 
     ``ab``: (bandwidth + 1, n) lower band storage (LAPACK 'L'); overwritten.
-    ``factor`` and ``factor_columns`` return None when the matrix is not positive
-    definite."""
+    ``factor`` returns None when the matrix is not positive definite."""
 
     #: unit-vector solves kept (each n floats)
     cache_size = 48
@@ -201,7 +211,7 @@ class BandedCholesky:
         self.R = None
         if self._window is not None:
             self.R = np.empty_like(LT)
-            band_factor.factor_rows(LT, self.R)
+            _factor_rows(LT, self.R)
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
@@ -219,12 +229,6 @@ class BandedCholesky:
         LT = np.array(cb.T, order="C")
         LT[:, 0] = 1.0 / LT[:, 0]
         return cls(LT, cb)
-
-    @classmethod
-    def factor_columns(cls, LT: np.ndarray) -> "BandedCholesky | None":
-        """In one compiled pass (:func:`.band_factor.factor_columns`) from the band's
-        columns as rows ``LT[j, k] = A[j + k, j]`` (overwritten)."""
-        return cls(LT) if band_factor.factor_columns(LT) else None
 
     @property
     def cb(self) -> np.ndarray:
