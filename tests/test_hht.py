@@ -268,9 +268,17 @@ def test_factor_policy_keeps_reuses_and_drops_a_factorization():
     assert not p.needs_tangent(6, f) and p.needs_tangent(7, f) and p.needs_tangent(0, None)
     p.finish(3, f)
     assert p.stale and p.start(1e-3, None) is None
-    s.reuse_factorization = FactorReuse.NEVER          # read at each use
-    assert not p.needs_tangent(0, f) and p.needs_tangent(1, f)
+    # a step redone from the same state takes what its first pass made at iteration 0
+    g = Factorization(structure_key=None, h=1e-3, matrix=None, solve=None)
+    assert p.start(1e-3, "a") is None
+    p.made(0, g)
+    assert p.start(1e-3, "a") is g and p.start(1e-3, "b") is None
+    assert p.start(2e-3, "a") is None
+    p.start(1e-3, "c")
+    p.made(1, f)                                        # not at the first iteration
+    assert p.start(1e-3, "c") is None
     s.reuse_factorization = FactorReuse.PER_STEP
-    assert p.start(1e-3, lambda: "a") is None
-    p.made(0, f)
-    assert p.start(1e-3, lambda: "a") is f and p.start(1e-3, lambda: "b") is None
+    assert p.start(1e-3, "a") is g
+    s.reuse_factorization = FactorReuse.NEVER          # read at each use
+    assert p.start(1e-3, "a") is None
+    assert not p.needs_tangent(0, f) and p.needs_tangent(1, f)

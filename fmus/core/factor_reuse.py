@@ -8,6 +8,9 @@ converged solution to the residual tolerance, in as many or more iterations. Und
 following steps while the model's ``structure_key`` and the step size are unchanged; a step
 that needed more than ``refresh_after`` iterations marks it stale (the next step factorizes
 at its first iteration), and an iteration past ``refresh_after + 4`` factorizes at once.
+A step redone from the same state with other inputs (an implicit coupling's next pass)
+starts from the same predictor, so the factorization its first pass made at its first
+iteration is the one it would make again: it is taken, bit for bit the same step.
 """
 
 from __future__ import annotations
@@ -22,11 +25,12 @@ class FactorReuse(Enum):
 
     #: full Newton: at every iteration
     NEVER = "never"
-    #: at the first iteration of each step, reused within the step (chord method); a step
-    #: redone from the same state (co-simulation rollback) reuses it too
+    #: at the first iteration of each step, reused within the step (chord method)
     PER_STEP = "per-step"
     #: also reused across steps while the model's structure_key and the step size are
-    #: unchanged (modified Newton)
+    #: unchanged (modified Newton). With either reuse, a step redone from the same state
+    #: (co-simulation rollback) takes the factorization its first pass made at its first
+    #: iteration
     ACROSS_STEPS = "across-steps"
 
 
@@ -55,22 +59,24 @@ class FactorPolicy:
         self.factor: Factorization | None = None
         #: refactorize at the next step
         self.stale = False
-        #: ``PER_STEP``: (the step's start, the factorization of its first iterate)
+        #: ((start state, h), the factorization made at the first iteration from it)
         self._redo = None
-        self._redo_key = None
+        self._start = None
 
     def reset(self) -> None:
         self.factor, self.stale = None, False
 
-    def start(self, h: float, redo_key) -> Factorization | None:
-        """The factorization the first iteration of a step of size h may use. ``redo_key``
-        (a callable giving the step's start) is asked for under ``PER_STEP`` only: a step
-        redone from the same state meets the same first Newton matrix."""
-        self._redo_key = None
+    def start(self, h: float, state) -> Factorization | None:
+        """The factorization the first iteration of a step of size h from the state labelled
+        ``state`` may use. A step redone from the same state (a co-simulation's passes over
+        one step) meets the same predictor, hence the same first Newton matrix: the one its
+        first pass factorized at its first iteration is taken again."""
         reuse = self.settings.reuse_factorization
-        if reuse is FactorReuse.PER_STEP:
-            self._redo_key = redo_key()
-            return self._redo[1] if self._redo and self._redo[0] == self._redo_key else None
+        self._start = (state, h)
+        if reuse is FactorReuse.NEVER:
+            return None
+        if self._redo is not None and self._redo[0] == self._start:
+            return self._redo[1]
         if reuse is FactorReuse.ACROSS_STEPS and not self.stale:
             factor = self.factor
             return factor if factor is not None and factor.h == h else None
@@ -84,8 +90,8 @@ class FactorPolicy:
 
     def made(self, k: int, factor: Factorization) -> None:
         """A factorization was made at iteration k."""
-        if k == 0 and self._redo_key is not None:
-            self._redo = (self._redo_key, factor)
+        if k == 0 and self.settings.reuse_factorization is not FactorReuse.NEVER:
+            self._redo = (self._start, factor)
 
     def finish(self, iterations: int, factor: Factorization | None) -> None:
         """After a converged step: keep its factorization, stale if it took long."""

@@ -412,7 +412,7 @@ class HHTIntegrator:
         if seen is not None:
             return self._repeat(seen, inputs)
         predicted = self._predict(h)
-        factor = self._policy.start(h, self._redo_key(h))
+        factor = self._policy.start(h, start)
         end = self._newton(h, inputs, predicted, factor)
         info = self._commit(end, inputs)
         self._remember(start, h, passes, end.residual)
@@ -427,11 +427,6 @@ class HHTIntegrator:
             a_guess = 2.0 * self.a - self.a_prev
         return _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, s.alpha, s.beta,
                         s.gamma)
-
-    def _redo_key(self, h: float):
-        """The step's start as a key (asked for by the ``PER_STEP`` policy only)."""
-        return lambda: (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes(),
-                        None if self.a_prev is None else self.a_prev.tobytes())
 
     def _newton(self, h: float, inputs, predicted, factor) -> "_StepEnd":
         """Newton-Raphson on q_{n+1} from the predicted iterate: R of (3.16) with v, a from
