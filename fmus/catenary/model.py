@@ -102,6 +102,7 @@ class CatenaryModel(SecondOrderModel):
         self._C_band = SparseBand.from_band(S.lower_band(self._C_base)).parts
         self._dropper_free = S.fmap[S.bars.dofs[db]]
         self._cp_cache: tuple | None = None
+        self._loads: tuple | None = None
         self._support_free = None
 
     # ------------------------------------------------------------------ geometry
@@ -250,6 +251,14 @@ class CatenaryModel(SecondOrderModel):
                 np.add.at(P, cp.dofs, Fk * cp.weights)
         return P
 
+    def _step_loads(self, t: float, inputs) -> np.ndarray:
+        """:meth:`input_vector`, kept while t and the forces stay (a step's iterations);
+        read only."""
+        key = (float(t), np.asarray(inputs, dtype=float).tobytes())
+        if self._loads is None or self._loads[0] != key:
+            self._loads = (key, self.input_vector(t, inputs))
+        return self._loads[1]
+
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         S = self.structure
         f, K, slack_now = S.internal(S.full(q), tangent)
@@ -258,7 +267,7 @@ class CatenaryModel(SecondOrderModel):
                                        self._dropper_free, self._dropper_C, f, S.free,
                                        self.weight)
         if inputs is not None:
-            f_rest -= self.input_vector(t, inputs)
+            f_rest -= self._step_loads(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
                         structure_key=(slack_now.tobytes(), self._slack_committed.tobytes()))
         if tangent:
