@@ -2,8 +2,11 @@
 components.
 
 This package (source folder ``fmus/``) holds the physics: pantograph models, the catenary
-finite-element model and the shared HHT-alpha integrator. It imports neither pythonfmu nor
-fmpy, and it is bundled unchanged into every FMU (all but the multibody core of the double
+finite-element model and the shared HHT-alpha integrator, and the FMU slaves. No module of
+it imports fmpy; pythonfmu and pythonfmu3 are imported by the FMI fronts alone
+(``pantocosim.fmi.fmi2_front``, ``pantocosim.fmi.fmi3_front``), which a slave class takes on
+demand (:func:`pantocosim.fmi.front.front`), so every other module imports without them. It is
+bundled unchanged into every FMU (all but the multibody core of the double
 pendulum, which no FMU uses). The master, monolithic solver and CLI live in
 ``pantocosim.master`` (source folder ``master/``).
 """

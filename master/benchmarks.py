@@ -25,7 +25,6 @@ import dataclasses
 import json
 import os
 import platform
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -41,7 +40,7 @@ from pantocosim.core.errors import PantocosimError, ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.master.cosim import fmu_paths, fmu_subsystems
 from pantocosim.master.fmu.build import default_out, ensure_fmus
-from pantocosim.master.native.build import CFLAGS, SOURCE_DIR
+from pantocosim.master.native.build import CFLAGS, SOURCE_DIR, c_compiler
 from pantocosim.master.native.models import export_scenario
 from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
@@ -218,9 +217,7 @@ def native_loop(tmp: Path, printer=print) -> dict:
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
     scenario, seconds, models = NATIVE_LOOP
-    cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
-    if cc is None:
-        raise PantocosimError("native-loop: no C compiler on PATH (set CC)")
+    cc = c_compiler()
     host = tmp / "realtime_host"
     subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
                     str(SOURCE_DIR / "realtime_host.c"), "-ldl", "-lm"], check=True)

@@ -17,6 +17,7 @@ import sys
 from pantocosim import __version__
 from pantocosim.core.disk_cache import check_settings
 from pantocosim.core.errors import Interrupted, PantocosimError
+from pantocosim.core.registry import Registry
 from pantocosim.master.interrupt import remember_interrupts
 
 #: exit status of an interrupted command (128 + SIGINT, as shells report it)
@@ -32,9 +33,11 @@ class Parser(argparse.ArgumentParser):
         self.exit(EXIT_USER_ERROR, f"{self.prog}: error: {message} (see {self.prog} "
                   "--help)\n")
 
-#: subcommand modules, in the order ``pantocosim --help`` lists them
-COMMANDS = ["run", "sweep", "report", "modal", "pantograph", "static", "modes", "pendulum",
-            "build-fmus", "ssp", "regress", "bench", "validate", "export-native"]
+#: subcommand -> its module, in the order ``pantocosim --help`` lists them
+COMMANDS = Registry("command")
+for _name in ("run", "sweep", "report", "modal", "pantograph", "static", "modes", "pendulum",
+              "build-fmus", "ssp", "regress", "bench", "validate", "export-native"):
+    COMMANDS.add(_name, f"pantocosim.master.commands.{_name.replace('-', '_')}")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -44,13 +47,8 @@ def build_parser() -> argparse.ArgumentParser:
         "components.")
     parser.add_argument("--version", action="version", version=f"pantocosim {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"pantocosim.master.commands.{name.replace('-', '_')}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"pantocosim.master.commands.{name.replace('-', '_')}":
-                continue  # command not built yet
-            raise
+    for module_name in COMMANDS.values():
+        module = importlib.import_module(module_name)   # a missing one is a broken install
         p = module.add_parser(sub)
         p.set_defaults(_run=module.run)
     return parser

@@ -82,7 +82,7 @@ class ModelSubsystem:
 
 class _FmuState:
     """FMU state save/restore/free of an adapter holding ``self.fmu``; the values read after
-    a step (:attr:`reads`) and the outputs made of them are kept until the FMU's state or
+    a step (``self.reads``) and the outputs made of them are kept until the FMU's state or
     inputs change (one fmi2GetReal per step for everything the master reads)."""
 
     _read = None
@@ -110,7 +110,7 @@ class _FmuState:
         self.fmu.do_step(t, h)
 
     def _values(self) -> np.ndarray:
-        """The values of :attr:`reads`, read once per change."""
+        """The values of ``self.reads``, read once per change."""
         if self._read is None:
             self._read = self.reads.get()
         return self._read

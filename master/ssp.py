@@ -199,8 +199,9 @@ def _oms_annotation(system: ET.Element, stop_time: float, step_size: float) -> N
 
 
 def fmu_variables(fmu: Path) -> dict:
-    """{name: (causality, type)} of an FMI 2.0 co-simulation FMU's model description (read
-    with ElementTree); a file that is not one raises ParameterError naming it."""
+    """{name: (causality, type)} of an FMI 2.0 or 3.0 co-simulation FMU's model description
+    (read with ElementTree; an FMI 3.0 array's type is e.g. "Real array"); a file that is not
+    one raises ParameterError naming it."""
     fmu = Path(fmu)
     try:
         with zipfile.ZipFile(fmu) as z:
@@ -229,8 +230,9 @@ def fmu_variables(fmu: Path) -> dict:
                                                     "Enumeration")), None)
         out[v.get("name")] = (v.get("causality", "local"), kind)
     for v in root.iterfind("ModelVariables/*"):     # FMI 3.0: one element per variable
-        if v.tag in FMI3_KINDS and v.find("Dimension") is None:
-            out[v.get("name")] = (v.get("causality", "local"), FMI3_KINDS[v.tag])
+        if v.tag in FMI3_KINDS:
+            array = " array" if v.find("Dimension") is not None else ""
+            out[v.get("name")] = (v.get("causality", "local"), FMI3_KINDS[v.tag] + array)
     return out
 
 

@@ -1,44 +1,23 @@
 """Numerical stability of a run: checked before it starts, watched while it runs, judged
 after it ends.
 
-Before. The explicit (Jacobi) and Gauss-Seidel couplings exchange the penalty force once per
-step: each side steps under the force of the previous exchange, a lag of one step plus the
-half step of the held force. Around the contact the catenary is a taut wire, whose point
-receptance is that of a dashpot, ``1 / (i w Z_w)`` with the wire impedance
-``Z_w = 2 sqrt(T rho)`` (contact-wire tension and mass per length, waves leaving both ways),
-and the pantograph is its contact mass ``m_p`` (receptance ``-1 / (m_p w^2)``; the mass seen
-at the contact point, ``1 / (g^T M^-1 g)`` of the model's linearisation, ``g`` the gradient of
-its contact height). The lag of ``1.5 dt`` turns the dashpot's -90 degrees into -180 degrees at
-``w* = pi / (3 dt)``; the exchange is stable while the loop gain there is below 1::
+Before. The staggered couplings (Jacobi, Gauss-Seidel) exchange the penalty force once per
+step; two loop gains bound them, derived and measured in docs/stability.md ("Before a run"):
+the wave gain of the wire's dashpot and the pantograph's contact mass under the exchange's lag
+of ``1.5 dt`` (:func:`exchange_gain`)::
 
-    G_w = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2) < 1.
+    G_w = |k_c + i w* c_c| * sqrt((1 / (w* Z_w))^2 + (1 / (m_p w*^2))^2),  w* = pi / (3 dt)
 
-Measured on en50318 (3 spans, 250 km/h, en50318-2mass; ``scripts/stability_breakpoints.py``,
-checked in ``tests/test_stability.py``):
-the Jacobi and Gauss-Seidel couplings break between k_c = 3e5 (G = 0.87) and 4e5 N/m
-(G = 1.16) at 1 ms, between 8e4 (G = 1.2) and 1.2e5 N/m at 5 ms and between 8e4 (G = 2.6)
-and 1e5 N/m at 10 ms: at longer steps the catenary is stiffer than a wire alone, so the limit
-errs on the safe side there.
+and the gain through a catenary's instantaneous compliance ``s`` at the contact (a modal
+model's static correction; :func:`feedthrough_gain`)::
 
-A catenary that answers a force within the instant it is applied (a modal model's static
-correction, a massless spring of compliance ``s`` in series with the contact; each model
-declares it, ``contact_compliance``) closes an algebraic loop through the exchange. At the
-Nyquist frequency the force alternates from step to step: the first-order hold of the
-exchange, ``2 F_n - F_(n-1)``, triples it, and the HHT-alpha velocity of a displacement that
-alternates is ``4 / (|alpha| dt)`` times it, in phase (Newmark with ``gamma = 1/2 - alpha``,
-``beta = (1 - alpha)^2 / 4``), so the exchange is stable while::
+    G_s = 3 s (k_c + 4 c_c / (|alpha| dt))
 
-    G_s = 3 s (k_c + 4 c_c / (|alpha| dt)) < 1
-
-(with ``c_c = 0``: ``F_(n+1) = -k_c s (2 F_n - F_(n-1))``, whose roots stay inside the unit
-circle while ``3 k_c s < 1``, at any step); ``s`` is the largest compliance the pantograph
-meets on its run. The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` is
-refused, one with ``G >= 0.5`` warned.
-
-Any coupling, the monolithic one too, warns when the step does not resolve the contact
-frequency ``f_c = sqrt(k_c / m_p) / (2 pi)``: above ``1 / (10 dt)`` the contact force chatters
-at a frequency the step only aliases (loss-of-contact figures are then the step's, not the
-system's).
+The exchange gain is ``G = max(G_w, G_s)``: a run with ``G >= 1`` (:data:`GAIN_LIMIT`) is
+refused, one with ``G >= 0.5`` (:data:`GAIN_WARNING`) warned. Any coupling, the monolithic
+one too, warns when the step does not resolve the contact frequency
+``f_c = sqrt(k_c / m_p) / (2 pi)`` (above ``1 / (10 dt)``), and when a rigid contact meets
+a contact point without mass (the modal model's static correction).
 
 During. :class:`Monitor` stops a run whose contact force is not finite or exceeds
 :data:`FORCE_CAP_FACTOR` times the pantograph's static force (its mean uplift when larger),
@@ -49,7 +28,9 @@ After. :func:`departures` flags a run whose mean contact force departs from the 
 its static start sets by more than :data:`MEAN_DEPARTURE` of it, or whose loss of contact
 exceeds what the normal law of its own force statistics predicts by more than
 :data:`LOSS_EXCESS_POINTS` (a force that alternates from step to step loses contact while
-its filtered statistics say it should not).
+its filtered statistics say it should not). :func:`step_separations` flags the separations
+of a rigid contact that last at most :data:`UNRESOLVED_SEPARATION_STEPS` steps (the step's,
+not the line's).
 """
 
 from __future__ import annotations
@@ -60,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pantocosim.core.errors import ParameterError, PantocosimError
-from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
+from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS, max_passes
 
 #: the exchange's loop gain at which an explicit or Gauss-Seidel run is refused
 GAIN_LIMIT = 1.0
@@ -68,6 +49,9 @@ GAIN_LIMIT = 1.0
 GAIN_WARNING = 0.5
 #: steps per contact period below which the contact frequency counts as not resolved
 STEPS_PER_CONTACT_PERIOD = 10
+#: a rigid contact's separation lasting at most this many steps is not resolved by the step
+#: (docs/en50318-validation.md, "Loss of contact and the step")
+UNRESOLVED_SEPARATION_STEPS = 3
 #: a contact force above this multiple of the static force stops the run
 FORCE_CAP_FACTOR = 20.0
 #: a pantograph out of contact this long [s] (after its raising) has not come back to the
@@ -311,6 +295,8 @@ def check(prep, coupling: str) -> list[str]:
                 raise _refusal(prep, est, name, who)
             if est.gain >= GAIN_WARNING:
                 warnings.append(_near_limit(prep, est, name, who))
+        if prep.contact.compliance == 0.0 and est.compliance > 0.0:
+            warnings.append(_massless_contact_point(who, est))
         if est.frequency * sc.dt > 1.0 / STEPS_PER_CONTACT_PERIOD:
             warnings.append(
                 f"{who}: contact frequency {est.frequency:.0f} Hz (contact.stiffness = "
@@ -319,6 +305,56 @@ def check(prep, coupling: str) -> list[str]:
                 f"{1.0 / (STEPS_PER_CONTACT_PERIOD * est.frequency):.2g} s): the force "
                 "chatters and the loss of contact is the step's")
     return warnings
+
+
+def unsettled_contacts(times, m: int) -> list[str]:
+    """The warning of a run whose contact active set gave up in some steps (``times``: their
+    ends) over ``m`` contacts; none if it always settled."""
+    if not times:
+        return []
+    return [f"the penalty contact's active set did not settle in {len(times)} step(s) "
+            f"(first at t = {times[0]:.6g} s): the set of pantographs in contact still changed "
+            f"after {max_passes(m)} passes and those steps keep the last pass's forces; a "
+            "smaller dt may settle it"]
+
+
+def _massless_contact_point(who: str, est: Estimate) -> str:
+    return (f"{who}: a rigid contact on a catenary whose contact point moves without mass "
+            f"(an instantaneous compliance of {est.compliance:.3g} m/N: the modal model's "
+            "static correction): the loss of contact is that truncated model's, which grows "
+            "with the contact's stiffness and with a shrinking dt, not the line's; the linear "
+            "or nonlinear catenary tells it")
+
+
+def run_lengths(flags: np.ndarray) -> np.ndarray:
+    """The lengths of the runs of True in ``flags``."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    return np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)
+
+
+def step_separations(prep, window_forces) -> list[str]:
+    """Warnings of a rigid contact (compliance 0) whose loss of contact in the analysis
+    window (``window_forces``: each pantograph's raw force there) comes from separations of
+    at most :data:`UNRESOLVED_SEPARATION_STEPS` steps: a separation the step does not
+    resolve lasts the same steps at any dt, so that part of the loss of contact is the
+    step's."""
+    if prep.contact.compliance != 0.0:
+        return []
+    out = []
+    many = len(prep.pantographs) > 1
+    for k, force in enumerate(window_forces, start=1):
+        runs = run_lengths(np.asarray(force) <= 0.0)
+        short = runs[runs <= UNRESOLVED_SEPARATION_STEPS]
+        if short.size == 0:
+            continue
+        who = f"pantograph {k}" if many else "the pantograph"
+        share, total = (100.0 * n / max(len(force), 1) for n in (short.sum(), runs.sum()))
+        out.append(f"{who}: {share:.2f} % of its {total:.2f} % loss of contact are "
+                   f"{short.size} separation(s) of the rigid contact lasting at most "
+                   f"{int(short.max())} step(s) of dt = {prep.scenario.dt:g} s: a separation "
+                   "that short is the step's, not the line's (it keeps its number of steps "
+                   "as dt shrinks); halve dt to tell")
+    return out
 
 
 def departures(prep, statistics) -> list[str]:

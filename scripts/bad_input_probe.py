@@ -227,16 +227,6 @@ def fmu_file(kind: str):
     return make
 
 
-def summary_check(fn):
-    """ok check reading the run's summary.json."""
-    def check(d: Path, proc):
-        f = d / "out" / "summary.json"
-        if not f.exists():
-            return "no summary.json"
-        return fn(json.loads(f.read_text()), d)
-    return check
-
-
 def interrupt_check(d: Path, proc):
     """An interrupted run: results so far and a summary that says where the run stopped."""
     s = d / "out" / "summary.json"

@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
 """The readings of the EN 50318 reference model, each run whole at 250 and 300 km/h.
 
-A reading is a set of preset files listed in
-``master/validation/en50318-readings/readings.toml`` (catenary, pantograph, one scenario per
-speed). Each run uses the reference models (nonlinear catenary, monolithic coupling), as
-``pantocosim validate`` does, one at a time; its time series is cached in
-``--out``/runs (a run is redone only when its files change). Readings with ``of`` re-analyse
-another reading's runs with another window or filter. Usage::
+A reading is the validation scenario of its speed with the dotted-path changes listed in
+``master/validation/en50318-readings/readings.toml`` (as a sweep's ``[set]``; the catenary
+fields on a copy of the preset catenary). Each run uses the reference models (nonlinear
+catenary, monolithic coupling), as ``pantocosim validate`` does, one at a time; its inputs are
+written to ``--out``/inputs/NAME-SPEED (``scenario.toml``, ``catenary.toml``: ``pantocosim
+run`` takes them) and its time series cached in ``--out``/runs (a run is redone only when its
+files change). Readings with ``of`` re-analyse another reading's runs with another window or
+filter. Usage::
 
     nice -n 10 .venv/bin/python scripts/en50318_readings.py [--only NAME ...]
         [--out DIR] [--docs PAGE] [--spectrum NAME ...] [--quick]
@@ -20,6 +22,7 @@ with the window x = 60-120 m (a check of the script, not of the standard).
 from __future__ import annotations
 
 import argparse
+import copy
 import dataclasses
 import hashlib
 import json
@@ -49,13 +52,63 @@ COLUMNS = [("mean", "mean_n", 1.0, "mean"), ("sigma", "std_n", 1.0, "std"),
 
 
 def load_readings() -> list[dict]:
+    """The readings of ``readings.toml``; a ``from`` or ``of`` must name a reading above."""
+    from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import load_toml
 
-    return load_toml(READINGS / "readings.toml")["readings"]
+    path = READINGS / "readings.toml"
+    readings, seen = load_toml(path)["readings"], set()
+    for i, r in enumerate(readings):
+        for key in ("from", "of"):
+            if key in r and r[key] not in seen:
+                raise ParameterError(f"readings.{i}.{key}", r[key],
+                                     "must name a reading listed above it", str(path))
+        seen.add(r["name"])
+    return readings
 
 
-def scenario_file(reading: dict, speed: int) -> Path:
-    return READINGS / "scenarios" / f"{reading['scenario']}-{speed}.toml"
+def changes(reading: dict, by_name: dict) -> list[tuple[str, object]]:
+    """The reading's [(dotted path, value)]: those of the reading it starts ``from``, then
+    its own ``set`` (a table with a ``type`` is one value: it replaces the whole table)."""
+    first = changes(by_name[reading["from"]], by_name) if "from" in reading else []
+    return first + _leaves(reading.get("set", {}))
+
+
+def _leaves(table: dict, prefix: str = "") -> list[tuple[str, object]]:
+    out = []
+    for key, value in table.items():
+        if isinstance(value, dict) and "type" not in value:
+            out += _leaves(value, f"{prefix}{key}.")
+        else:
+            out.append((f"{prefix}{key}", value))
+    return out
+
+
+def scenario_file(reading: dict, by_name: dict, speed: int, out: Path) -> Path:
+    """Write the reading's inputs at ``speed`` (the validation scenario with its changes; a
+    copy of the catenary when a catenary field changes) to ``out``/inputs; their scenario."""
+    import tomli_w
+
+    from pantocosim.catenary.definition import load_catenary
+    from pantocosim.core.params import load_toml
+    from pantocosim.master.campaign.axes import CaseInputs, make_axis
+    from pantocosim.master.scenario import scenario_path
+
+    case = CaseInputs(scenario=load_toml(scenario_path(f"en50318-{speed}")), run={})
+    case.scenario.update(name=f"en50318-{reading['name']}-{speed}",
+                         description=f"EN 50318 reading {reading['name']} at {speed} km/h")
+    for path, value in changes(reading, by_name):
+        if path.startswith("catenary.") and case.catenary is None:
+            case.catenary = copy.deepcopy(load_catenary(case.scenario["catenary"]).raw)
+        make_axis(path).apply(case, copy.deepcopy(value))
+    folder = out / "inputs" / f"{reading['name']}-{speed}"
+    folder.mkdir(parents=True, exist_ok=True)
+    if case.catenary is not None:
+        case.catenary["name"] = f"en50318-{reading['name']}"
+        (folder / "catenary.toml").write_text(tomli_w.dumps(case.catenary))
+        case.scenario["catenary"] = str((folder / "catenary.toml").resolve())
+    (folder / "scenario.toml").write_text(tomli_w.dumps(case.scenario))
+    return folder / "scenario.toml"
 
 
 # ---------------------------------------------------------------------------- filters
@@ -94,7 +147,21 @@ def statistics(run: dict, window: tuple[float, float], kind: str = "zero-phase")
     return {"mean_n": mean, "std_n": std, "stat_max_n": mean + 3 * std,
             "stat_min_n": mean - 3 * std, "max_n": float(fw.max()), "min_n": float(fw.min()),
             "loss_of_contact_percent": 100.0 * float(np.mean(F[mask] <= 0.0)),
+            "step_loss_percent": step_loss(run, F[mask] <= 0.0),
             "max_uplift_at_support_m": uplift}
+
+
+def step_loss(run: dict, off: np.ndarray) -> float | None:
+    """The part [%] of a rigid contact's loss of contact (``off``: the window's samples at
+    zero force) in separations of at most UNRESOLVED_SEPARATION_STEPS steps, which the step
+    does not resolve (master/stability.py); None for a compliant law."""
+    from pantocosim.interaction.contact_laws import make_contact
+    from pantocosim.master.stability import UNRESOLVED_SEPARATION_STEPS, run_lengths
+
+    if make_contact(str(run["law"]), float(run["stiffness"]), 0.0).compliance != 0.0:
+        return None
+    runs = run_lengths(off)
+    return 100.0 * float(runs[runs <= UNRESOLVED_SEPARATION_STEPS].sum()) / max(off.size, 1)
 
 
 # ---------------------------------------------------------------------------- runs
@@ -155,7 +222,7 @@ def reading_rows(reading: dict, by_name: dict, out: Path, short: bool) -> list[d
     base = by_name[reading["of"]] if "of" in reading else reading
     rows = []
     for speed in SPEEDS:
-        run = cached_run(scenario_file(base, speed), out, short)
+        run = cached_run(scenario_file(base, by_name, speed, out), out, short)
         window = tuple(run["window"])
         if "window_supports" in reading and not short:
             i, j = reading["window_supports"]
@@ -171,6 +238,7 @@ def reading_rows(reading: dict, by_name: dict, out: Path, short: bool) -> list[d
 
 # ---------------------------------------------------------------------------- tables
 def table(readings: list[dict], rows: list[dict]) -> str:
+    from pantocosim.master.stability import UNRESOLVED_SEPARATION_STEPS
     from pantocosim.master.validation import load_standard
 
     std = load_standard("en50318")
@@ -192,9 +260,15 @@ def table(readings: list[dict], rows: list[dict]) -> str:
             ok = lo <= round(v, 1) <= hi
             inside += ok
             vals.append(f"{v:.1f}" if ok else f"**{v:.1f}**")
+        step = row["statistics"].get("step_loss_percent")
+        if step is not None:
+            vals[-1] += f" ({step:.1f})"
         cells.append(first + vals + [f"{inside}/8"] + tail)
     return ("Generated by `scripts/en50318_readings.py`; **bold**: outside the EN 50318 "
-            "range.\n\n" + markdown_table(head, cells))
+            "range; loss [%] of the raw force, in parentheses for the constraint contact the "
+            f"part in separations of at most {UNRESOLVED_SEPARATION_STEPS} steps, which the "
+            "step does not resolve (\"Loss of contact and the step\" below).\n\n"
+            + markdown_table(head, cells))
 
 
 def band_sigma(force: np.ndarray, dt: float) -> list[float]:
@@ -290,7 +364,13 @@ def main(argv=None) -> int:
         os.nice(10)
     except OSError:
         pass
-    readings = load_readings()
+    from pantocosim.core.errors import ParameterError
+
+    try:
+        readings = load_readings()
+    except ParameterError as exc:
+        print(exc, file=sys.stderr)
+        return 2
     by_name = {r["name"]: r for r in readings}
     unknown = [n for n in (args.only or []) + args.spectrum if n not in by_name]
     if unknown:
@@ -314,7 +394,8 @@ def main(argv=None) -> int:
     print(text)
     spec = None
     if args.spectrum:
-        runs = {n: cached_run(scenario_file(by_name[n], 300), args.out, args.quick)
+        runs = {n: cached_run(scenario_file(by_name[n], by_name, 300, args.out), args.out,
+                              args.quick)
                 for n in args.spectrum}
         spec = spectrum(runs, 300, args.docs)
         print(spec)

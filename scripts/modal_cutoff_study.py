@@ -54,11 +54,8 @@ def run(scenario: str, model: str, cutoff: float | None = None) -> dict:
         timing["setup_s"] = time.perf_counter() - t0
         return out
 
-    models.CATENARY_MODELS[model] = timed
-    try:
+    with models.CATENARY_MODELS.swapped(model, timed):
         prep = prepare(sc)
-    finally:
-        models.CATENARY_MODELS[model] = factory
     res = run_monolithic(prep, None, progress=False)
     if res.error is not None:
         return {"error": str(res.error)}

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 from filelock import FileLock
+from tooling import missing
 
 #: the cache (and matplotlib's configuration) variables and the folder each one names under
 #: the run's folder
@@ -91,8 +92,8 @@ def cofmupy_python(tmp_path_factory, run_caches) -> str:
     python = venv / "bin" / "python"
     problem = _cofmupy_problem(python)
     if problem:
-        (pytest.fail if os.environ.get("CI") else pytest.skip)(
-            f"no Python with cofmupy==1.0.0 and numba at {venv}: {problem}")
+        missing(f"a Python with cofmupy==1.0.0 and numba at {venv} ({problem})",
+                "set PANTOCOSIM_COFMUPY_VENV or let the run make the venv")
     return str(python)
 
 

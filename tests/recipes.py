@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from tooling import missing
 
 
 def run_recipe(name, *args, cwd=None, timeout=1200):
@@ -36,4 +37,4 @@ def require_ecospy() -> None:
     try:
         import ecospy  # noqa: F401
     except (ImportError, OSError) as exc:
-        pytest.skip(f"ecospy cannot be loaded here: {exc}")
+        missing(f"ecospy ({exc})", "pip install ecospy; apt-get install -y libtbb12")

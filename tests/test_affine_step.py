@@ -176,7 +176,8 @@ def test_condensed_penalty_law_solves_the_law_with_the_structure_compliance():
     z0, v0 = np.array([5.3, 5.3]), np.array([0.01, -0.02])
     for z_p, lost in ((np.array([5.303, 5.302]), None), (np.array([5.303, 5.2999]), 1)):
         v_p = np.array([0.0, 0.05])
-        F, Jz, Jv = contact.condensed(z_p, v_p, z0, v0, G, Hm)
+        F, Jz, Jv, settled = contact.condensed(z_p, v_p, z0, v0, G, Hm)
+        assert settled
         z_w, v_w = z0 + G @ F, v0 + Hm @ F
         law = [contact.force(z_p[k], z_w[k], v_p[k], v_w[k]) for k in range(2)]
         # law: k (z_p - z_w) of 5.3 m heights, floor k ulp(5.3 m) = 4.4e-11 N; atol ~20 of them

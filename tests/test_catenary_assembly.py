@@ -54,7 +54,7 @@ def test_worked_example_of_the_architecture_page(monkeypatch):
     text = DOC.read_text()
     code = re.findall(r"```python\n(.*?)```", text, re.S)[0]
     table = tomllib.loads(re.findall(r"```toml\n(.*?)```", text, re.S)[0])
-    monkeypatch.setattr(supports.registry, "SUPPORTS", dict(supports.SUPPORTS))
+    monkeypatch.setattr(supports.registry, "SUPPORTS", supports.SUPPORTS.copy())
     module = types.ModuleType("architecture_example")
     monkeypatch.setitem(sys.modules, module.__name__, module)
     exec(compile(code, str(DOC), "exec"), module.__dict__)

@@ -250,6 +250,49 @@ def test_compare_flexible_rigid(tmp_path):
 
 
 
+def readings_module():
+    sys.path.insert(0, str(SCRIPTS))
+    try:
+        import en50318_readings
+    finally:
+        sys.path.remove(str(SCRIPTS))
+    return en50318_readings
+
+
+def test_en50318_reading_inputs(tmp_path):
+    """Each reading is the validation scenario with its changes (``from`` first): the
+    inputs it writes load, and carry the changes and nothing else."""
+    import dataclasses
+
+    from pantocosim.catenary.definition import load_catenary
+    from pantocosim.master.scenario import load_scenario
+
+    R = readings_module()
+    readings = R.load_readings()
+    by_name = {r["name"]: r for r in readings}
+    run = [r for r in readings if "of" not in r]
+    assert len(run) == 18 and len(readings) == 24
+    loaded = {(r["name"], v): load_scenario(R.scenario_file(r, by_name, v, tmp_path))
+              for r in run for v in R.SPEEDS}
+    assert len(loaded) == 36
+    base = load_scenario("en50318-300")
+    same = ("name", "description", "source")
+    assert dataclasses.replace(loaded["preset", 300], **{k: getattr(base, k) for k in same}) \
+        == base
+    sc = loaded["csup300-lumped-constraint-dt0.25", 300]
+    assert (sc.dt, sc.alpha, sc.contact_law, sc.speed_kmh) == (0.00025, -0.05, "constraint",
+                                                               300.0)
+    raw = load_catenary(sc.catenary).raw
+    assert raw["contact_support"] == {"type": "spring", "stiffness": 300.0, "mass": 1.0}
+    assert raw["messenger_support"] == {"type": "spring", "stiffness": 5.0e4}
+    preset = load_catenary("en50318").raw
+    assert {k: v for k, v in raw.items() if "support" not in k and k != "name"} == \
+        {k: v for k, v in preset.items() if "support" not in k and k != "name"}
+    k5 = loaded["preset-k5e5", 250]
+    assert (k5.contact_law, k5.contact_stiffness, k5.catenary) == ("penalty", 5e5, "en50318")
+    assert loaded["preset-constraint-newmark", 250].alpha == 0.0
+
+
 @pytest.mark.slow
 def test_en50318_readings(tmp_path, short_ref):
     page = page_copy("en50318-validation.md", tmp_path)
@@ -265,16 +308,15 @@ def test_en50318_readings(tmp_path, short_ref):
     assert con["mean_n"] == pytest.approx(pen["mean_n"], abs=1.0)
     # no contact mode: a smoother force than the 5e4 N/m penalty's
     assert con["std_n"] < pen["std_n"]
+    # the step's part of the loss of contact: the rigid contact's only
+    assert pen["step_loss_percent"] is None
+    assert 0.0 <= con["step_loss_percent"] <= con["loss_of_contact_percent"]
     assert len(rows_of(out, "a: preset")) == 2 and len(rows_of(out, "c: preset-constraint")) == 2
     text = page.read_text()
     assert "c: preset-constraint" in text.split("<!-- readings:start -->")[1]
     assert (tmp_path / "figures" / "en50318-spectrum.png").stat().st_size > 10_000
     # the zero-phase filter of a reading is that of every run (master/results/statistics.py)
-    sys.path.insert(0, str(SCRIPTS))
-    try:
-        import en50318_readings as R
-    finally:
-        sys.path.remove(str(SCRIPTS))
+    R = readings_module()
     import numpy as np
 
     from pantocosim.master.results.statistics import contact_statistics
@@ -283,7 +325,7 @@ def test_en50318_readings(tmp_path, short_ref):
     F = 100 + 20 * np.sin(2 * np.pi * 3 * t) + 5 * np.sin(2 * np.pi * 40 * t)
     x = 30 + 70 * t
     run = {"time": t, "x": x, "force": F, "uplift": np.zeros((t.size, 2)),
-           "support_x": np.array([0.0, 200.0])}
+           "support_x": np.array([0.0, 200.0]), "law": "penalty", "stiffness": 5e4}
     mine = R.statistics(run, (60.0, 120.0))
     ref = contact_statistics(t, F, x, (60.0, 120.0), run["uplift"], run["support_x"])
     assert mine["std_n"] == pytest.approx(ref.std_n, rel=1e-12)

@@ -1,5 +1,5 @@
-"""The FMUs' export libraries (fmus/fmi/embedding/) on their own: compiled with every warning
-and GCC's static analyser, and run in the C hosts of tests/native and in a threaded Python
+"""The embedding library (fmus/fmi/embedding/) on its own: compiled with every warning
+and GCC's static analyser, and run in the C hosts of tests/c_hosts and in a threaded Python
 host over a small slave (tests/c_hosts/slow_slave.py) instead of a built FMU: the runtime
 probe reads any answer without overflow and within a time bound, names the interpreter it
 tried and what it lacked; no Python error outlives a call; an instance or FMU state freed on
@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 from fmi_script import results
+from tooling import missing
 from test_native_host import assert_clean_exit, clean_env, host  # noqa: F401  (fixture)
 
 from pantocosim.fmi.embedding import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS
@@ -30,9 +31,9 @@ OK, WARNING, ERROR = 0, 1, 3
 
 @pytest.fixture(scope="session")
 def libraries(tmp_path_factory):
-    """{FMI version: the export library compiled as build-fmus compiles it}."""
+    """{FMI version: the embedding library compiled as build-fmus compiles it}."""
     if compiler() is None:
-        pytest.skip("no C compiler (apt-get install gcc)")
+        missing("a C compiler", "apt-get install -y gcc")
     work = tmp_path_factory.mktemp("export")
     return {v: compile_export_library(work, v) for v in (2, 3)}
 
@@ -46,7 +47,7 @@ def host3(tmp_path_factory, libraries):
 
 
 def slow_fmu(folder: Path, library: Path, fmi: int = 2, runtime: str = sys.executable) -> Path:
-    """An extracted FMU folder of the slow slave with the export library of ``fmi``."""
+    """An extracted FMU folder of the slow slave with the embedding library of ``fmi``."""
     export = EXPORTS[fmi]
     (folder / "binaries" / export.platform).mkdir(parents=True)
     shutil.copy(library, folder / "binaries" / export.platform / "slow.so")
@@ -113,6 +114,27 @@ def test_a_probe_that_never_answers_is_stopped_and_named(host, libraries, tmp_pa
         os.kill(int(pid_file.read_text()), 0)
 
 
+@pytest.mark.parametrize("value", ["abc", "-1", "0", "nan", "inf", "1e6", "1e5x"])
+def test_a_bad_probe_time_bound_is_refused_naming_the_variable(host, libraries, tmp_path,
+                                                               value):
+    fmu = slow_fmu(tmp_path / "fmu", libraries[2])
+    proc, _ = run(host, fmu, ["instantiate A a"], tmp_path, PANTOCOSIM_PROBE_TIMEOUT_S=value)
+    assert_clean_exit(proc)
+    assert results(proc.stdout)[2][0] == ERROR
+    assert (f"PANTOCOSIM_PROBE_TIMEOUT_S = '{value}': not a time bound: give seconds, a "
+            "number > 0 and below 1e+06 (default 30)") in proc.stdout
+
+
+def test_a_probe_time_bound_with_blanks_is_taken(host, libraries, tmp_path):
+    exe = fake_python(tmp_path, "exec sleep 600\n")
+    fmu = slow_fmu(tmp_path / "fmu", libraries[2], runtime="/nonexistent/python")
+    proc, wall = run(host, fmu, ["instantiate A a"], tmp_path, PANTOCOSIM_PYTHON=str(exe),
+                     PANTOCOSIM_PROBE_TIMEOUT_S=" 1 ", PATH=str(tmp_path / "empty"))
+    assert results(proc.stdout)[2][0] == ERROR
+    assert f"PANTOCOSIM_PYTHON = {exe}: did not answer within 1 s" in proc.stdout
+    assert wall < 20.0
+
+
 def test_a_skipped_interpreter_is_a_warning_naming_the_one_used(host, libraries, tmp_path):
     exe = fake_python(tmp_path, "exec sleep 600\n")
     fmu = slow_fmu(tmp_path / "fmu", libraries[2])
@@ -140,7 +162,8 @@ def test_a_python_error_of_one_call_does_not_poison_the_next(host, libraries, tm
 
 
 THREADS = r'''
-import ctypes as C, json, sys, threading, time
+import ctypes as C, json, os, pathlib, sys, threading, time
+marks = pathlib.Path(os.environ["SLOW_SLAVE_MARKS"])
 lib = C.CDLL(sys.argv[1])
 LOG = C.CFUNCTYPE(None, C.c_void_p, C.c_char_p, C.c_int, C.c_char_p, C.c_char_p, C.c_char_p)
 logged = []
@@ -172,25 +195,31 @@ lib.fmi2SetReal(c, vr, 1, delay)                     # serialising and stepping 
 state = C.c_void_p()
 out["get_state"] = lib.fmi2GetFMUstate(c, C.byref(state))
 
-def in_thread(name, fn):
+def in_thread(name, fn, call):
+    """Run fn on a thread; return once the slave says ``call`` is under way (30 s at most)."""
     def body():
         out[name + "_start"] = time.monotonic()
         out[name] = fn()
         out[name + "_end"] = time.monotonic()
     t = threading.Thread(target=body)
     t.start()
-    time.sleep(0.2)                                  # the call is under way
+    deadline = time.monotonic() + 30.0
+    while not (marks / call).exists():
+        assert time.monotonic() < deadline, f"{call} never began"
+        time.sleep(0.005)
+    out[name + "_begun"] = time.monotonic()
     return t
 
 size = C.c_size_t(0)
-t = in_thread("size", lambda: lib.fmi2SerializedFMUstateSize(c, state, C.byref(size)))
+t = in_thread("size", lambda: lib.fmi2SerializedFMUstateSize(c, state, C.byref(size)),
+              "serialize")
 copy = C.c_void_p(state.value)
 out["free_state"] = lib.fmi2FreeFMUstate(c, C.byref(copy))
 out["free_state_end"] = time.monotonic()
 t.join()
 out["size_bytes"] = size.value
 out["set_freed_state"] = lib.fmi2SetFMUstate(c, state)
-t = in_thread("step", lambda: lib.fmi2DoStep(c, 0.0, 1e-3, 1))
+t = in_thread("step", lambda: lib.fmi2DoStep(c, 0.0, 1e-3, 1), "step")
 lib.fmi2FreeInstance(c)
 out["free_instance_end"] = time.monotonic()
 t.join()
@@ -204,16 +233,19 @@ def test_a_state_or_instance_freed_on_another_thread_waits_for_the_call(librarie
     fmu = slow_fmu(tmp_path / "fmu", libraries[2])
     script = tmp_path / "threads.py"
     script.write_text(THREADS)
+    marks = tmp_path / "marks"
+    marks.mkdir()
     proc = subprocess.run([sys.executable, str(script), str(fmu / "binaries" / "linux64" /
                                                          "slow.so"),
                            f"file://{fmu}/resources"], capture_output=True, text=True,
-                          timeout=120)
+                          timeout=120, env={**os.environ, "SLOW_SLAVE_MARKS": str(marks)})
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.splitlines()[-1])
     assert out["instantiated"] and out["get_state"] == OK
     assert out["size"] == OK and out["size_bytes"] > 0
-    # the free waited for the call under way (0.6 s from its start; it began 0.2 s before
-    # the free), whatever the order in which the two threads read the clock after it
+    # the free, made once the call was under way, waited for it (0.6 s from its start),
+    # whatever the order in which the two threads read the clock after it
+    assert out["size_begun"] < out["free_state_end"] and out["size_begun"] < out["size_end"]
     assert out["free_state"] == OK and out["free_state_end"] >= out["size_start"] + 0.55
     assert out["set_freed_state"] == ERROR
     assert out["step"] == OK and out["free_instance_end"] >= out["step_start"] + 0.55

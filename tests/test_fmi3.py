@@ -1,13 +1,12 @@
 """The FMI 3.0 FMUs (``pantocosim build-fmus`` writes them into ``fmi3/``): the same slave
-cores as the FMI 2.0 FMUs behind the FMI 3.0 front and export library. They pass fmpy's FMI
+cores as the FMI 2.0 FMUs behind the FMI 3.0 front and embedding library. They pass fmpy's FMI
 3.0 validation, have the FMI 2.0 FMUs' ports and units, give the FMI 2.0 FMUs' numbers in
 fmpy's ``simulate_fmu``, in our master (explicit and implicit; the implicit run equals the
-monolithic one) and in a native C host started with a clean environment, refuse what they do
+monolithic one) and in a C host started with a clean environment, refuse what they do
 not honour with FMI 3.0 statuses, and roll back bit for bit. FMUs never load into the pytest
 process: fmpy, the master and the C host run in subprocesses."""
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmi_script import Script, results
+from tooling import c_compiler
 from test_native_host import (CATENARY_RUN, DISCARD, ERROR, OK, PANTOGRAPH_RUN,
                               assert_clean_exit, host, run_host, run_twin, stepping_script)
 
@@ -44,11 +44,7 @@ def fmus3(built):
 @pytest.fixture(scope="session")
 def host3(tmp_path_factory):
     """The FMI 3.0 C host, compiled with the system's C compiler."""
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        if os.environ.get("CI"):
-            pytest.fail("no C compiler: .ci/run installs gcc")
-        pytest.skip("no C compiler (apt-get install gcc)")
+    cc = c_compiler()
     exe = tmp_path_factory.mktemp("host3") / "fmi3_host"
     subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe), str(HOST_SOURCE), "-ldl"],
                    check=True)
@@ -56,7 +52,7 @@ def host3(tmp_path_factory):
 
 
 def run_host3(host, script: Script, tmp: Path) -> subprocess.CompletedProcess:
-    """The C host in what a native host started from a desktop has: no Python variables, no
+    """The C host in what a C host started from a desktop has: no Python variables, no
     venv on PATH, another working folder."""
     work = tmp / "elsewhere"
     work.mkdir(exist_ok=True)
@@ -269,7 +265,7 @@ def test_ssp_command_pairs_an_fmi3_pantograph_with_the_fmi3_catenary(fmus3, tmp_
                     == "3.0", name
 
 
-# ----------------------------------------------------------------------- the native C host
+# ----------------------------------------------------------------------- the C host
 @pytest.mark.parametrize("name", NAMES)
 def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host3, fmus3, tmp_path, name):
     case = CATENARY_RUN if name == "catenary" else PANTOGRAPH_RUN

@@ -50,7 +50,9 @@ def test_every_fmu_bundles_the_models_only(fmus):
     import zipfile
 
     from pantocosim.master.fmu.build import is_stale
+    from pantocosim.pantograph.presets import PRESETS
 
+    assert set(PRESETS) <= set(fmus)          # every preset's FMU is checked
     for name, fmu in fmus.items():
         names = zipfile.ZipFile(fmu).namelist()
         assert any(n.startswith("resources/pantocosim/pantograph/") for n in names), name
@@ -66,6 +68,7 @@ def test_every_pantograph_fmu_validates_with_the_same_ports(fmus):
     from pantocosim.pantograph.presets import preset_defaults
 
     ports = None
+    assert len(fmus) >= 4
     for name, path in fmus.items():
         assert validate_fmu(str(path)) == [], name
         md = read_model_description(str(path))

@@ -1,7 +1,7 @@
 """FMI 2.0 state machine and typed get/set of the FMUs, through fmpy in subprocesses
 (tests/fmu_state_probe.py).
 
-The FMUs' export library (pantocosim.fmi.embedding) gives every call its own FMI status: a
+The FMUs' embedding library (pantocosim.fmi.embedding) gives every call its own FMI status: a
 refused set, get or setFMUstate returns fmi2Error, logs the reason with status fmi2Error and
 is not applied; the instance stays usable and the next valid call is honoured. A refused
 doStep returns fmi2Discard. No call is ever fatal.

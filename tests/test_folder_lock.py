@@ -7,9 +7,9 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 
 import pytest
+from waiting import wait_until
 
 from pantocosim.master.cli import main
 from pantocosim.master.folder_lock import LOCK_NAME, FolderBusy, FolderLock, holder_of
@@ -49,8 +49,7 @@ def test_wait_takes_the_lock_when_the_holder_ends(tmp_path):
     first = FolderLock(tmp_path).__enter__()
     t = threading.Thread(target=second)
     t.start()
-    while not messages:      # the waiter has found the lock held
-        time.sleep(0.01)
+    wait_until(lambda: messages, "the waiter finding the lock held", timeout=30.0)
     assert not got.is_set()
     assert messages[0].startswith(f"waiting for pid {os.getpid()} on ")
     first.__exit__(None, None, None)

@@ -1,4 +1,4 @@
-"""Host processes that load the FMUs end cleanly: 60 processes (fmpy, the native C host,
+"""Host processes that load the FMUs end cleanly: 60 processes (fmpy, the C host,
 libcosim) each run an FMU and exit normally (no ``os._exit``); none aborts at exit (200 of
 them, 80/80/40, were measured with no abort). And
 fmpy's ``simulate_fmu`` runs any number of times in one process, with any mix of the FMUs

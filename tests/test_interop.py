@@ -55,7 +55,9 @@ def test_shipped_ssp_is_valid_and_holds_no_pantograph_values(built):
                                      "resources/catenary.fmu"}
         root = ET.fromstring(z.read("SystemStructure.ssd"))
     names = [root.get("name")] + [e.get("name") for e in root.iter(f"{{{NS['ssd']}}}System")]
-    for comp in root.iter(f"{{{NS['ssd']}}}Component"):
+    components = list(root.iter(f"{{{NS['ssd']}}}Component"))
+    assert len(components) == 2                  # the pantograph and the catenary
+    for comp in components:
         names.append(comp.get("name"))
         connectors = [c.get("name") for c in comp.iter(f"{{{NS['ssd']}}}Connector")]
         names += connectors
@@ -74,6 +76,7 @@ def test_shipped_ssp_is_valid_and_holds_no_pantograph_values(built):
 
 
 def test_outputs_declare_no_direct_feedthrough(fmus):
+    assert {"catenary", "en50318-2mass", "dsa380-rigid"} <= set(fmus)
     for name, path in fmus.items():
         with zipfile.ZipFile(path) as z:
             md = ET.fromstring(z.read("modelDescription.xml"))

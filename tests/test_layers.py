@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import ast
 import pathlib
+import re
 from collections import defaultdict
+
+import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -184,11 +187,13 @@ def against_floors(edges) -> list[tuple[str, str]]:
     return wrong
 
 
-def test_dependencies_point_downwards():
+@pytest.mark.parametrize("what", ["the floors", "master's rooms"])
+def test_dependencies_point_downwards(what):
+    check = against_floors if what == "the floors" else against_master_floors
     known, edges, lines = graph()
     wrong = [f"{known[a].relative_to(ROOT)}:{lines[a, b]} {a} -> {b}"
-             for a, b in against_floors(edges)]
-    assert not wrong, "imports against the floors:\n" + "\n".join(wrong)
+             for a, b in check(edges)]
+    assert not wrong, f"imports against {what}:\n" + "\n".join(wrong)
 
 
 def test_floor_check_finds_upward_and_sideways_imports():
@@ -257,3 +262,169 @@ def test_deferred_third_party_imports_are_heavy_ones():
             if not heavy and not allowed:
                 wrong.append(f"{path.relative_to(ROOT)}:{n.lineno} {ast.unparse(n)}")
     assert not wrong, "light imports inside a function:\n" + "\n".join(wrong)
+
+
+# ----------------------------------------------------------------------------- master's rooms
+#: master's rooms bottom to top (docs/architecture.md): a module imports its own floor and the
+#: floors below; the longest matching room names a module's floor
+MASTER_FLOORS = {
+    "": 0, "scenario": 0, "output_folder": 0, "folder_lock": 0, "interrupt": 0,
+    "expression": 0, "pacing": 0, "size_limits": 0, "stability": 0, "coupling": 0,
+    "validation": 0, "regression": 0,
+    "results": 1,                    # files, recorder, statistics, plots
+    "run": 2,                        # a monolithic run: setup, checks, stepping, finish
+    "fmu": 3,                        # the Python FMUs: build, check, embedding, runtime
+    "ssp": 4,                        # the SSP file of a scenario's FMUs
+    "fmu.dist": 5,                   # build-fmus' output: the FMUs with their SSP file
+    "cosim": 5, "native": 5, "standalone": 5,
+    "regress": 6, "campaign": 6, "benchmarks": 6, "thirdparty": 6,
+    "commands": 7,                   # the CLI commands
+    "cli": 8,                        # imports the commands by name (COMMANDS)
+}
+
+
+def master_floor(name: str) -> int:
+    """The floor of a module of ``pantocosim.master`` (KeyError: a room not placed yet)."""
+    parts = name.split(".")[2:]
+    for room in [".".join(parts[:n]) for n in range(len(parts), 0, -1)] or [""]:
+        if room in MASTER_FLOORS:
+            return MASTER_FLOORS[room]
+    raise KeyError(name)
+
+
+def against_master_floors(edges) -> list[tuple[str, str]]:
+    """(importer, imported) of every import of master that climbs to a room above, and every
+    import of a CLI command from outside the commands."""
+    wrong = []
+    for source in sorted(edges):
+        if not source.startswith("pantocosim.master"):
+            continue
+        for target in sorted(edges[source]):
+            if not target.startswith("pantocosim.master"):
+                continue
+            commands = "pantocosim.master.commands"
+            if (master_floor(target) > master_floor(source)
+                    or target.startswith(commands) and not source.startswith(commands)):
+                wrong.append((source, target))
+    return wrong
+
+
+def test_every_master_module_has_a_room():
+    missing = []
+    for name in modules():
+        try:
+            master_floor(name) if name.startswith("pantocosim.master") else None
+        except KeyError:
+            missing.append(name)
+    assert not missing, "place these in MASTER_FLOORS:\n" + "\n".join(missing)
+    assert master_floor("pantocosim.master") == 0
+    with pytest.raises(KeyError):
+        master_floor("pantocosim.master.new_room")
+
+
+def test_master_floor_check_finds_climbs():
+    edges = {"pantocosim.master.results.files": {"pantocosim.master.run.setup"},
+             "pantocosim.master.fmu.dist": {"pantocosim.master.ssp"},
+             "pantocosim.master.fmu.build": {"pantocosim.master.ssp"},
+             "pantocosim.master.campaign.spec": {"pantocosim.master.commands.run"},
+             "pantocosim.master.commands.run": {"pantocosim.master.commands.sweep",
+                                                "pantocosim.master.run"}}
+    assert against_master_floors(edges) == [
+        ("pantocosim.master.campaign.spec", "pantocosim.master.commands.run"),
+        ("pantocosim.master.fmu.build", "pantocosim.master.ssp"),
+        ("pantocosim.master.results.files", "pantocosim.master.run.setup")]
+
+
+# ----------------------------------------------------------------------------- C sources
+#: the C99 standard headers
+C_STANDARD = {"assert.h", "complex.h", "ctype.h", "errno.h", "fenv.h", "float.h",
+              "inttypes.h", "iso646.h", "limits.h", "locale.h", "math.h", "setjmp.h",
+              "signal.h", "stdarg.h", "stdbool.h", "stddef.h", "stdint.h", "stdio.h",
+              "stdlib.h", "string.h", "tgmath.h", "time.h", "wchar.h", "wctype.h"}
+#: the native FMUs' C sources (fmus/native) and the embedding library's (fmus/fmi/embedding)
+NATIVE, EMBEDDING = ROOT / "fmus" / "native", ROOT / "fmus" / "fmi" / "embedding"
+#: C files of fmus/native that are no part of an FMU: -> why they may include more
+NATIVE_HOSTS = {"realtime_host.c": "the C host that loads the FMUs (dlopen, POSIX clocks)"}
+
+
+def includes(path: pathlib.Path) -> list[str]:
+    """The header names a C file includes (``"x.h"`` and ``<x.h>`` alike)."""
+    return re.findall(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', path.read_text(), re.M)
+
+
+def c_files(folder: pathlib.Path) -> list[pathlib.Path]:
+    return sorted(p for p in folder.rglob("*") if p.suffix in (".c", ".h"))
+
+
+def test_native_fmu_sources_include_their_own_fmi_and_standard_headers_only():
+    own = {p.name for p in NATIVE.glob("*.h")}
+    fmi = {p.name for p in NATIVE.glob("fmi[23]/*.h")}
+    files = [p for p in c_files(NATIVE) if p.parent == NATIVE]
+    assert {"pcs_model.h", "pcs_data.c", "fmi2_front.c"} <= {p.name for p in files}
+    assert {"fmi2Functions.h", "fmi3Functions.h"} <= fmi
+    wrong = [f"{p.relative_to(ROOT)}: {h}" for p in files if p.name not in NATIVE_HOSTS
+             for h in includes(p) if h not in own | fmi | C_STANDARD]
+    assert not wrong, "includes outside own, FMI and C standard headers:\n" + "\n".join(wrong)
+
+
+def test_the_two_c_layers_never_include_each_other():
+    layers = {NATIVE: c_files(NATIVE), EMBEDDING: c_files(EMBEDDING)}
+    assert all(layers.values())
+    wrong = []
+    for here, other in ((NATIVE, EMBEDDING), (EMBEDDING, NATIVE)):
+        theirs = {p.name for p in c_files(other)} - {p.name for p in c_files(here)}
+        for p in layers[here]:
+            wrong += [f"{p.relative_to(ROOT)}: {h}" for h in includes(p)
+                      if pathlib.PurePath(h).name in theirs or ".." in h]
+    assert not wrong, "includes across the native FMUs and the embedding library:\n" + \
+        "\n".join(wrong)
+
+
+# ----------------------------------------------------------------------------- FMI libraries
+#: the only modules of the package that import an FMI library: module -> the library
+FMI_LIBRARY_IMPORTERS = {"pantocosim.fmi.fmi2_front": "pythonfmu",
+                         "pantocosim.fmi.fmi3_front": "pythonfmu3"}
+
+
+def fmi_library_imports(path: pathlib.Path) -> set[str]:
+    """The FMI libraries (pythonfmu, pythonfmu3, fmpy) a module imports, anywhere in it."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                 [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                 else [])
+        found |= {n.split(".")[0] for n in names} & {"pythonfmu", "pythonfmu3", "fmpy"}
+    return found
+
+
+def test_only_the_fronts_import_pythonfmu_and_nothing_imports_fmpy():
+    found = {name: fmi_library_imports(path) for name, path in modules().items()
+             if not name.startswith("pantocosim.master")}
+    assert {n: libs for n, libs in found.items() if libs} == \
+        {n: {lib} for n, lib in FMI_LIBRARY_IMPORTERS.items()}
+
+
+def test_the_slaves_import_without_pythonfmu():
+    import subprocess
+    import sys
+
+    code = ("import sys, pantocosim.fmi.catenary_slave, pantocosim.fmi.pantograph_slave, "
+            "pantocosim.fmi.front; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('pythonfmu', 'pythonfmu3', 'fmpy')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_the_port_tables_import_no_slave():
+    """The master, the SSP writer and the reference page read the port tables without the
+    slave modules."""
+    import subprocess
+    import sys
+
+    code = ("import sys, pantocosim.fmi.catenary_ports, pantocosim.fmi.pantograph_ports; "
+            "print(sorted(m for m in sys.modules if m.endswith(('_slave', 'slave_base'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"

@@ -20,7 +20,7 @@ from pantocosim.catenary.linear import LinearCatenary
 from pantocosim.catenary.modal import ModalCatenary
 from pantocosim.catenary.modal_step import ModalHHT
 from pantocosim.core.hht import HHTIntegrator, HHTSettings
-from pantocosim.core.stepper_contract import structure_step
+from pantocosim.core.stepper_contract import closed_form_step
 
 V = 300 / 3.6
 H = 1e-3
@@ -134,7 +134,7 @@ def test_closed_form_step_equals_newton_with_slackening(line4):
     y0 = newton.static_state(_load(0.0))
     ref = HHTIntegrator(newton, HHTSettings(alpha=-0.05, rtol=1e-12, etol=0.0))
     ref.initialize(0.0, y0, None, _load(0.0))
-    cf = structure_step(closed, HHTSettings(alpha=-0.05))
+    cf = closed_form_step(closed, HHTSettings(alpha=-0.05))
     assert isinstance(cf, ModalHHT)
     cf.initialize(0.0, y0, None, _load(0.0))
     err, slack_steps, switches = 0.0, 0, 0

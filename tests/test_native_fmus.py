@@ -6,7 +6,6 @@ statuses the Python FMUs give; in our master (explicit and implicit) the native 
 gives the Python catenary FMU's contact force."""
 
 import dataclasses
-import os
 import shutil
 import subprocess
 import zipfile
@@ -14,21 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tooling import required
 
 ROOT = Path(__file__).resolve().parents[1]
 HOST_SOURCE = ROOT / "fmus" / "native" / "realtime_host.c"
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 STEPS, DT = 600, 0.001
-
-
-def required(tool: str, package: str):
-    """The path of ``tool``; on CI its absence fails the test (.ci/run installs it)."""
-    path = shutil.which(tool)
-    if path is None:
-        if os.environ.get("CI"):
-            pytest.fail(f"{tool} is missing: .ci/run installs {package} (apt-get)")
-        pytest.skip(f"{tool} is missing (apt-get install -y {package})")
-    return path
 
 
 @pytest.fixture(scope="module")
@@ -494,7 +484,7 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, 
     """contact_mode 1 (pantograph heights in, the penalty law inside, solved implicitly with
     the wire): the native catenary gives the Python catenary FMU's contact force (the same
     model), through a loss of contact."""
-    from pantocosim.catenary.models import MODEL_NAMES
+    from pantocosim.catenary.models import model_code
 
     if model == "linear":
         cat = exported["catenary"]
@@ -512,7 +502,7 @@ def test_penalty_contact_inside_equals_the_python_catenary_fmu(model, prepared, 
     params = {"catenary_definition": sc.catenary, "speed_kmh": sc.speed_kmh,
               "n_pantographs": 1, "position_1": sc.pantographs[0].position_m,
               "static_force_1": F0, "hht_alpha": sc.alpha, "contact_mode": 1,
-              "catenary_model": MODEL_NAMES.index(model),
+              "catenary_model": model_code(model),
               "modal_cutoff_hz": sc.modal_cutoff_hz, "newton_rtol": sc.newton_rtol}
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave

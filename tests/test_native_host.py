@@ -1,11 +1,9 @@
-"""The FMUs in a native host: a C program (tests/c_hosts/fmi2_host.c, compiled here with the
+"""The Python FMUs in a C host (their embedding library, no Python host): a C program (tests/c_hosts/fmi2_host.c, compiled here with the
 system's C compiler) dlopens each FMU's linux64 binary and runs the FMI 2.0 call sequence in
 a clean environment (no LD_PRELOAD, no PYTHONPATH, no virtual environment on PATH, another
 working folder). Its outputs equal fmpy's; every refused call returns fmi2Error (fmi2Discard
 from doStep) with a categorised message; the process never aborts."""
 
-import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmi_script import Script, results
+from tooling import c_compiler
 
 ROOT = Path(__file__).resolve().parents[1]
 HOST_SOURCE = ROOT / "tests" / "c_hosts" / "fmi2_host.c"
@@ -30,11 +29,7 @@ CATENARY_RUN = ({"catenary_definition": "en50318", "spans": 4, "speed_kmh": 250.
 @pytest.fixture(scope="session")
 def host(tmp_path_factory):
     """The C host, compiled with the system's C compiler."""
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        if os.environ.get("CI"):
-            pytest.fail("no C compiler: .ci/run installs gcc")
-        pytest.skip("no C compiler (apt-get install gcc)")
+    cc = c_compiler()
     exe = tmp_path_factory.mktemp("host") / "fmi2_host"
     subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe), str(HOST_SOURCE), "-ldl"],
                    check=True)
@@ -42,7 +37,7 @@ def host(tmp_path_factory):
 
 
 def clean_env(home: Path, **extra) -> dict:
-    """What a native host started from a desktop has: no Python variables, no venv on PATH."""
+    """What a C host started from a desktop has: no Python variables, no venv on PATH."""
     env = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": str(home), "LANG": "C.UTF-8"}
     env.update(extra)
     return env

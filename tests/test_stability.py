@@ -81,6 +81,31 @@ def test_gain_never_passes_a_measured_unstable_case(dt, stable, unstable):
     assert gain(stable, dt) < 3.0 * stability.GAIN_LIMIT
 
 
+def _printed(value: str, computed: float) -> bool:
+    """``value`` is ``computed`` rounded to the digits it shows."""
+    decimals = len(value.partition(".")[2])
+    return f"{computed:.{decimals}f}" == value
+
+
+def test_the_stability_page_prints_the_law_s_gains():
+    """docs/stability.md's measured table and default-contact figures are the law's gains."""
+    import re
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "stability.md").read_text()
+    rows = re.findall(r"^\| (\d+) ms \| ([\d.e]+) \(([\d.]+)\) \| ([\d.e]+) \(([\d.]+)\) \|$",
+                      page, re.M)
+    assert [(float(ms) / 1000, float(a), float(b)) for ms, a, _, b, _ in rows] == MEASURED
+    for ms, stable, g_stable, unstable, g_unstable in rows:
+        dt = float(ms) / 1000
+        assert _printed(g_stable, gain(float(stable), dt)), (ms, stable, g_stable)
+        assert _printed(g_unstable, gain(float(unstable), dt)), (ms, unstable, g_unstable)
+    default = re.search(r"`G = ([\d.]+)` at 1 ms, is warned at 5 ms \(`G = ([\d.]+)`\) and "
+                        r"refused at 10 ms \(`G = ([\d.]+)`\)", page.replace("\n", " "))
+    assert default, "the default-contact sentence moved"
+    for shown, dt in zip(default.groups(), (0.001, 0.005, 0.01)):
+        assert _printed(shown, gain(5e4, dt)), (shown, dt)
+
+
 def test_default_contact_runs_unwarned_at_1_ms_and_is_warned_near_the_limit_at_5_ms():
     assert gain(5e4, 0.001) == pytest.approx(0.145, abs=0.005)
     assert stability.GAIN_WARNING <= gain(5e4, 0.005) < stability.GAIN_LIMIT

@@ -40,7 +40,7 @@ def test_the_catenary_models_declare_their_stepping():
 
     assert CatenaryModel.stepping == contract.NEWTON
     assert LinearCatenary.stepping == "affine" and ModalCatenary.stepping == "modal"
-    assert contract.STRUCTURE_STEPS["modal"] is ModalHHT
+    assert contract.CLOSED_FORM_STEPS["modal"] is ModalHHT
 
 
 def test_the_factory_picks_what_the_model_declares(line2):
@@ -68,6 +68,8 @@ def test_an_unknown_stepping_is_refused():
     with pytest.raises(ParameterError, match="no-such-stepper") as exc:
         make_stepper(Odd(), SETTINGS)
     assert "affine" in str(exc.value) and "newton" in str(exc.value)
+    # it says what to import
+    assert "@register_closed_form_step('no-such-stepper') in the module of Odd" in str(exc.value)
 
 
 def test_settings_take_a_factorization_policy_not_a_flag():
@@ -81,11 +83,11 @@ def example(monkeypatch):
     """The worked example of docs/architecture.md, run from the page itself."""
     text = DOC.read_text().split("## Worked example: a stepper", 1)[1]
     code = "\n".join(re.findall(r"```python\n(.*?)```", text, re.S))
-    monkeypatch.setattr(contract, "STRUCTURE_STEPS", dict(contract.STRUCTURE_STEPS))
+    monkeypatch.setattr(contract, "CLOSED_FORM_STEPS", contract.CLOSED_FORM_STEPS.copy())
     module = types.ModuleType("stepper_example")
     monkeypatch.setitem(sys.modules, module.__name__, module)
     exec(compile(code, str(DOC), "exec"), module.__dict__)
-    assert "diagonal" in contract.STRUCTURE_STEPS
+    assert "diagonal" in contract.CLOSED_FORM_STEPS
     return module
 
 

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from waiting import group_size, wait_until
 
 #: Dask clusters and several runs each: outside `pytest -m "not slow"` (CI runs everything)
 pytestmark = pytest.mark.slow
@@ -229,7 +230,9 @@ def test_ctrl_c_of_a_sweep_of_short_cases_is_one_line(tmp_path, moment):
         deadline = time.time() + 400
         while time.time() < deadline and proc.poll() is None:
             if moment == "workers starting" and (out / "cases.json").exists():
-                time.sleep(1.0)                      # the worker processes are importing
+                # the worker processes are started (and importing)
+                wait_until(lambda: group_size(proc.pid) >= 3, "the workers' processes",
+                           proc=proc)
                 break
             if moment == "cases running" and list(out.glob("cases/*/case.json")):
                 break

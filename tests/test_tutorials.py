@@ -40,7 +40,9 @@ def figures_of(text: str) -> list[str]:
 
 
 def test_every_figure_on_a_tutorial_page_is_written_by_its_script():
-    for md in TUTORIALS.glob("*.md"):
+    pages = sorted(TUTORIALS.glob("*.md"))
+    assert len(pages) >= 5 and sum(len(figures_of(p.read_text())) for p in pages) >= 3
+    for md in pages:
         script = (TUTORIALS / md.name.replace("-", "_")).with_suffix(".py").read_text()
         for fig in figures_of(md.read_text()):
             assert (TUTORIALS / fig).is_file(), (md.name, fig)
@@ -173,6 +175,7 @@ def test_cli_reference_lists_every_command_and_flag(reference):
     from pantocosim.master.cli import COMMANDS
 
     text = reference.cli_page()
+    assert len(COMMANDS) == 14
     for name in COMMANDS:
         assert f"\n## {name}\n" in text
     for flag in ("--coupling", "--catenary-model", "--realtime", "--scheduler", "--criteria",
@@ -186,6 +189,8 @@ def test_format_pages_list_every_declared_field(reference):
     from pantocosim.master.campaign import assessment, spec
 
     pages = reference.format_pages()
+    formats = (scenario.FORMAT, definition.FORMAT, spec.FORMAT, assessment.FORMAT)
+    assert all(sum(len(sec.fields) for sec in fmt.sections) >= 5 for fmt in formats)
     for name, fmt in (("scenario.md", scenario.FORMAT), ("catenary.md", definition.FORMAT),
                       ("sweep.md", spec.FORMAT), ("criteria.md", assessment.FORMAT)):
         for sec in fmt.sections:
@@ -223,6 +228,7 @@ def test_declared_defaults_are_the_loaded_defaults():
     sc = parse_scenario({"catenary": "en50318", "speed_kmh": 200.0,
                          "pantographs": [{"model": "en50318-2mass", "position_m": 30.0}],
                          "analysis": {"window_supports": [4, 6]}}, "sc.toml")
+    assert len(SIMULATION.fields) >= 5
     for f in SIMULATION.fields:
         assert getattr(sc, f.name) == (None if f.name == "duration_s" else f.default)
     assert (sc.contact_law, sc.contact_stiffness, sc.contact_damping) == tuple(

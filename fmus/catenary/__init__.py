@@ -7,7 +7,7 @@
 - :mod:`.structure`: collects the element sets on one CSR pattern; :mod:`.mesh`: geometry,
   DOF numbering, elements and supports (see ``docs/architecture.md``)
 - :mod:`.statics`: static equilibrium and the initial-configuration problem (3.1.3)
-- :mod:`.model`: :class:`CatenaryModel`, the model the HHT-alpha integrator drives
+- :mod:`.model`: :class:`~.model.CatenaryModel`, the model the HHT-alpha integrator drives
 - :mod:`.contact_point`: contact-wire points under the pantographs (3.12)-(3.13)
 
 The package itself imports none of them: import a name from its module

@@ -30,7 +30,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..core.errors import ConvergenceError
+from ..core.errors import ConvergenceError, ParameterError
 from ..core.model import Evaluation, SecondOrderModel
 from .linear import LinearCatenary
 from . import modal_kernels as _k
@@ -40,19 +40,23 @@ from .modal_step import ModalSolve
 from .model import CatenaryModel
 from ..core.disk_cache import cached
 
+#: modes kept above the cutoff per static-correction coordinate (a dropper, a contact
+#: point): with fewer the residual flexibility is round-off (docs/modal-cutoff.md)
+SPARE_MODES = 2
 #: coefficient sets (time steps) whose shared Woodbury pieces are kept
 KEPT_BASES = 4
 
 
-def kept_modes_below(lin: LinearCatenary, cutoff_hz: float, bands):
-    """:func:`~.modal_basis.modes_below` of the linear model's (K0, M) ``bands``, kept in the
-    set-up cache (:mod:`pantocosim.core.disk_cache`) under the bands and the cutoff: the band
-    eigensolution is most of the modal model's set-up."""
+def kept_modes_below(lin: LinearCatenary, cutoff_hz: float, bands, max_modes: int):
+    """:func:`~.modal_basis.modes_below` of the linear model's (K0, M) ``bands``, at most
+    ``max_modes``, kept in the set-up cache (:mod:`pantocosim.core.disk_cache`) under the bands
+    and the cutoff: the band eigensolution is most of the modal model's set-up."""
     def compute():
-        f, phi = modes_below(lin.K0, lin.M, cutoff_hz, bands=bands)
+        f, phi = modes_below(lin.K0, lin.M, cutoff_hz, max_modes=max_modes, bands=bands)
         return {"frequencies": f, "Phi": phi}
 
-    basis = cached("modal-basis", (bands[0], bands[1], float(cutoff_hz)), compute)
+    key = (bands[0], bands[1], float(cutoff_hz), int(max_modes))
+    basis = cached("modal-basis", key, compute)
     return basis["frequencies"], basis["Phi"]
 
 
@@ -70,8 +74,10 @@ class ModalCatenary(SecondOrderModel):
                                                       element_size=element_size)
         self.cutoff_hz = float(cutoff_hz)
         S = lin.structure
+        spare = len(lin.droppers) + len(lin.x0)    # the static correction's coordinates
         bands = (S.lower_band(lin.K0_data), S.lower_band(S.M_data))
-        self.frequencies, self.Phi = kept_modes_below(lin, self.cutoff_hz, bands)
+        self.frequencies, self.Phi = kept_modes_below(lin, self.cutoff_hz, bands,
+                                                      lin.n_dofs - SPARE_MODES * spare)
         self.omega2 = (2.0 * np.pi * self.frequencies) ** 2
         self.m = m = self.Phi.shape[1]
         self.n_p = len(lin.x0)
@@ -81,8 +87,7 @@ class ModalCatenary(SecondOrderModel):
         #: a complete basis leaves no residual: no zeta, no xi
         self.corrected = m < lin.n_dofs
         seps = [a - b for a in self.x0 for b in self.x0]
-        flex = self.flex = InterfaceFlexibility(lin, self.Phi, self.omega2, seps,
-                                                residual=self.corrected)
+        flex = self.flex = self._flexibility(seps)
         self.nz = len(dr) if self.corrected else 0
         self.nx = self.n_p if self.corrected else 0
         self.n_dofs = m + self.nz + self.nx
@@ -102,6 +107,18 @@ class ModalCatenary(SecondOrderModel):
         self._bases = {}
         self._init_geometry()
         _k.warm_up()
+
+    def _flexibility(self, separations) -> InterfaceFlexibility:
+        """The interfaces' modal and residual tables (:mod:`.modal_residual`); a cutoff whose
+        modes above leave the residual singular is refused."""
+        try:
+            return InterfaceFlexibility(self.linear, self.Phi, self.omega2, separations,
+                                        residual=self.corrected)
+        except np.linalg.LinAlgError:
+            raise ParameterError("modal_cutoff_hz", self.cutoff_hz, f"the "
+                                 f"{self.linear.n_dofs - self.m} modes above it leave the "
+                                 "static correction singular; accepted: > 0 and below "
+                                 f"{self.frequencies[-1]:.6g} Hz") from None
 
     # ------------------------------------------------------------------ delegated geometry
     @property

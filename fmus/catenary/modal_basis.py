@@ -22,6 +22,8 @@ from numba import njit
 from scipy.linalg import cython_lapack
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
+from ..core.errors import ParameterError
+
 #: eigenvalues closer than this (relative) are iterated together as a cluster
 CLUSTER_RTOL = 1e-5
 #: inverse iterations per mode (the shift is the eigenvalue: each gains ~1e-6 or better)
@@ -144,8 +146,9 @@ def band_modes(K_band: np.ndarray, M_band: np.ndarray, lam: np.ndarray,
 
 def modes_below(K, M, cutoff_hz: float, max_modes: int | None = None, bands=None):
     """(frequencies [Hz], mass-normalised modes (n, m)) of every mode below ``cutoff_hz``
-    (at least one; ``inf``: all of them, by a dense solve). ``bands``: (K_band, M_band) in
-    lower band storage if known (else taken from the sparse K, M)."""
+    (at least one; ``inf``: all of them, by a dense solve), at most ``max_modes`` (default
+    n - 2: a finite cutoff keeping more is refused). ``bands``: (K_band, M_band) in lower band
+    storage if known (else taken from the sparse K, M)."""
     n = K.shape[0]
     if not np.isfinite(cutoff_hz):                 # every mode (dense; small models only)
         lam, phi = sla.eigh(K.toarray(), M.toarray())
@@ -155,7 +158,13 @@ def modes_below(K, M, cutoff_hz: float, max_modes: int | None = None, bands=None
     lam_all = band_eigenvalues(*bands)
     w2 = (2.0 * np.pi * cutoff_hz) ** 2
     m = max(1, int(np.searchsorted(lam_all, w2)))
-    m = min(m, n - 2 if max_modes is None else max_modes)
+    limit = n - 2 if max_modes is None else max_modes
+    if m > limit:
+        f_max = np.sqrt(max(float(lam_all[limit]), 0.0)) / (2.0 * np.pi)
+        raise ParameterError("modal_cutoff_hz", cutoff_hz, f"keeps {m} of the model's {n} "
+                             f"modes, more than the {limit} it takes (the static correction "
+                             f"needs the modes above the cutoff); accepted: > 0 and at most "
+                             f"{f_max:.6g} Hz")
     lam, phi = band_modes(*bands, lam_all[:m])
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi), phi
 

@@ -29,19 +29,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.affine_hht import _new_id, check_slack_passes, restore_step_state, step_state
-from ..core.stepper_contract import register_structure_step
+from ..core.stepper_contract import register_closed_form_step
 from . import modal_kernels as _k
 
 #: slack sets whose Woodbury pieces are kept (first in, first out)
 KEPT_SOLVES = 64
 
 
-@register_structure_step("modal")
+@register_closed_form_step("modal")
 class ModalHHT:
     """``ModalHHT(model, settings)``: ``initialize(t0, y0, v0, F0)``; per step
     ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`, then
     ``finish(F)`` (False: the slack set changed and the step was re-solved; supply F
-    again): a :class:`~pantocosim.core.stepper_contract.StructureStep`, registered as ``"modal"``.
+    again): a :class:`~pantocosim.core.stepper_contract.ClosedFormStep`, registered as ``"modal"``.
 
     The constant step data are the model's (:class:`~.modal.ModalCatenary`): ``omega2``
     and ``zeta_c`` (the modal diagonal), ``kbar`` and ``T_K`` (the droppers' static

@@ -18,7 +18,7 @@ so the set used by the elastic force and tangent is updated *within* the iterati
 dropper's share of the Rayleigh damping (beta K0_d) is removed according to the slack set
 *committed* at the end of the previous accepted step (keeps the residual continuous within a
 step). Both sets are deterministic functions of the iterate / the committed state; the
-committed set is the model's internal state (:meth:`get_internal_state`), and
+committed set is the model's internal state (:meth:`CatenaryModel.get_internal_state`), and
 ``Evaluation.structure_key`` changes whenever either set changes.
 """
 

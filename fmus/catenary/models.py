@@ -9,12 +9,14 @@
   with static corrections at the droppers and the contact points.
 
 Every factory takes the catenary (preset, path, definition or mesh), the start positions, the
-speed and the options; the FMU code of a model is its index in :data:`MODEL_NAMES`.
+speed and the options; the FMU code of a model is its stable code in :data:`CATENARY_MODELS`
+(:func:`model_code`; never a position in a list: a new model takes a new code).
 """
 
 from __future__ import annotations
 
 from ..core.errors import ParameterError
+from ..core.registry import Registry
 
 #: default cutoff of the modal model [Hz]: the accuracy targets against the linear
 #: model on en50318-250, en50318-300 and dsa380-ave-300 (docs/modal-cutoff.md; the wire modes
@@ -44,29 +46,27 @@ def _modal(catenary, x0, speed, element_size=None, modal_cutoff_hz=None):
     return ModalCatenary(catenary, x0, speed, element_size=element_size, cutoff_hz=cutoff)
 
 
-#: name -> factory(catenary, x0, speed, element_size=None, modal_cutoff_hz=None)
-CATENARY_MODELS = {"nonlinear": _nonlinear, "linear": _linear, "modal": _modal}
-#: FMU parameter ``catenary_model``: the index of the name
-MODEL_NAMES = tuple(CATENARY_MODELS)
+#: name -> factory(catenary, x0, speed, element_size=None, modal_cutoff_hz=None), with the
+#: model's code (the catenary FMU's Integer ``catenary_model``; stable, never reused)
+CATENARY_MODELS = Registry("catenary model", "catenary_model", coded=True)
+CATENARY_MODELS.add("nonlinear", _nonlinear, code=0)
+CATENARY_MODELS.add("linear", _linear, code=1)
+CATENARY_MODELS.add("modal", _modal, code=2)
+#: the model names in code order
+MODEL_NAMES = tuple(CATENARY_MODELS.codes())
 
 
 def model_code(name: str) -> int:
     """The FMU code of the model ``name`` (the catenary FMU's ``catenary_model``)."""
-    return MODEL_NAMES.index(model_name(name))
+    return CATENARY_MODELS.code(name)
 
 
 def model_name(code_or_name) -> str:
     """The model name of an FMU code (0, 1, 2) or a name."""
     if isinstance(code_or_name, str):
-        if code_or_name not in CATENARY_MODELS:
-            raise ParameterError("catenary_model", code_or_name,
-                                 f"must be one of {', '.join(MODEL_NAMES)}")
+        CATENARY_MODELS.entry(code_or_name)
         return code_or_name
-    code = int(code_or_name)
-    if not 0 <= code < len(MODEL_NAMES):
-        raise ParameterError("catenary_model", code, "must be " + ", ".join(
-            f"{i} ({n})" for i, n in enumerate(MODEL_NAMES)))
-    return MODEL_NAMES[code]
+    return CATENARY_MODELS.name_of(int(code_or_name))
 
 
 def make_catenary(model, catenary, x0=(0.0,), speed: float = 0.0, *,
@@ -74,7 +74,7 @@ def make_catenary(model, catenary, x0=(0.0,), speed: float = 0.0, *,
     """The catenary model ``model`` (name or FMU code) of ``catenary``."""
     if modal_cutoff_hz is not None and not modal_cutoff_hz > 0:
         raise ParameterError("modal_cutoff_hz", modal_cutoff_hz, "must be > 0")
-    return CATENARY_MODELS[model_name(model)](catenary, x0, speed, element_size=element_size,
+    return CATENARY_MODELS.entry(model_name(model))(catenary, x0, speed, element_size=element_size,
                                               modal_cutoff_hz=modal_cutoff_hz)
 
 

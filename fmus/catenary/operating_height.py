@@ -24,7 +24,7 @@ from pantocosim.core.disk_cache import cached
 from pantocosim.core.errors import ConvergenceError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.core.lowrank import ColumnCache
-from pantocosim.core.structure_stepping import structure_stepper
+from pantocosim.core.structure_stepping import stepper_under_inputs
 
 
 class LinearisedCatenary:
@@ -92,9 +92,9 @@ def mean_dynamic_wire_height(catenary, forces, window: tuple[float, float], dt: 
 def _moving_load_run(catenary, model, forces, window, dt, duration, alpha) -> np.ndarray:
     """:func:`mean_dynamic_wire_height` computed: the HHT-alpha run of the linearised model
     under the moving forces (its declared stepper,
-    :func:`~pantocosim.core.structure_stepping.structure_stepper`)."""
+    :func:`~pantocosim.core.structure_stepping.stepper_under_inputs`)."""
     q0 = catenary.static_state(forces)  # start from the static deflection: short transient
-    integ = structure_stepper(model, HHTSettings(alpha=alpha))
+    integ = stepper_under_inputs(model, HHTSettings(alpha=alpha))
     integ.initialize(0.0, q0, np.zeros(model.n_dofs), forces)
     n = len(forces)
     total = np.zeros(n)

@@ -40,14 +40,15 @@ from .banded import SparseBand
 from .errors import ConvergenceError
 from .lowrank import LowRankSolve
 from .state_label import new_label as _new_id
-from .stepper_contract import register_structure_step
+from .stepper_contract import register_closed_form_step
 
 #: slack-set re-solves of one step before it is declared not converged
 MAX_SLACK_PASSES = 20
 #: steps after which the kept products of the state are formed again from it
 #: (:mod:`.affine_kernels`: they carry the round-off of their updates)
 RESYNC_STEPS = 4096
-#: memory the unilateral elements' columns may take when solved at set-up (:meth:`prepare`)
+#: memory the unilateral elements' columns may take when solved at set-up
+#: (:meth:`AffineHHT.prepare`)
 PREFILL_BYTES = 256 * 2**20
 #: Woodbury solves kept, one per slack set (a dropper slackens and re-tensions over a few
 #: steps, and neighbouring droppers do so in turn: the same sets come back)
@@ -136,7 +137,7 @@ class AffineHHT:
     """``AffineHHT(form, settings)``; ``initialize(t0, q0, v0, F0)``; per step
     ``begin(h, loads)``, read :attr:`q_p`, :attr:`v_p`, :attr:`delta_free`, :attr:`W`,
     then ``finish(F)`` (False: the slack set changed, the free response and W were
-    re-solved; supply F again): a :class:`~.stepper.StructureStep`, registered as
+    re-solved; supply F again): a :class:`~.stepper_contract.ClosedFormStep`, registered as
     ``"affine"`` (a model declaring ``stepping = "affine"`` gives its ``affine_form()``).
 
     The constant step data: :attr:`form` (matrices, unilateral elements' rank-one terms
@@ -400,7 +401,7 @@ class AffineHHT:
         self._prev_id = None
 
 
-@register_structure_step("affine")
+@register_closed_form_step("affine")
 def affine_step(model, settings, redo: bool = False) -> AffineHHT:
     """The closed-form step of a model with an ``affine_form()``."""
     return AffineHHT(model.affine_form(), settings, keep_free_response=redo)

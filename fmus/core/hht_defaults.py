@@ -5,7 +5,7 @@ parsers read them)."""
 #: numerical damping of the highest frequencies)
 DEFAULT_ALPHA = -0.05
 #: Newton residual tolerance of simulation runs, relative to the largest force in the
-#: residual (:meth:`HHTSettings.for_runs`)
+#: residual (:meth:`~.hht.HHTSettings.for_runs`)
 RUN_RTOL = 1e-4
 #: the loosest tolerance a run may set (scenario newton_rtol / coupling_rtol, catenary FMU)
 RUN_RTOL_MAX = 1e-2

@@ -16,7 +16,7 @@ needs the two force pieces and their tangents:
 
 Matrices are dense ``numpy`` arrays for small models and ``scipy.sparse`` matrices for large
 ones; a model may also override :meth:`SecondOrderModel.effective_matrix` and
-:meth:`SecondOrderModel.solve` to exploit its structure (banded storage, factorization
+:meth:`SecondOrderModel.newton_solve` to exploit its structure (banded storage, factorization
 reuse). Models know nothing of integrators or FMI.
 """
 
@@ -71,7 +71,7 @@ class SecondOrderModel:
     """Base class of the models the HHT-alpha integrator (:mod:`pantocosim.core.hht`) drives."""
 
     n_dofs: int = 0
-    #: how the model is stepped (:mod:`.stepper`): Newton-Raphson HHT on :meth:`evaluate`
+    #: how the model is stepped (:mod:`.stepper_contract`): Newton-Raphson HHT on :meth:`evaluate`
     #: unless a model with a closed-form step names it
     stepping: str = NEWTON
 

@@ -1,7 +1,7 @@
-"""Stepping a structure alone under its inputs (:func:`structure_stepper`): the HHT integrator
-for a model stepped by Newton, or a closed-form structure step under given loads
-(:class:`ForcedStepper`) for one that declares a registered structure step (``"affine"``,
-``"modal"``, :mod:`.stepper`). With pantographs in contact the one factory is
+"""Stepping a structure alone under its inputs (:func:`stepper_under_inputs`): the HHT
+integrator for a model stepped by Newton, or a closed-form step under given loads
+(:class:`ForcedStepper`) for one that declares a registered closed-form step (``"affine"``,
+``"modal"``, :mod:`.stepper_contract`). With pantographs in contact the one factory is
 :func:`pantocosim.interaction.stepper_factory.make_stepper`, which steps a structure alone with
 this one.
 """
@@ -10,42 +10,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import affine_hht  # noqa: F401  (registers the "affine" structure step)
+from . import affine_hht  # noqa: F401  (registers the "affine" closed-form step)
 from .hht import HHTIntegrator
-from .stepper_contract import NEWTON, Stepper, StepReport, StructureStep, declared_stepping, \
-    structure_step
+from .stepper_contract import (NEWTON, ClosedFormStep, Forwarding, Stepper, StepReport,
+                               closed_form_step, declared_stepping)
 
 
-class ForcedStepper:
-    """A closed-form :class:`~.stepper.StructureStep` under given loads: ``step(h, F)``
+class ForcedStepper(Forwarding):
+    """A closed-form :class:`~.stepper_contract.ClosedFormStep` under given loads: ``step(h, F)``
     applies F (one force per contact point, at t + h) on the model's contact points
     ``points(t)`` (dofs, weights), e.g. the catenary's under forces read from FMU inputs.
     The constant step data are those of :attr:`structure`."""
 
     #: a step leaves the state alone until it succeeds
     closed_form = True
+    wrapped = "structure"
 
-    def __init__(self, structure: StructureStep, points):
+    def __init__(self, structure: ClosedFormStep, points):
         self.structure = structure
         self.points = points
-
-    @property
-    def t(self) -> float:
-        return self.structure.t
-
-    @property
-    def q(self) -> np.ndarray:
-        return self.structure.q
-
-    @property
-    def v(self) -> np.ndarray:
-        return self.structure.v
-
-    def initialize(self, t0: float, q0, v0=None, inputs0=None) -> None:
-        self.structure.initialize(t0, q0, v0, inputs0)
-
-    def prepare(self, h: float) -> None:
-        self.structure.prepare(h)
 
     def step(self, h: float, inputs=None) -> StepReport:
         st = self.structure
@@ -55,17 +38,11 @@ class ForcedStepper:
             pass
         return StepReport(iterations=st.passes)
 
-    def get_state(self) -> dict:
-        return self.structure.get_state()
 
-    def set_state(self, state: dict) -> None:
-        self.structure.set_state(state)
-
-
-def structure_stepper(model, settings, *, redo: bool = False) -> Stepper:
+def stepper_under_inputs(model, settings, *, redo: bool = False) -> Stepper:
     """The stepper of ``model`` alone under its inputs, as it declares (``stepping``):
-    :class:`ForcedStepper` over its structure step, or the HHT integrator. ``redo``: keep what
+    :class:`ForcedStepper` over its closed-form step, or the HHT integrator. ``redo``: keep what
     a step redone from the same state reuses (a co-simulation rollback redoes steps)."""
     if declared_stepping(model) != NEWTON:
-        return ForcedStepper(structure_step(model, settings, redo), model.contact_points)
+        return ForcedStepper(closed_form_step(model, settings, redo), model.contact_points)
     return HHTIntegrator(model, settings)

@@ -7,13 +7,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from pantocosim.catenary.models import MODEL_NAMES
+from pantocosim.catenary.models import CATENARY_MODELS
 from pantocosim.core.hht_defaults import DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX
 from pantocosim.interaction.penalty_contact import DEFAULT_CONTACT_STIFFNESS
 
-from .slave_base import MAX_SUBSTEPS
-from .variables import (Choices, Described, Each, Interval, Positive, VariableTable, parameter,
-                        real)
+from .variables import (MAX_SUBSTEPS, Choices, Described, Each, Interval, Positive,
+                        VariableTable, parameter, real)
 
 MAX_PANTOGRAPHS = 4
 #: support_uplift_j outputs: the FMU's port limit (a longer line reports the first ones)
@@ -50,7 +49,7 @@ VARIABLES = VariableTable((
               "elements, the reference), 1 = linear (about the static equilibrium, droppers "
               "slacken), 2 = modal (the linear model on its modes below modal_cutoff_hz, "
               "static corrections at the droppers and contact points)",
-              Choices(dict(enumerate(MODEL_NAMES)))),
+              Choices({c: n for n, c in CATENARY_MODELS.codes().items()})),
     real("modal_cutoff_hz", "parameter", "Hz", 0.0, "catenary_model 2: modes below this "
          "frequency; 0 = the default cutoff", Interval(0, note="0 = the default")),
     real("element_size", "parameter", "m", 0.0, "target finite-element length; 0 = as "

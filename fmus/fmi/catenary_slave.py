@@ -15,7 +15,9 @@ with the pantograph's height/velocity at t + h from the inputs (at t0 the pantog
 at z_w + static_force_k / k_H, so the contact force at t0 is ``static_force_k``; with a zero
 static force the inputs set during initialisation are used, else their start values; a
 height first delivered after t0 that is off the settled one is refused). With
-``n_substeps`` > 1 the inputs are interpolated linearly inside the communication step.
+``n_substeps`` > 1 the inputs are interpolated linearly inside the communication step. A
+mode-1 step whose contacts' active set gives up (:func:`unsettled`) is discarded and the
+state kept as it was.
 """
 
 from __future__ import annotations
@@ -49,6 +51,13 @@ HEIGHT_TOL_M = 1e-9
 #: model field -> this FMU's parameter, for errors raised by the model side
 FIELD_NAMES = {"alpha": "hht_alpha", "rtol": "newton_rtol",
                "contact.stiffness": "contact_stiffness", "contact.damping": "contact_damping"}
+
+
+def unsettled(t: float, h: float, t_sub: float) -> str:
+    """The discard message of a step whose built-in contact's active set gave up."""
+    return (f"doStep(t = {t:.6g}, h = {h:.3g}): the built-in penalty contact's active set "
+            f"did not settle (the set of pantographs in contact still changed after its last "
+            f"pass, at t = {t_sub:.6g} s); the step is not taken: a smaller step may settle it")
 
 
 class CatenarySlave(IntegratorSlave):
@@ -323,7 +332,14 @@ class CatenarySlave(IntegratorSlave):
                         if self.extrapolate_heights:  # first-order hold from t
                             z, v = z_new + v_new * i * h, v_new
                         s.set(z, v)
-                    iters += self._integ.step(h).iterations
+                    report = self._integ.step(h)
+                    if not report.settled:
+                        self.log(unsettled(current_time, step_size, self._integ.t),
+                                 Status.discard)
+                        if saved is not None:
+                            self._integ.set_state(saved)
+                        return False
+                    iters += report.iterations
             self._prev_inputs = new   # made by _read_inputs (the steps took copies)
             self.newton_iterations = float(iters)
             self._update_outputs()

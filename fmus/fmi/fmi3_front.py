@@ -3,7 +3,7 @@ and model description of FMI 3.0 (:mod:`pantocosim.fmi.front`).
 
 The ports keep their FMI 2.0 names and units: Real is Float64, Integer is Int32. pythonfmu3's
 builder reads start values through ``get_float64``/``get_int32``, which are the core's typed
-getters here; the export library calls the core through its bridge (``fmi3_export.c``).
+getters here; the embedding library calls the core through its bridge (``fmi3_export.c``).
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ class Fmi3Front(VariableMaker, Fmi3Slave):
 
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:
         root = super().to_xml(model_options)
-        # event mode is supported (the export library's bridge); the FMU has no events of
+        # event mode is supported (the embedding library's bridge); the FMU has no events of
         # its own
         root.find("CoSimulation").set("hasEventMode", "true")
         # every output is a state output (no direct feedthrough within a step)

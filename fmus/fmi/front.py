@@ -21,6 +21,8 @@ from __future__ import annotations
 import importlib
 from enum import IntEnum
 
+from pantocosim.core.registry import Registry
+
 
 class Status(IntEnum):
     """FMI status, the same numbers in FMI 2.0 and 3.0."""
@@ -60,19 +62,16 @@ class VariableMaker:
 
 #: FMI major version -> "module:class" of its front (imported when first asked for: a core
 #: does not need pythonfmu3 to run as FMI 2.0)
-FRONTS = {
-    2: "pantocosim.fmi.fmi2_front:Fmi2Front",
-    3: "pantocosim.fmi.fmi3_front:Fmi3Front",
-}
+FRONTS = Registry("FMI front", "FMI version")
+FRONTS.add(2, "pantocosim.fmi.fmi2_front:Fmi2Front")
+FRONTS.add(3, "pantocosim.fmi.fmi3_front:Fmi3Front")
 
 _CLASSES: dict = {}
 
 
 def front(version: int) -> type:
     """The front class of FMI ``version``."""
-    if version not in FRONTS:
-        raise ValueError(f"FMI version {version!r}: one of {sorted(FRONTS)}")
-    module, name = FRONTS[version].split(":")
+    module, name = FRONTS.entry(version).split(":")
     return getattr(importlib.import_module(module), name)
 
 

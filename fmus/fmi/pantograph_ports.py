@@ -11,8 +11,8 @@ from pantocosim.pantograph.base import Ramp
 from pantocosim.interaction.pantograph_start import START_MODES
 
 from .catenary_ports import LAW_NAMES, LAW_OUTPUTS, SPEED_OUTPUT
-from .slave_base import MAX_SUBSTEPS
-from .variables import Choices, Described, Interval, VariableTable, parameter, real
+from .variables import (MAX_SUBSTEPS, Choices, Described, Interval, VariableTable, parameter,
+                        real)
 
 FORCE_TIMING = ("contact_force: the value set before doStep(t, h) is the force at t + h; the "
                 "force at t is the previous accepted step's (kept in the FMU state).")

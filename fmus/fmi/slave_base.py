@@ -58,9 +58,6 @@ STEP_RTOL = 1e-6
 
 _INT32 = 2 ** 31
 
-#: most integration steps in one communication step (``n_substeps``): a doStep answers in
-#: bounded time
-MAX_SUBSTEPS = 10_000
 
 
 def fmi_type(var) -> str:
@@ -265,7 +262,7 @@ class GuardedSlave:
             self._error = message
         self.log(message, status)
 
-    #: True when the FMU's export library gives each call its own status (pantocosim's
+    #: True when the FMU's embedding library gives each call its own status (pantocosim's
     #: library, ``pantocosim.fmi.embedding``): a refused call then returns fmi2Error itself.
     #: pythonfmu's library returns fmi2OK for it, so the next doStep also reports it.
     statuses_per_call = False
@@ -506,7 +503,8 @@ class GuardedSlave:
                       f"FMUs (build_fmus.py) or run them in a process without another pantocosim")
 
     def substeps(self) -> int:
-        """``n_substeps``, checked: 1 .. :data:`MAX_SUBSTEPS` (its declared range)."""
+        """``n_substeps``, checked: 1 .. :data:`~.variables.MAX_SUBSTEPS` (its declared
+        range)."""
         return self.value("n_substeps")
 
     @staticmethod

@@ -16,6 +16,10 @@ from typing import Any, Iterator
 
 from pantocosim.core.errors import ParameterError
 
+#: most integration steps in one communication step (every FMU's ``n_substeps``): a doStep
+#: answers in bounded time
+MAX_SUBSTEPS = 10_000
+
 CAUSALITIES = ("parameter", "input", "output", "local")
 TYPES = ("Real", "Integer", "Boolean", "String")
 

@@ -23,7 +23,7 @@ from numba import njit
 
 from ..core.hht import HHTIntegrator
 from ..core.model import Evaluation, SecondOrderModel
-from ..core.stepper_contract import StepReport, StructureStep
+from ..core.stepper_contract import StepReport, ClosedFormStep
 from .penalty_contact import condensed_forces
 
 
@@ -59,7 +59,8 @@ def _point_response(dofs, w, dw, x):
 def _bodies_on_interface(k, c, x, zf, vf, P, Pv, work, active, trial, A, F, heights, wire):
     """The penalty law (:func:`~.penalty_contact.condensed_forces`) between bodies whose
     contact heights are z_f + P F, v_f + P_v F and the interface x = [z0, v0, G, H] (flat),
-    into F; then the bodies' heights and the wire's, z0 + G F. ``work``: 2 m + 2 m^2."""
+    into F; then the bodies' heights and the wire's, z0 + G F. ``work``: 2 m + 2 m^2.
+    Returns whether the law's active set settled."""
     m = zf.shape[0]
     dz, dv = work[:m], work[m:2 * m]
     Ge = work[2 * m:2 * m + m * m].reshape((m, m))
@@ -72,13 +73,14 @@ def _bodies_on_interface(k, c, x, zf, vf, P, Pv, work, active, trial, A, F, heig
             He[i, j] = x[2 * m + m * m + i * m + j]
         Ge[i, i] -= P[i]
         He[i, i] -= Pv[i]
-    condensed_forces(k, c, dz, dv, Ge, He, active, trial, A, F)
+    settled = condensed_forces(k, c, dz, dv, Ge, He, active, trial, A, F)
     for i in range(m):
         heights[i] = zf[i] + P[i] * F[i]
         acc = x[i]
         for j in range(m):
             acc += x[2 * m + i * m + j] * F[j]
         wire[i] = acc
+    return settled
 
 
 class InterfaceContacts(SecondOrderModel):
@@ -95,6 +97,9 @@ class InterfaceContacts(SecondOrderModel):
         self.forces = np.zeros(self.m)
         self.heights = np.zeros(self.m)
         self.wire_heights = np.zeros(self.m)
+        #: the last evaluation's active set settled
+        #: (:meth:`.penalty_contact.PenaltyContact.condensed`)
+        self.settled = True
         self._zero = np.zeros(1)
 
     def split(self, x):
@@ -116,7 +121,7 @@ class InterfaceContacts(SecondOrderModel):
         z_p = np.array([b.contact_height(qs[k]) for k, b in enumerate(self.bodies)])
         v_p = np.array([b.contact_velocity(qs[k], vs[k]) for k, b in enumerate(self.bodies)])
         z0, v0, G, H = self.unpack(inputs)
-        F, Jz, Jv = self.contact.condensed(z_p, v_p, z0, v0, G, H)
+        F, Jz, Jv, self.settled = self.contact.condensed(z_p, v_p, z0, v0, G, H)
         f_in = np.concatenate([e.f_inertia for e in evs])
         f_rest = np.concatenate([e.f_rest for e in evs])
         for k in range(self.m):
@@ -207,6 +212,11 @@ class NewtonBodies:
         return self.integ.step(h, x).iterations
 
     @property
+    def settled(self) -> bool:
+        """The contacts' active set settled in the last evaluation of the last solve."""
+        return self.contacts.settled
+
+    @property
     def forces(self):
         return self.contacts.forces
 
@@ -237,6 +247,8 @@ class LinearBodies:
         self._free = np.zeros((4, m))       # z_pf, v_pf, P, P_v of the current step
         self._applied = np.zeros(m)         # the force each body's step was taken with
         self._stepped = False
+        #: the contacts' active set settled in the last solve
+        self.settled = True
         self._units, self._units_h = None, None
         self._u = np.zeros(1)
         self._work = (np.zeros(2 * m + 2 * m * m), np.zeros(m, dtype=np.bool_),
@@ -250,8 +262,8 @@ class LinearBodies:
         m = len(self.bodies)
         z0, v0 = x0[:m], x0[m:2 * m]
         z_p = np.array([b.contact_height(q) for b, q in zip(self.bodies, q_bodies)])
-        F, _, _ = self.contact.condensed(z_p, np.zeros(m), z0, v0, np.zeros((m, m)),
-                                         np.zeros((m, m)))
+        F = self.contact.condensed(z_p, np.zeros(m), z0, v0, np.zeros((m, m)),
+                                   np.zeros((m, m)))[0]
         for integ, q, Fk in zip(self.integs, q_bodies, F):
             integ.initialize(t0, q, None, np.array([Fk]))
         self.forces[:], self.heights[:], self.wire_heights[:] = F, z_p, z0
@@ -307,8 +319,9 @@ class LinearBodies:
             self._take_steps(h)
         zf, vf, P, Pv = self._free
         F = self.forces
-        _bodies_on_interface(self.contact.stiffness, self.contact.damping, x, zf, vf, P, Pv,
-                             *self._work, F, self.heights, self.wire_heights)
+        self.settled = bool(_bodies_on_interface(
+            self.contact.stiffness, self.contact.damping, x, zf, vf, P, Pv, *self._work, F,
+            self.heights, self.wire_heights))
         for k, integ in enumerate(self.integs):
             if F[k] != self._applied[k]:
                 self._u[0] = F[k]
@@ -327,13 +340,13 @@ def bodies_solver(bodies, contact, settings):
 class CondensedStepper:
     """One HHT-alpha step of structure + bodies + contacts: the structure's free response,
     the bodies' step on the condensed interface, the structure's step with the forces (a
-    :class:`~.stepper.Stepper`; the structure's constant step data are those of
-    :attr:`structure`)."""
+    :class:`~pantocosim.core.stepper_contract.Stepper`; the structure's constant step data
+    are those of :attr:`structure`)."""
 
     #: the bodies' Newton iterations may fail half-way through a step
     closed_form = False
 
-    def __init__(self, structure: StructureStep, points, bodies, contact, settings,
+    def __init__(self, structure: ClosedFormStep, points, bodies, contact, settings,
                  speed: float = 0.0):
         #: ``points(t)``: the structure's contact points at t (dofs, weights, offset,
         #: dweights_dx, doffset_dx), one per body
@@ -419,4 +432,4 @@ class CondensedStepper:
         while True:
             iterations = self.bodies.solve(h, self.interface(cps))
             if st.finish(self.bodies.forces):
-                return StepReport(iterations=iterations)
+                return StepReport(iterations=iterations, settled=self.bodies.settled)

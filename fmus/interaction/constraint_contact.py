@@ -29,6 +29,10 @@ kappa_k c_k) as a force phi_k u_k, so a step converges only when each contact is
 open as it must be; a converged step that still violates it by more than
 :attr:`ConstraintContact.gap_tolerance` raises :class:`~.errors.ConvergenceError`.
 
+A separation at a dropper clamp that lasts one step or a few keeps its number of steps as h
+shrinks: that part of the loss of contact is the step's (docs/en50318-validation.md, "Loss of
+contact and the step").
+
 The law has no stiffness: there is no contact mode, the wire and the head move together
 while in contact. It needs the assembled monolithic solver; a force-height exchange through
 FMU ports cannot hold it (docs/en50318-validation.md).

@@ -26,5 +26,5 @@ __all__ = ["CONTACT_LAWS", "DEFAULT_LAW", "ContactLaw", "make_contact", "registe
 
 def make_contact(law: str, stiffness: float, damping: float):
     """The law ``law`` with the scenario's ``[contact]`` values (each law takes those it uses,
-    :meth:`from_fields`)."""
+    ``from_fields``)."""
     return CONTACT_LAWS[law].from_fields(stiffness=stiffness, damping=damping)

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
+from ..core.registry import Registry
+
 #: contact laws by their scenario name
-CONTACT_LAWS: dict[str, type] = {}
+CONTACT_LAWS = Registry("contact law", "contact.law")
 #: the law of a scenario that names none
 DEFAULT_LAW = "penalty"
 
@@ -27,6 +29,5 @@ def register(name: str):
     """Class decorator: make a law available as ``law = "<name>"``."""
     def deco(cls):
         cls.name = name
-        CONTACT_LAWS[name] = cls
-        return cls
+        return CONTACT_LAWS.add(name, cls)
     return deco

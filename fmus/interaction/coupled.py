@@ -6,8 +6,9 @@ scenario's law (:mod:`pantocosim.interaction.contact_laws`: the penalty law
 :mod:`~pantocosim.interaction.penalty_contact`, or the rigid
 :mod:`~pantocosim.interaction.constraint_contact` whose multipliers the Newton correction
 solves with the coordinates). The monolithic reference solver (``master/run/stepping.py``)
-advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once. Contact is lost and recovered through the penalty law; droppers
-slacken inside the catenary model.
+advances it with the one HHT-alpha integrator, Newton-Raphson on all coordinates at once.
+Contact is lost and recovered through the penalty law; droppers slacken inside the catenary
+model.
 
 DOF layout: ``[catenary | pantograph 1 | pantograph 2 | ...]``.
 
@@ -57,7 +58,7 @@ class CoupledSystem(SecondOrderModel):
         """Per pantograph: (F, z_p, z_w, v_p, v_w, contact point, gradient, dF/dgap, dF/dvrel).
 
         The wire velocity seen by the moving pantograph includes the convective term
-        V dz_w/dx, as in :meth:`CatenaryModel.wire_velocity`."""
+        V dz_w/dx, as in :meth:`~pantocosim.catenary.model.CatenaryModel.wire_velocity`."""
         qc, qps = self.split(q)
         vc, vps = self.split(v)
         speed = float(getattr(self.catenary, "speed", 0.0))
@@ -125,7 +126,7 @@ class CoupledSystem(SecondOrderModel):
 
     def newton_solve(self, solve, ev, rhs):
         """The Newton correction with the blocks' factorization ``solve`` and the contact
-        linearisation of the evaluation ``ev`` (the contact law's, :meth:`law.newton_solve`)."""
+        linearisation of the evaluation ``ev`` (the contact law's, ``law.newton_solve``)."""
         return self.law.newton_solve(solve, ev, rhs)
 
     def factorize(self, S):

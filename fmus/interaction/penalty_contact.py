@@ -25,18 +25,26 @@ DEFAULT_CONTACT_STIFFNESS = 50_000.0
 
 
 @njit(cache=True)
+def max_passes(m: int) -> int:
+    """The passes of the active-set search over m contacts before it gives up: 2 m + 2."""
+    return 2 * m + 2
+
+
+@njit(cache=True)
 def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
     """F of the law with the wire affine in the forces (:meth:`PenaltyContact.condensed`),
     in place: on the active set, (I + k G + c H)_AA F_A = k dz_A + c dv_A
     (:func:`~.small_dense.gauss_jordan`; ``A``: m x (m + 1) work, or m x (2 m + 1) to end
     with the inverse of that matrix, the inactive rows and columns of the identity, in
     A[:, m + 1:]), then the set of positive gaps and forces (``trial``) until it repeats, at
-    most 2 m + 2 passes. ``active`` ends as the set F was solved on; F is NaN if that
-    system is singular."""
+    most :func:`max_passes` (m). ``active`` ends as the set F was solved on; F is NaN if that
+    system is singular. Returns whether the set settled (False: it still changed after the
+    last pass, and F is that pass's)."""
     m = dz.shape[0]
     for i in range(m):
         active[i] = dz[i] > 0.0
-    for it in range(2 * m + 2):
+    last = max_passes(m) - 1
+    for it in range(last + 1):
         for i in range(m):                      # inactive rows: F_i = 0
             for j in range(m):
                 A[i, j] = 0.0
@@ -53,7 +61,7 @@ def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
                 A[i, j] = 1.0 if j == m + 1 + i else 0.0
         if not gauss_jordan(A, m):
             F[:] = np.nan
-            return F
+            return True                         # settled on a singular system: F flags it
         for i in range(m):
             F[i] = A[i, m]
         changed = False
@@ -65,11 +73,13 @@ def condensed_forces(k, c, dz, dv, G, H, active, trial, A, F):
                 rel -= H[i, j] * F[j]
             trial[i] = gap > 0.0 and k * gap + c * rel > 0.0
             changed = changed or trial[i] != active[i]
-        if not changed or it == 2 * m + 1:
-            break
+        if not changed:
+            return True
+        if it == last:
+            return False
         for i in range(m):
             active[i] = trial[i]
-    return F
+    return False
 
 
 @register("penalty")
@@ -120,17 +130,20 @@ class PenaltyContact:
     def condensed(self, z_p, v_p, z0, v0, G, H):
         """The law with the wire affine in the forces, z_w = z0 + G F, v_w = v0 + H F (a
         structure condensed on its contact points, :mod:`.condensed`): (F, dF/dz_p,
-        dF/dv_p). On the active set A, (I + k_H G + c_H H)_AA F_A = k_H (z_p - z0)_A
-        + c_H (v_p - v0)_A; A holds the contacts whose gap and force are positive."""
+        dF/dv_p, settled). On the active set A, (I + k_H G + c_H H)_AA F_A = k_H (z_p - z0)_A
+        + c_H (v_p - v0)_A; A holds the contacts whose gap and force are positive; settled
+        is False when the search over A gave up (:func:`condensed_forces`)."""
         dz = np.asarray(z_p, float) - z0
         dv = np.asarray(v_p, float) - v0
         m = dz.size
         active = np.zeros(m, dtype=np.bool_)
         A = np.empty((m, 2 * m + 1))
-        F = condensed_forces(self.stiffness, self.damping, dz, dv, np.ascontiguousarray(G),
-                             np.ascontiguousarray(H), active, active.copy(), A, np.empty(m))
+        F = np.empty(m)
+        settled = condensed_forces(self.stiffness, self.damping, dz, dv,
+                                   np.ascontiguousarray(G), np.ascontiguousarray(H), active,
+                                   active.copy(), A, F)
         Mi = A[:, m + 1:] * np.outer(active, active)
-        return F, self.stiffness * Mi, self.damping * Mi
+        return F, self.stiffness * Mi, self.damping * Mi, bool(settled)
 
 
 class PenaltyInSystem:

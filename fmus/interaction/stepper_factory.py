@@ -1,14 +1,14 @@
 """The one stepper factory (:func:`make_stepper`) and the stepper it builds besides the HHT
-integrator, the condensed step and the closed-form structure step under given loads
-(:class:`~pantocosim.core.structure_stepping.ForcedStepper`): Newton-Raphson on structure, bodies and
-contacts assembled (:class:`AssembledStepper`).
+integrator, the condensed step and the closed-form step under given loads
+(:class:`~pantocosim.core.structure_stepping.ForcedStepper`): Newton-Raphson on structure,
+bodies and contacts assembled (:class:`AssembledStepper`).
 
 ==========================  =======================  ===================================
 the model declares          under its inputs         with bodies in contact
 ==========================  =======================  ===================================
 ``stepping = "newton"``     ``HHTIntegrator``        :class:`AssembledStepper`
 a registered structure      ``ForcedStepper``        :class:`~.condensed.CondensedStepper`
-step (``"affine"``,         (``structure_stepper``,  (a law that cannot be condensed:
+step (``"affine"``,         (``stepper_under_inputs``,  (a law that cannot be condensed:
 ``"modal"``)                ``core.structure_stepping``)       :class:`AssembledStepper`)
 ==========================  =======================  ===================================
 
@@ -21,18 +21,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.hht import HHTIntegrator
-from ..core.stepper_contract import (NEWTON, CoupledStepper, Stepper, StepReport, declared_stepping,
-                            structure_step)
-from ..core.structure_stepping import structure_stepper
+from ..core.stepper_contract import (NEWTON, CoupledStepper, Forwarding, Stepper, StepReport,
+                                     closed_form_step, declared_stepping)
+from ..core.structure_stepping import stepper_under_inputs
 from .condensed import CondensedStepper
 from .coupled import CoupledSystem
 
 
-class AssembledStepper:
+class AssembledStepper(Forwarding):
     """Newton-Raphson HHT on a structure, bodies and their penalty contacts assembled into one
     model (:class:`~.coupled.CoupledSystem`, DOFs [structure | body 1 | ...]): any model."""
 
     closed_form = False
+    wrapped = "integ"
 
     def __init__(self, structure, bodies, contact, settings, contact_state=None):
         self.system = CoupledSystem(structure, bodies, contact)
@@ -40,27 +41,9 @@ class AssembledStepper:
         self.integ = HHTIntegrator(self.system, settings)
 
     @property
-    def t(self) -> float:
-        return self.integ.t
-
-    @property
-    def q(self) -> np.ndarray:
-        return self.integ.q
-
-    @property
-    def v(self) -> np.ndarray:
-        return self.integ.v
-
-    @property
     def structure_q(self) -> np.ndarray:
         """The structure's coordinates."""
         return self.integ.q[:self.system.n_cat]
-
-    def initialize(self, t0: float, q0, v0=None, inputs0=None) -> None:
-        self.integ.initialize(t0, q0, v0, inputs0)
-
-    def prepare(self, h: float) -> None:
-        self.integ.prepare(h)
 
     def step(self, h: float, inputs=None) -> StepReport:
         return self.integ.step(h, inputs)
@@ -69,12 +52,6 @@ class AssembledStepper:
         """(contact forces, contact heights, wire heights), one per body."""
         st = self.system.contact_state(self.integ.t, self.integ.q, self.integ.v)
         return tuple(np.array([c[i] for c in st]) for i in range(3))
-
-    def get_state(self) -> dict:
-        return self.integ.get_state()
-
-    def set_state(self, state: dict) -> None:
-        self.integ.set_state(state)
 
 
 def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False,
@@ -91,7 +68,7 @@ def make_stepper(model, settings, bodies=(), contact=None, *, redo: bool = False
     closed = declared_stepping(model) != NEWTON
     if bodies:
         if closed and contact.condensable:
-            return CondensedStepper(structure_step(model, settings, redo), model.contact_points,
+            return CondensedStepper(closed_form_step(model, settings, redo), model.contact_points,
                                     bodies, contact, settings, speed=model.speed)
         return AssembledStepper(model, bodies, contact, settings, contact_state)
-    return structure_stepper(model, settings, redo=redo)
+    return stepper_under_inputs(model, settings, redo=redo)

@@ -9,7 +9,7 @@ body components), linear in the node coordinates, so
 
 is one quadratic constraint (B a second body point, or a fixed point). Its multiplier gives
 the force of the link or actuator: the constraint force on B is -s lambda dg/dp_B =
--2 s lambda (p_B - p_A), i.e. a push of -2 s lambda L along p_B - p_A (:meth:`force`).
+-2 s lambda (p_B - p_A), i.e. a push of -2 s lambda L along p_B - p_A (:meth:`Distance.force`).
 """
 
 from __future__ import annotations

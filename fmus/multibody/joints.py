@@ -10,7 +10,6 @@ treats its joints as constraints with multipliers, eq. 15):
 
 | joint      | equations                                    | relative freedoms      |
 |------------|----------------------------------------------|------------------------|
-| spherical  | 3 coincidence                                | 3 rotations            |
 | universal  | 3 coincidence + a_A . b_B = 0                | 2 rotations (a_A, b_B) |
 | revolute   | 3 coincidence + a_A . p_B = 0, a_A . r_B = 0 | rotation about a       |
 | clamp      | 3 coincidence + 3 perpendicularities         | none                   |
@@ -84,10 +83,6 @@ class Joint:
             H[k, 9:, :9] = Cm.T
         return ConstraintSet(np.tile(np.concatenate([da, db]), (m, 1)), H,
                              np.zeros((m, 18)), np.zeros(m), name=f"{self.kind} axes")
-
-
-class Spherical(Joint):
-    kind = "spherical"
 
 
 class Universal(Joint):

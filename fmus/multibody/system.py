@@ -15,7 +15,7 @@ eq. 112; the pendulum paper eq. 15 without the augmented-Lagrangian penalty):
 
 ``s`` (``constraint_scale``) only balances the rows of the Newton matrix. With the HHT weights
 the constraint rows read (1 + alpha) g_{n+1} - alpha g_n = 0: index-3 HHT, the constraints
-hold at every step to the Newton tolerance (drift reported by :meth:`constraint_drift`).
+hold at every step to the Newton tolerance (drift reported by :meth:`System.constraint_drift`).
 Constraints may depend on time (actuators: g(q, t), ``constraint_set.py``).
 
 The component protocol (each member optional):

@@ -1,6 +1,6 @@
 /*
  * Value references of the native catenary FMU: the same variable names as the Python
- * catenary FMU (fmus/fmi/catenary_slave.py). pantocosim.master.native.export reads the
+ * catenary FMU (fmus/fmi/catenary_ports.py). pantocosim.master.native.export reads the
  * CAT_VR_ lines of this file to write modelDescription.xml: this is the one place they
  * are numbered. A per-pantograph variable k (1..n) is BASE + k - 1, a support j is
  * CAT_VR_SUPPORT_UPLIFT + j.

@@ -1,6 +1,6 @@
 /*
  * Value references of the native lumped pantograph FMU: the same variable names as the
- * Python pantograph FMU (fmus/fmi/pantograph_slave.py). pantocosim.master.native.export
+ * Python pantograph FMU (fmus/fmi/pantograph_ports.py). pantocosim.master.native.export
  * reads the PAN_VR_ lines of this file to write modelDescription.xml.
  */
 #ifndef LUMPED_VARS_H

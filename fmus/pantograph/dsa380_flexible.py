@@ -438,11 +438,23 @@ class Dsa380FlexibleModel(TorqueActuatedPantograph):
 
     # ------------------------------------------------------------------ topology
     def _build(self) -> None:
-        p = self.params
-        rp = p.rigid
+        """The model's constant parts: DOFs, elements, mass and weight, work arrays, and the
+        reference configuration (the rigid equilibrium at the working height)."""
         rig = self.rigid
-        pts = rig.points(rig.q_equilibrium)
-        theta = float(rig.q_equilibrium[0])
+        point_g = self._number_dofs(rig.points(rig.q_equilibrium), float(rig.q_equilibrium[0]))
+        self._elements()
+        self._mass_and_weight()
+        self._buffers(point_g)
+        # reference (stress-free) configuration: the rigid equilibrium at the working height;
+        # the generalised coordinates are displacements from it
+        self.q_ref = self._absolute_from_rigid(rig.q_equilibrium)
+        self._E0 = np.zeros((self.n_elements, 8))
+        beam.gather(self.q_ref, self._pg, self._pR, self._pc, self._E0)
+
+    def _number_dofs(self, pts: dict, theta: float) -> dict[str, int]:
+        """Bar lengths, welded slopes, the DOFs of every node (positions, slopes); returns
+        the first DOF of each named point."""
+        p, rp = self.params, self.params.rigid
         L = [b.L for b in rp.bars] + [float(np.linalg.norm(pts["6"] - pts["4"])), rp.L1p]
         self.bar_lengths = np.array(L)
         # welded slopes (bar, end) -> (bar, end, angle): r_x(b) = R(alpha) r_x(a)
@@ -494,7 +506,14 @@ class Dsa380FlexibleModel(TorqueActuatedPantograph):
         self.slope1 = node_slope[0][0][0]
         self.slope10 = node_slope[6][p.mesh[6] // 2][0]
         self.node_pos, self.node_slope = node_pos, node_slope
-        # element arrays
+        return point_g
+
+    def _elements(self) -> None:
+        """The beam elements: their DOFs (with the welds' rotations and ground positions),
+        lengths, stiffnesses, and element mass and gravity."""
+        p, rp = self.params, self.params.rigid
+        L = self.bar_lengths.tolist()
+        node_pos, node_slope, I2 = self.node_pos, self.node_slope, np.eye(2)
         ne = int(sum(p.mesh))
         pg = np.full((ne, 4), -1, dtype=np.int64)
         pR = np.zeros((ne, 4, 2, 2))
@@ -540,10 +559,15 @@ class Dsa380FlexibleModel(TorqueActuatedPantograph):
         self.n_elements = ne
         self._Me = np.array(Me)
         self._Qe = np.array(Qe)
+
+    def _mass_and_weight(self) -> None:
+        """The constant mass matrix (with the collector's pitch inertia beyond its tube) and
+        the weight vector."""
+        p, rp = self.params, self.params.rigid
         n = self.n_dofs
         M = np.zeros((n, n))
         Qg = np.zeros(n)
-        beam.scatter_add(pg, pR, self._Qe, self._Me, Qg, M, True)
+        beam.scatter_add(self._pg, self._pR, self._Qe, self._Me, Qg, M, True)
         # collector pitch inertia beyond its tube (calibrated I7 of the rigid model)
         b7 = rp.bars[6]
         tube7 = b7.m * (b7.L ** 2 / 12.0 + p.second_moment(6) / p.area(6))
@@ -553,10 +577,14 @@ class Dsa380FlexibleModel(TorqueActuatedPantograph):
         self.M = M
         self.M.flags.writeable = False
         self.Qg = Qg
-        # buffers
+
+    def _buffers(self, point_g: dict[str, int]) -> None:
+        """Work arrays of the evaluation and the kernel's integer and real parameters."""
+        rp, n = self.params.rigid, self.n_dofs
+        ne = self.n_elements
         self._dE = np.zeros((ne, 8))
         self._q = np.zeros(n)
-        self._pc0 = np.zeros_like(pc)
+        self._pc0 = np.zeros_like(self._pc)
         self._Fe = np.zeros((ne, 8))
         self._Ke = np.zeros((ne, 8, 8))
         self._Ue = np.zeros((ne, 2))
@@ -571,11 +599,6 @@ class Dsa380FlexibleModel(TorqueActuatedPantograph):
                                 0.0, 0.0, 0.0, 1.0])
         self._gradient = np.zeros(n)
         self._gradient[self.point_dofs["10"] + 1] = 1.0
-        # reference (stress-free) configuration: the rigid equilibrium at the working height;
-        # the generalised coordinates are displacements from it
-        self.q_ref = self._absolute_from_rigid(rig.q_equilibrium)
-        self._E0 = np.zeros((ne, 8))
-        beam.gather(self.q_ref, pg, pR, pc, self._E0)
 
     def absolute(self, u) -> np.ndarray:
         """Absolute node positions and slopes q_ref + u."""

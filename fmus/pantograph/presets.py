@@ -7,17 +7,15 @@ from pathlib import Path
 
 from ..core.errors import ParameterError
 from ..core.params import Table, load_toml
+from ..core.registry import Registry
 from .base import PantographModel, PantographOptions
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
 #: preset name -> parameter file in ``data/``
-PRESETS = {
-    "dsa380-rigid": "dsa380-rigid.toml",
-    "dsa380-flexible": "dsa380-flexible.toml",
-    "dsa380-lumped3": "dsa380-lumped3.toml",
-    "en50318-2mass": "en50318-2mass.toml",
-}
+PRESETS = Registry("pantograph preset", "model")
+for _name in ("dsa380-rigid", "dsa380-flexible", "dsa380-lumped3", "en50318-2mass"):
+    PRESETS.add(_name, f"{_name}.toml")
 
 
 def preset_path(name_or_path: str | Path) -> Path:
@@ -50,21 +48,38 @@ def _file_options(path: Path, data: dict) -> PantographOptions:
     return PantographOptions.from_table(Table(data.get("options", {}), str(path), "options"))
 
 
-def _model_kind(data: dict):
-    """(loader, reader of the working height) of a parameter file, told by its tables
-    (imported on demand: a pantograph FMU loads the one model it runs; measured with the
-    catenary factories in :mod:`pantocosim.catenary.models`)."""
-    if "chain" in data:
-        from .lumped import load_chain, read_chain
+# each kind imports its own model on demand: a pantograph FMU loads the one model it runs
+# (measured with the catenary factories in :mod:`pantocosim.catenary.models`)
+def _chain():
+    from .lumped import load_chain, read_chain
 
-        return load_chain, lambda path: read_chain(path)[0].working_height
-    if "rigid_model" in data:
-        from .dsa380_flexible import load_dsa380_flexible, read_flexible
+    return load_chain, lambda path: read_chain(path)[0].working_height
 
-        return load_dsa380_flexible, lambda path: read_flexible(path)[0].rigid.working_height
+
+def _flexible():
+    from .dsa380_flexible import load_dsa380_flexible, read_flexible
+
+    return load_dsa380_flexible, lambda path: read_flexible(path)[0].rigid.working_height
+
+
+def _rigid():
     from .dsa380 import load_dsa380, read_parameters
 
     return load_dsa380, lambda path: read_parameters(path)[0].working_height
+
+
+#: the model kinds of parameter files, by the table that marks a file of the kind (looked
+#: for in this order; "": none, the rigid DSA-380) -> factory of (loader, reader of the
+#: working height)
+MODEL_KINDS = Registry("pantograph model kind", "parameter file")
+MODEL_KINDS.add("chain", _chain)
+MODEL_KINDS.add("rigid_model", _flexible)
+MODEL_KINDS.add("", _rigid)
+
+
+def _model_kind(data: dict):
+    """(loader, reader of the working height) of a parameter file, told by its tables."""
+    return MODEL_KINDS[next(m for m in MODEL_KINDS if not m or m in data)]()
 
 
 def preset_defaults(name_or_path: str | Path) -> PresetDefaults:

@@ -28,11 +28,15 @@ def add_parser(sub):
 
 def run(args) -> int:
     from pantocosim.master.benchmarks import bench
+    from pantocosim.master.output_folder import check_writable_file, write_whole
 
+    if args.out:
+        check_writable_file("--out", args.out)       # before the benchmarks' minutes
     res = bench(quick=args.quick, printer=(lambda *a, **k: None) if args.json else print,
                 cases=args.case)
     if args.json:
         print(json.dumps(res, indent=2))
     if args.out:
-        Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
+        text = json.dumps(res, indent=2) + "\n"
+        write_whole("--out", args.out, lambda tmp: Path(tmp).write_text(text))
     return 0

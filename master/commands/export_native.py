@@ -34,26 +34,34 @@ def add_parser(sub):
 
 
 def run(args) -> int:
-    from pantocosim.core.errors import ParameterError
     from pantocosim.core.params import check_number
+    from pantocosim.master.native.build import c_compiler
     from pantocosim.master.native.models import export_scenario
+    from pantocosim.master.output_folder import OutputFolder
+    from pantocosim.master.commands.run import named_as_options
     from pantocosim.master.run import prepare
-    from pantocosim.master.scenario import load_scenario
+    from pantocosim.master.scenario import load_scenario, require_port_contact
 
     sc = load_scenario(args.scenario)
+    require_port_contact(sc, "a native FMU export")
     changes = {"catenary_model": args.catenary_model}
     if args.modal_cutoff_hz is not None:
         check_number("--modal-cutoff-hz", args.modal_cutoff_hz, positive=True)
         changes["modal_cutoff_hz"] = float(args.modal_cutoff_hz)
     sc = dataclasses.replace(sc, **changes)
     out = Path(args.out) if args.out else Path("dist") / "native" / sc.name
-    if out.exists() and not out.is_dir():
-        raise ParameterError("--out", str(out), "is a file, not a folder")
     win64 = {"auto": None, "yes": True, "no": False}[args.win64]
-    prep = prepare(sc, force=args.force)
-    written, kept = export_scenario(prep, out, fmi=args.fmi, win64=win64)
+    c_compiler()                                  # before the set-up
+    folder = OutputFolder(out)                    # --out checked before the set-up
+    try:
+        with named_as_options(args):
+            prep = prepare(sc, force=args.force)
+            written, kept = export_scenario(prep, folder.path, fmi=args.fmi, win64=win64)
+        folder.commit()
+    finally:
+        folder.discard()
     for path in written:
-        print(f"wrote {path}")
+        print(f"wrote {out / path.name}")
     for k, why in kept:
         print(f"pantograph {k + 1} ({sc.pantographs[k].model}): {why}; it stays a Python FMU")
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from contextlib import contextmanager
 from pathlib import Path
 
 from pantocosim.master.coupling import ACCELERATORS, DEFAULT_ACCELERATOR, SCHEME_NAMES
@@ -36,7 +37,9 @@ def add_parser(sub):
                    "modal_cutoff_hz)")
     p.add_argument("--out", default=None, help="output folder (default out/SCENARIO-COUPLING); "
                    "the run writes beside it and moves its files in when done (earlier "
-                   "results are replaced only by a run that computed something)")
+                   "results are replaced only by a run that computed something; a run that "
+                   "stopped early, by Ctrl-C or a solver failure, goes to OUT-stopped when OUT "
+                   "holds a complete run)")
     p.add_argument("--json", action="store_true", help="print the JSON summary")
     p.add_argument("--force", action="store_true",
                    help="run even above 0.7 of the wave speed")
@@ -95,6 +98,20 @@ def print_statistics(summary: dict) -> None:
         print(f"  results in {Path(summary['files']['summary']).parent}")
 
 
+@contextmanager
+def named_as_options(args):
+    """A bad scenario field that the command line set (``--modal-cutoff-hz``) named as its
+    option."""
+    from pantocosim.core.errors import ParameterError
+
+    try:
+        yield
+    except ParameterError as exc:
+        if exc.field != "simulation.modal_cutoff_hz" or args.modal_cutoff_hz is None:
+            raise
+        raise ParameterError("--modal-cutoff-hz", exc.value, exc.reason) from None
+
+
 def with_model(scenario, catenary_model=None, modal_cutoff_hz=None):
     """The scenario with the command line's catenary model and cutoff (None: as given)."""
     from pantocosim.core.errors import ParameterError
@@ -113,7 +130,7 @@ def run(args) -> int:
     from pantocosim.core.errors import Interrupted, OutputError, PantocosimError
     from pantocosim.master.interrupt import stop_on_interrupt
     from pantocosim.master.output_folder import OutputFolder
-    from pantocosim.master.run import RESULT_FILES, finish
+    from pantocosim.master.run import RESULT_FILES, finish, holds_complete_run
     from pantocosim.master.scenario import load_scenario
     check_limit_option("--max-dofs", args.max_dofs)
     check_limit_option("--max-steps", args.max_steps)
@@ -129,9 +146,13 @@ def run(args) -> int:
         result = simulate(args, scenario, coupling, folder.path)
         if len(result.columns["time"]) < 2 or isinstance(result.error, OutputError):
             raise result.error   # nothing computed (the set-up failed), or a full disk
+        target = out   # a run that stopped early never replaces a complete one
+        if result.error is not None and holds_complete_run(out):
+            target = out.with_name(f"{out.name}-stopped")
         with stop_on_interrupt() as late:   # a Ctrl-C now waits until the files are in place
-            summary = finish(result, folder.path, plots=not args.no_plots, report_dir=out)
-            folder.commit()
+            summary = finish(result, folder.path, plots=not args.no_plots,
+                             report_dir=target)
+            folder.commit(into=target)
     except OutputError as exc:
         if folder is None or exc.field == "--out":   # --out itself, or moving into place
             if folder is not None:
@@ -153,11 +174,14 @@ def run(args) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print_statistics(summary)
+    kept = (f"; the complete results of an earlier run in {out} are kept"
+            if target != out else "")
     if isinstance(result.error, Interrupted):
-        raise Interrupted(f"{result.error}; the results so far are in {out} (summary.json "
-                          "says where the run stopped)")
+        raise Interrupted(f"{result.error}; the results so far are in {target} (summary.json "
+                          f"says where the run stopped){kept}")
     if result.error is not None:
-        raise PantocosimError(f"run stopped: {result.error} (results so far kept in {out})")
+        raise PantocosimError(f"run stopped: {result.error} (results so far kept in "
+                              f"{target}){kept}")
     if late.requested:
         raise Interrupted(f"interrupted (Ctrl-C) while the results were written: they are "
                           f"complete in {out}")
@@ -175,8 +199,9 @@ def simulate(args, scenario, coupling: str, out: Path):
 
         require_port_contact(scenario, f"the {coupling} coupling")   # before the set-up
         plan = fmu_paths(scenario)   # the FMU files are checked before the long set-up
-    prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
-                   max_steps=args.max_steps)
+    with named_as_options(args):
+        prep = prepare(scenario, force=args.force, max_dofs=args.max_dofs,
+                       max_steps=args.max_steps)
     progress = None if not args.quiet else False
     if coupling == "monolithic":
         result = run_monolithic(prep, out, progress=progress, realtime=args.realtime)

@@ -1,1 +1,1 @@
-"""The Python FMUs: build, export library, packaging, checks and the fmpy runtime."""
+"""The Python FMUs: build, embedding library, packaging, checks and the fmpy runtime."""

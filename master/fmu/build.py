@@ -31,6 +31,7 @@ from pathlib import Path
 
 import pantocosim
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.registry import Registry
 from pantocosim.core.stamp import UNBUNDLED, package_stamp
 from pantocosim.fmi.front import FRONTS
 from pantocosim.fmi.slave_base import STAMP_FILE, bundled_stamp
@@ -66,14 +67,13 @@ class FmiBuild:
 
 
 #: FMI major version -> its build; ``build-fmus`` builds both by default
-FMI_BUILDS = {
-    2: FmiBuild("pythonfmu.builder", "", "pantocosim_fmu_",
-                {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True}),
-    3: FmiBuild("pythonfmu3.builder", "fmi3", "pantocosim_fmu3_",
-                {"canGetAndSetFMUState": True, "canSerializeFMUState": True,
-                 "canHandleVariableCommunicationStepSize": True},
-                named_base=("pythonfmu3.fmi3slave", "Fmi3Slave")),
-}
+FMI_BUILDS = Registry("FMU build", "--fmi")
+FMI_BUILDS.add(2, FmiBuild("pythonfmu.builder", "", "pantocosim_fmu_",
+                           {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True}))
+FMI_BUILDS.add(3, FmiBuild("pythonfmu3.builder", "fmi3", "pantocosim_fmu3_",
+                           {"canGetAndSetFMUState": True, "canSerializeFMUState": True,
+                            "canHandleVariableCommunicationStepSize": True},
+                           named_base=("pythonfmu3.fmi3slave", "Fmi3Slave")))
 FMI_VERSIONS = tuple(FMI_BUILDS)
 
 

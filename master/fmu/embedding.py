@@ -1,4 +1,5 @@
-"""The FMUs' own FMI export libraries (``pantocosim.fmi.embedding``).
+"""The embedding library of the Python FMUs (``pantocosim.fmi.embedding``): the C library that
+embeds Python in them, one per FMI version.
 
 ``pantocosim build-fmus`` compiles the library of each FMI version it builds once per build
 with the system's C compiler (``$CC``, else ``cc``): ``fmi2_export.c`` or ``fmi3_export.c``
@@ -6,7 +7,7 @@ with the shared ``export_common.c``. It goes into every FMU of that version as
 ``binaries/<platform>/<modelIdentifier>.so`` (``linux64`` in FMI 2.0, ``x86_64-linux`` in
 FMI 3.0), in place of pythonfmu's or pythonfmu3's library, together with the bridge module it
 calls and the name of the Python that built the FMU. The Windows DLLs are kept as they are.
-Without a C compiler the build keeps pythonfmu's library and says what that costs (native
+Without a C compiler the build keeps pythonfmu's library and says what that costs (C and C++
 hosts then need libpython preloaded).
 """
 
@@ -19,6 +20,7 @@ import sys
 import zipfile
 from pathlib import Path
 
+from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.embedding import BRIDGE_SOURCE, COMMON_SOURCES, EXPORTS, RUNTIME_FILE
 
 CFLAGS = ["-std=c11", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-Wall"]
@@ -26,20 +28,27 @@ LIBS = ["-ldl", "-lpthread"]
 
 
 def compiler() -> str | None:
-    """The C compiler: ``$CC``, else ``cc`` or ``gcc`` on PATH."""
-    cc = os.environ.get("CC")
-    return cc if cc else shutil.which("cc") or shutil.which("gcc")
+    """The C compiler: ``$CC`` (refused when it names no program), else ``cc`` or ``gcc`` on
+    PATH (None: none)."""
+    cc = os.environ.get("CC", "").strip()
+    if not cc:
+        return shutil.which("cc") or shutil.which("gcc")
+    if shutil.which(cc) is None:
+        raise ParameterError("CC", cc, "no such compiler: give a C compiler's name on PATH "
+                             "or its path, or unset CC for cc or gcc on PATH",
+                             source="environment variable")
+    return cc
 
 
 def compile_export_library(work: Path, fmi: int = 2) -> Path | None:
-    """The export library of FMI version ``fmi`` compiled into ``work``; None (with a
+    """The embedding library of FMI version ``fmi`` compiled into ``work``; None (with a
     warning) without a compiler."""
     cc = compiler()
     source = EXPORTS[fmi].source
     out = Path(work) / f"{source.stem}.so"
     if cc is None:
         print("build-fmus: warning: no C compiler (set CC or install gcc): the FMUs keep "
-              "pythonfmu's library, which native FMI hosts load only with libpython "
+              "pythonfmu's library, which C and C++ FMI hosts load only with libpython "
               "preloaded (docs/third-party.md)", file=sys.stderr)
         return None
     cmd = [cc, *CFLAGS, "-o", str(out), str(source), *map(str, COMMON_SOURCES), *LIBS]

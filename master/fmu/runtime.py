@@ -29,6 +29,7 @@ import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
+from pantocosim.core.registry import Registry
 from pantocosim.core.user_cache import cache_root, cache_warning, describe
 
 STATUS_NAMES = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -192,8 +193,7 @@ class Fmi2Api:
 
         return fmi2ValueReference, fmi2Real
 
-    STATE_CALLS = {"get": "getFMUstate", "set": "setFMUstate", "free": "freeFMUstate",
-                   "serialize": "serializeFMUstate", "deserialize": "deSerializeFMUstate"}
+    STATE_CALLS = {"get": "getFMUstate", "set": "setFMUstate", "free": "freeFMUstate"}
 
 
 class Fmi3Api(Fmi2Api):
@@ -240,12 +240,13 @@ class Fmi3Api(Fmi2Api):
 
         return fmi3ValueReference, fmi3Float64
 
-    STATE_CALLS = {"get": "getFMUState", "set": "setFMUState", "free": "freeFMUState",
-                   "serialize": "serializeFMUState", "deserialize": "deserializeFMUState"}
+    STATE_CALLS = {"get": "getFMUState", "set": "setFMUState", "free": "freeFMUState"}
 
 
 #: the model description's fmiVersion -> its API
-APIS = {"2.0": Fmi2Api, "3.0": Fmi3Api}
+APIS = Registry("FMI API", "fmiVersion")
+APIS.add("2.0", Fmi2Api)
+APIS.add("3.0", Fmi3Api)
 
 
 def fmi_version(fmu_path: str | Path) -> int:
@@ -356,12 +357,6 @@ class FmuInstance:
 
     def free_state(self, state) -> None:
         self._state_call("free", state)
-
-    def serialize_state(self, state) -> bytes:
-        return self._state_call("serialize", state)
-
-    def deserialize_state(self, data: bytes):
-        return self._state_call("deserialize", data)
 
     def terminate(self) -> None:
         if self.fatal:

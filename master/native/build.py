@@ -18,6 +18,7 @@ from xml.sax.saxutils import escape
 
 import pantocosim
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.fmu.embedding import compiler
 from pantocosim.master.native.data_file import DATA_FILE, write_data
 
 #: the C sources of the native models (installed with the package as pantocosim/native)
@@ -248,14 +249,21 @@ def compile_library(sources: Path, c_files: list[str], target: Path, cc: str) ->
                              + (proc.stderr or proc.stdout)[:2000])
 
 
+def c_compiler() -> str:
+    """The C compiler of the native FMUs (``$CC``, else cc or gcc on PATH); none is an
+    error."""
+    cc = compiler()
+    if cc is None:
+        raise ParameterError("compiler", "gcc", "no C compiler on PATH (set CC)")
+    return cc
+
+
 def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, description: str,
               variables: list[Variable], kind: str, sections: dict, step: float,
               fmi: int = 2, win64: bool | None = None) -> Path:
     """Write the native FMU ``out`` (a .fmu file); ``win64``: also build the Windows DLL
     (None: when mingw-w64 is installed)."""
-    cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
-    if cc is None:
-        raise ParameterError("compiler", "gcc", "no C compiler on PATH (set CC)")
+    cc = c_compiler()
     mingw = shutil.which(MINGW)
     if win64 and mingw is None:
         raise ParameterError("--win64", True, f"{MINGW} is not installed (apt-get install "

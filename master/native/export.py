@@ -3,7 +3,7 @@ the models' and steppers' internals (the native models in ``fmus/native/`` step 
 these constants with the same closed-form steps).
 
 - linear catenary (:class:`~pantocosim.catenary.linear.LinearCatenary`, its
-  :meth:`affine_form`): the bands of M and K0, q_static, r0, Rayleigh coefficients, the
+  :meth:`~pantocosim.catenary.linear.LinearCatenary.affine_form`): the bands of M and K0, q_static, r0, Rayleigh coefficients, the
   droppers' vectors b, axial stiffnesses k_a and pre-tensions N0 (exact slackening), the
   contact wire's reference geometry for the Hermite contact point (3.11)-(3.13), the rows
   behind ``support_uplift_j`` and the static start under the static contact forces;

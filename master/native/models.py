@@ -149,18 +149,25 @@ def export_pantograph(prep, k: int, out: Path, fmi: int = 2,
                      sections, sc.dt, fmi=fmi, win64=win64)
 
 
+def pantograph_files(specs) -> list[str]:
+    """The FMU file of each pantograph: ``<model>.fmu``, or ``<model>-<k + 1>.fmu`` where
+    pantographs share a model (each FMU fixes its own start height and force)."""
+    models = [spec.model for spec in specs]
+    return [f"{m}.fmu" if models.count(m) == 1 else f"{m}-{k + 1}.fmu"
+            for k, m in enumerate(models)]
+
+
 def export_scenario(prep, out: Path, fmi: int = 2, win64: bool | None = None):
     """The native FMUs of a prepared scenario into the folder ``out``: ``catenary.fmu`` and
-    ``<pantograph model>.fmu`` of each constant-matrix pantograph. Returns (written files,
+    one per constant-matrix pantograph (:func:`pantograph_files`). Returns (written files,
     [(pantograph index, why it has no native FMU)])."""
     out = Path(out)
     written = [export_catenary(prep, out / "catenary.fmu", prep.scenario.catenary_model,
                                fmi=fmi, win64=win64)]
     kept = []
-    for k, spec in enumerate(prep.scenario.pantographs):
+    for k, name in enumerate(pantograph_files(prep.scenario.pantographs)):
         try:
-            written.append(export_pantograph(prep, k, out / f"{spec.model}.fmu", fmi=fmi,
-                                             win64=win64))
+            written.append(export_pantograph(prep, k, out / name, fmi=fmi, win64=win64))
         except ParameterError as exc:
             if exc.field not in ("pantograph",) and not str(exc.field).startswith("pantographs["):
                 raise

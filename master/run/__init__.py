@@ -11,6 +11,7 @@
 This package gathers their entry points.
 """
 
-from pantocosim.master.run.finish import RESULT_FILES, RunResult, finish  # noqa: F401
+from pantocosim.master.run.finish import (RESULT_FILES, RunResult, finish,  # noqa: F401
+                                          holds_complete_run)
 from pantocosim.master.run.setup import Prepared, prepare  # noqa: F401
 from pantocosim.master.run.stepping import run_monolithic  # noqa: F401

@@ -5,6 +5,7 @@ statistics and writes the JSON summary and the plots.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from pantocosim.master.results import plots as P
 from pantocosim.master.output_folder import writing
 from pantocosim.master.results.files import write_json
 from pantocosim.master.run.setup import Prepared
-from pantocosim.master.stability import departures
+from pantocosim.master.stability import departures, step_separations
 from pantocosim.master.results.statistics import contact_statistics, window_mask
 
 #: the step counters of a monolithic run: the Newton iterations of its step
@@ -73,6 +74,14 @@ RESULT_FILES = ("timeseries.csv", "summary.json", "contact_force.png", "spectrum
                 "support_uplift.png")
 
 
+def holds_complete_run(folder: Path) -> bool:
+    """Whether ``folder`` holds the summary of a run that completed (``completed``)."""
+    try:
+        return json.loads((Path(folder) / "summary.json").read_text()).get("completed") is True
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
 def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
            report_dir: Path | None = None) -> dict:
     """Statistics, JSON summary and plots of a finished (or stopped) run, written into
@@ -126,7 +135,10 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
                               "time_s": summary["simulated_time_s"],
                               "steps": summary["steps"], "of_steps": int(prep.n_steps)}
     summary.update(result.summary)
-    summary["warnings"] = list(result.warnings) + departures(prep, stats)
+    inside = [c[f"contact_force_{k}"][window_mask(c[f"x_{k}"], *prep.window_m)]
+              for k in range(1, len(prep.pantographs) + 1)] if stats else []
+    summary["warnings"] = (list(result.warnings) + departures(prep, stats)
+                           + step_separations(prep, inside))
     #: the statistics are doubtful (see the warnings)
     summary["flagged"] = bool(summary["warnings"])
     if out_dir is not None:

@@ -96,6 +96,19 @@ def scenario_pantograph(sc: Scenario, k: int):
         raise ParameterError(f"pantographs[{k}].model", p.model, str(exc), sc.source) from None
 
 
+def scenario_catenary_model(sc: Scenario, definition, element_size: float | None = None):
+    """The scenario's catenary model; a bad modal cutoff named as the scenario's field."""
+    try:
+        return make_catenary(sc.catenary_model, definition,
+                             x0=[p.position_m for p in sc.pantographs], speed=sc.speed,
+                             element_size=element_size, modal_cutoff_hz=sc.modal_cutoff_hz)
+    except ParameterError as exc:
+        if exc.field != "modal_cutoff_hz":
+            raise
+        raise ParameterError("simulation.modal_cutoff_hz", exc.value, exc.reason,
+                             sc.source) from None
+
+
 def prepare(scenario: Scenario | str | None, force: bool = False,
             element_size: float | None = None, max_dofs: int | None = None,
             max_steps: int | None = None) -> Prepared:
@@ -114,9 +127,7 @@ def prepare(scenario: Scenario | str | None, force: bool = False,
     check_steps(n_steps, "simulation.dt", sc.dt, sc.source, max_steps, dofs)
     contact = make_contact(sc.contact_law, sc.contact_stiffness, sc.contact_damping)
     pantographs = [scenario_pantograph(sc, k) for k in range(len(sc.pantographs))]
-    catenary = make_catenary(sc.catenary_model, definition,
-                             x0=[p.position_m for p in sc.pantographs], speed=sc.speed,
-                             element_size=element_size, modal_cutoff_hz=sc.modal_cutoff_hz)
+    catenary = scenario_catenary_model(sc, definition, element_size)
     actuation = Actuation.of(sc, catenary, pantographs, contact, window, duration)
     actuation.apply(pantographs)
     system = CoupledSystem(catenary, pantographs, contact)

@@ -16,7 +16,7 @@ from tqdm import tqdm
 
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.hht import HHTSettings
-from pantocosim.core.stepper_contract import CoupledStepper, warm_up
+from pantocosim.core.stepper_contract import CoupledStepper, StepReport, warm_up
 from pantocosim.interaction.stepper_factory import make_stepper
 from pantocosim.master import stability
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
@@ -52,6 +52,14 @@ class RowWriter:
         self.prep, self.stepper, self.rec, self.monitor = prep, stepper, rec, monitor
         self.n_p = len(prep.pantographs)
         self.row = np.zeros(len(rec.names))
+        #: times of the steps whose contact active set did not settle
+        self.unsettled = []
+
+    def step(self, report: StepReport) -> None:
+        """The row of a step from its report."""
+        if not report.settled:
+            self.unsettled.append(self.stepper.t)
+        self(report.iterations)
 
     def __call__(self, newton_iterations: int) -> None:
         st, row, n_p = self.stepper, self.row, self.n_p
@@ -88,7 +96,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
         try:
             stop.check(stepper.t, 0, prep.n_steps)   # a Ctrl-C during the set-up
             for k in clock.steps(prep.n_steps):
-                record(stepper.step(sc.dt).iterations)
+                record.step(stepper.step(sc.dt))
                 bar.update(1)
                 stop.check(stepper.t, k + 1, prep.n_steps)
         except PantocosimError as exc:
@@ -98,6 +106,7 @@ def run_monolithic(prep: Prepared, out_dir: Path | None, progress: bool | None =
         finally:
             bar.close()
             rec.close()
+    warnings += stability.unsettled_contacts(record.unsettled, len(prep.pantographs))
     return RunResult(prep=prep, coupling="monolithic", columns=rec.columns(),
                      wall_time_s=_time.perf_counter() - t_wall, error=error,
                      summary=clock.summary(), warnings=warnings)

@@ -1,15 +1,24 @@
-"""A small FMU slave for the tests of the export libraries (tests/test_export_library.py):
+"""A small FMU slave for the tests of the embedding libraries (tests/test_export_library.py):
 what the bridge calls, with a settable delay in its steps and state serialisation, so that a
 test can act on another thread while a call is under way, and the import of the module the
 environment variable SLOW_SLAVE_IMPORT names, if set (a missing one is then named by the
-library). Variables: vr 0 ``x`` (grows by h each step), vr 1 ``delay`` [s]."""
+library). Variables: vr 0 ``x`` (grows by h each step), vr 1 ``delay`` [s]. A delayed call
+creates the file of its name (``step``, ``serialize``) in the folder SLOW_SLAVE_MARKS names,
+if set, as it begins: what a test waits for to know the call is under way."""
 
 import os
 import pickle
 import time
+from pathlib import Path
 
 if os.environ.get("SLOW_SLAVE_IMPORT"):
     __import__(os.environ["SLOW_SLAVE_IMPORT"])
+
+
+def _begun(call: str) -> None:
+    """Say that ``call`` is under way (module docstring)."""
+    if os.environ.get("SLOW_SLAVE_MARKS"):
+        (Path(os.environ["SLOW_SLAVE_MARKS"]) / call).touch()
 
 
 class Message:
@@ -44,6 +53,7 @@ class SlowSlave:
         pass
 
     def do_step(self, t, h):
+        _begun("step")
         time.sleep(self.values[1])
         self.values[0] += h
         self._time = t + h
@@ -67,6 +77,7 @@ class SlowSlave:
 
     @staticmethod
     def _fmu_state_to_bytes(state):
+        _begun("serialize")
         time.sleep(state[1])
         return pickle.dumps(state)
 

@@ -10,17 +10,17 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ...core.params import Table
+from ...core.registry import Registry
 
 #: support classes by their TOML ``type`` string
-SUPPORTS: dict[str, type["Support"]] = {}
+SUPPORTS = Registry("support type", "type")
 
 
 def register(name: str):
     """Class decorator: make a support class available as ``type = "<name>"``."""
     def deco(cls):
         cls.type_name = name
-        SUPPORTS[name] = cls
-        return cls
+        return SUPPORTS.add(name, cls)
     return deco
 
 

@@ -1,4 +1,4 @@
-"""Python side of the FMUs' export libraries (``fmi2_export.c``, ``fmi3_export.c``).
+"""Python side of the FMUs' embedding libraries (``fmi2_export.c``, ``fmi3_export.c``).
 
 Each FMU carries a copy of this module as ``resources/pantocosim_fmi2_bridge.py`` (FMI 2.0)
 or ``resources/pantocosim_fmi3_bridge.py`` (FMI 3.0); the library imports it and calls

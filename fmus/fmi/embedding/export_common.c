@@ -1,5 +1,5 @@
 /*
- * The version-neutral part of pantocosim's FMI export libraries (export_common.h):
+ * The version-neutral part of pantocosim's FMI embedding libraries (export_common.h):
  *
  * - it finds a Python runtime itself: the host's interpreter when the host is a Python
  *   process, else the executable named by $PANTOCOSIM_PYTHON, else the interpreter that
@@ -14,6 +14,7 @@
  * stable C API functions resolved with dlsym.
  */
 #define _GNU_SOURCE
+#include <ctype.h>
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -313,16 +314,22 @@ static void append_problem(const char *fmt, ...)
     va_end(args);
 }
 
-/* the time bound of one probe [s]: $PANTOCOSIM_PROBE_TIMEOUT_S if a positive number, else
-   PROBE_TIMEOUT_S */
+/* the time bound of one probe [s]: $PANTOCOSIM_PROBE_TIMEOUT_S (unset or blank:
+   PROBE_TIMEOUT_S), or -1 when it is not a number of seconds > 0 and below
+   PROBE_TIMEOUT_MAX_S (the poll's milliseconds stay an int) */
 #define PROBE_TIMEOUT_S 30.0
+#define PROBE_TIMEOUT_MAX_S 1e6
 static double probe_timeout(void)
 {
     const char *text = getenv("PANTOCOSIM_PROBE_TIMEOUT_S");
     char *end = NULL;
-    double value = text ? strtod(text, &end) : 0.0;
-    return text && end != text && *end == '\0' && value > 0.0 && value < 1e6 ? value
-                                                                               : PROBE_TIMEOUT_S;
+    double value;
+    while (text && isspace((unsigned char)*text)) text++;
+    if (text == NULL || *text == '\0') return PROBE_TIMEOUT_S;
+    value = strtod(text, &end);
+    while (end != text && isspace((unsigned char)*end)) end++;
+    return end != text && *end == '\0' && value > 0.0 && value < PROBE_TIMEOUT_MAX_S ? value
+                                                                                     : -1.0;
 }
 
 static double now_s(void)
@@ -527,6 +534,11 @@ int ensure_runtime(const char *resources)
                  "already loaded in the process: the FMU runs in it, so it needs numpy, "
                  "scipy and numba)",
                  dladdr(symbol, &where) && where.dli_fname ? where.dli_fname : "linked in");
+    } else if (probe_timeout() < 0.0) {
+        snprintf(problem, sizeof problem, "environment variable: PANTOCOSIM_PROBE_TIMEOUT_S = "
+                 "'%.200s': not a time bound: give seconds, a number > 0 and below %g "
+                 "(default %g)", getenv("PANTOCOSIM_PROBE_TIMEOUT_S"), PROBE_TIMEOUT_MAX_S,
+                 PROBE_TIMEOUT_S);
     } else {
         snprintf(runtime_file, sizeof runtime_file, "%s/pantocosim_runtime.txt", resources);
         read_key(runtime_file, "executable", exe, sizeof exe);

@@ -1,5 +1,5 @@
 /*
- * The part of pantocosim's FMI export libraries that does not depend on the FMI version
+ * The part of pantocosim's FMI embedding libraries that does not depend on the FMI version
  * (export_common.c): the Python C API resolved with dlsym and the runtime that provides it,
  * the registries of live instances and of their FMU states, logging to the host, and calling
  * the FMU's bridge module. fmi2_export.c and fmi3_export.c are the FMI 2.0 and 3.0 APIs over

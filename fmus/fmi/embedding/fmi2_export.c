@@ -1,5 +1,5 @@
 /*
- * pantocosim's FMI 2.0 co-simulation export library.
+ * pantocosim's FMI 2.0 co-simulation embedding library.
  *
  * Every pantocosim FMI 2.0 FMU carries this library (compiled with export_common.c) as
  * binaries/linux64/<modelIdentifier>.so. It implements the FMI 2.0 C API over the FMU's

@@ -1,5 +1,5 @@
 /*
- * pantocosim's FMI 3.0 co-simulation export library.
+ * pantocosim's FMI 3.0 co-simulation embedding library.
  *
  * Every pantocosim FMI 3.0 FMU carries this library (compiled with export_common.c) as
  * binaries/x86_64-linux/<modelIdentifier>.so. It implements the FMI 3.0 C API over the FMU's

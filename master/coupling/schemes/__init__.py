@@ -2,6 +2,7 @@
 :class:`~.base.Scheme` subclass and its line here."""
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.core.registry import Registry
 
 from .base import Scheme
 from .gauss_seidel import GaussSeidel
@@ -9,7 +10,9 @@ from .implicit import Implicit
 from .jacobi import Jacobi
 
 #: name -> class
-SCHEMES = {cls.name: cls for cls in (Jacobi, GaussSeidel, Implicit)}
+SCHEMES = Registry("coupling scheme", "coupling")
+for _cls in (Jacobi, GaussSeidel, Implicit):
+    SCHEMES.add(_cls.name, _cls)
 #: every name a scheme answers to (its aliases too) -> its registry name
 SCHEME_NAMES = {alias: cls.name for cls in SCHEMES.values() for alias in (cls.name, *cls.aliases)}
 
