@@ -373,7 +373,7 @@ class HHTIntegrator:
 
     def prepare(self, h: float) -> None:
         """Nothing to pay ahead: the first Newton step factorizes (a warm-up step pays it,
-        :func:`~.stepper.warm_up`)."""
+        :func:`~.stepper_contract.warm_up`)."""
 
     # ------------------------------------------------------------------ setup
     def initialize(self, t0: float, q0, v0=None, inputs0=None, a0=None) -> None:
@@ -518,7 +518,7 @@ class HHTIntegrator:
         return StepReport(iterations=0, residual=end["residual"])
 
     def _step_linear(self, h: float, inputs) -> StepReport:
-        """The closed-form step of a :class:`LinearForm` model: writes q, v, a, a_prev,
+        """The closed-form step of a :class:`~.model.LinearForm` model: writes q, v, a, a_prev,
         f_rest and inputs in place (no allocation once the arrays exist)."""
         lin = self._linear
         C, K, B, w = lin.C, lin.K, lin.B, lin.w
