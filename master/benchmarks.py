@@ -186,13 +186,14 @@ def _host_percentiles(text: str, what: str) -> dict:
 
 
 def python_fmu_loop(prep, steps: int, h: float) -> dict:
-    """The doStep times of the Python catenary FMU (catenary_model of the scenario) with the
+    """The doStep times of the Python catenary FMU (catenary_model of the scenario) and the
     Python pantograph FMU in fmpy, in the native loop's scheme: the master applies the
-    penalty law to the heights and gives the force to both (explicit, zero-order hold)."""
+    penalty law to the heights and gives the force to both (explicit, zero-order hold):
+    {"catenary": percentiles, "pantograph": percentiles}."""
     instances: list = []
     csub, psubs = fmu_subsystems(prep, instances, fmu_paths(prep))
     k_h = prep.contact.stiffness
-    times = []
+    times = {"catenary": [], "pantograph": []}
     try:
         for i in range(steps):
             t = i * h
@@ -202,13 +203,39 @@ def python_fmu_loop(prep, steps: int, h: float) -> dict:
             csub.set_forces(F)
             t0 = time.perf_counter()
             csub.step(t, h)
-            times.append(time.perf_counter() - t0)
+            t1 = time.perf_counter()
             psubs[0].set_forces(F)
             psubs[0].step(t, h)
+            times["catenary"].append(t1 - t0)
+            times["pantograph"].append(time.perf_counter() - t1)
     finally:
         for fmu in instances:
             fmu.terminate()
-    return _percentiles(times)
+    return {key: _percentiles(value) for key, value in times.items()}
+
+
+def compile_host(tmp: Path) -> Path:
+    """The C host (fmus/native/realtime_host.c) compiled into ``tmp``."""
+    cc = c_compiler()
+    host = tmp / "realtime_host"
+    if not host.exists():
+        subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
+                        str(SOURCE_DIR / "realtime_host.c"), "-ldl", "-lm"], check=True)
+    return host
+
+
+def native_coupled(host: Path, prep, folder: Path, steps: int) -> str:
+    """The scenario's native FMUs (export-native into ``folder``, unpacked) stepped by the
+    host's explicit loop (coupled-forces); its output."""
+    written, _ = export_scenario(prep, folder, win64=False)
+    folders = []
+    for fmu in written:
+        folders.append(folder / fmu.stem)
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folders[-1])
+    return subprocess.run([str(host), "coupled-forces", str(folders[0]), str(folders[1]),
+                           str(steps), repr(prep.scenario.dt)], capture_output=True, text=True,
+                          check=True).stdout
 
 
 def native_loop(tmp: Path, printer=print) -> dict:
@@ -217,41 +244,63 @@ def native_loop(tmp: Path, printer=print) -> dict:
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
     scenario, seconds, models = NATIVE_LOOP
-    cc = c_compiler()
-    host = tmp / "realtime_host"
-    subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
-                    str(SOURCE_DIR / "realtime_host.c"), "-ldl", "-lm"], check=True)
+    host = compile_host(tmp)
     out = {"floor_solve_ms": 1e3 * floor_per_step("en50318", 10)}
     for model in models:
         sc = dataclasses.replace(load_scenario(scenario), catenary_model=model)
         prep = prepare(sc)
         steps = int(round(seconds / sc.dt))
-        written, _ = export_scenario(prep, tmp / f"native-{model}", win64=False)
-        folders = []
-        for fmu in written:
-            folders.append(tmp / f"native-{model}" / fmu.stem)
-            with zipfile.ZipFile(fmu) as z:
-                z.extractall(folders[-1])
-        run = subprocess.run([str(host), "coupled-forces", str(folders[0]), str(folders[1]),
-                              str(steps), repr(sc.dt)], capture_output=True, text=True,
-                             check=True)
-        entry = {"native_catenary": _host_percentiles(run.stdout, "catenary"),
-                 "native_pantograph": _host_percentiles(run.stdout, "pantograph"),
-                 "python_catenary_fmu": python_fmu_loop(prep, steps, sc.dt)}
+        text = native_coupled(host, prep, tmp / f"native-{model}", steps)
+        entry = {"native_catenary": _host_percentiles(text, "catenary"),
+                 "native_pantograph": _host_percentiles(text, "pantograph"),
+                 "python_catenary_fmu": python_fmu_loop(prep, steps, sc.dt)["catenary"]}
         entry["native_p99_over_floor"] = entry["native_catenary"]["p99_ms"] / out["floor_solve_ms"]
         entry["python_p99_over_native_p99"] = (entry["python_catenary_fmu"]["p99_ms"]
                                               / entry["native_catenary"]["p99_ms"])
         out[model] = entry
         for label in ("native_catenary", "python_catenary_fmu", "native_pantograph"):
-            e = entry[label]
-            printer(f"native loop {scenario} {model}: {label} doStep p50 {e['p50_ms']:.3f} ms, "
-                    f"p99 {e['p99_ms']:.3f} ms, max {e['max_ms']:.3f} ms")
+            printer(do_step_line(f"native loop {scenario} {model}: {label}", entry[label]))
     printer(f"native loop: floor solve {out['floor_solve_ms']:.3f} ms")
     return out
 
 
+def do_step_line(label: str, e: dict) -> str:
+    return (f"{label} doStep p50 {e['p50_ms']:.3f} ms, p99 {e['p99_ms']:.3f} ms, max "
+            f"{e['max_ms']:.3f} ms")
+
+
+#: the native DSA-380 figure: scenario (its catenary as the linear model, native too),
+#: simulated seconds, pantograph models
+NATIVE_DSA380 = ("dsa380-ave-300", 2.0, ("dsa380-rigid", "dsa380-flexible"))
+
+
+def native_dsa380(tmp: Path, printer=print) -> dict:
+    """The native rigid and flexible DSA-380 FMUs' doStep (p50 / p99 / max) in the C loop of
+    :func:`native_loop` on dsa380-ave-300 (the native linear catenary beside them), and the
+    Python DSA-380 FMUs' in the same loop in fmpy (with the Python catenary FMU)."""
+    scenario, seconds, models = NATIVE_DSA380
+    host = compile_host(tmp)
+    out = {}
+    for model in models:
+        sc = load_scenario(scenario)
+        pans = [dataclasses.replace(p, model=model) for p in sc.pantographs]
+        sc = dataclasses.replace(sc, pantographs=pans, catenary_model="linear")
+        prep = prepare(sc)
+        steps = int(round(seconds / sc.dt))
+        text = native_coupled(host, prep, tmp / f"native-{model}", steps)
+        entry = {"native_pantograph": _host_percentiles(text, "pantograph"),
+                 "python_pantograph_fmu": python_fmu_loop(prep, steps, sc.dt)["pantograph"]}
+        entry["python_p99_over_native_p99"] = (entry["python_pantograph_fmu"]["p99_ms"]
+                                               / entry["native_pantograph"]["p99_ms"])
+        out[model] = entry
+        for label in ("native_pantograph", "python_pantograph_fmu"):
+            printer(do_step_line(f"{scenario} {model}: {label}", entry[label]))
+    return out
+
+
 #: figures other than the step-time cases, by name (``--case NAME``)
-FIGURES = {"time-to-result": time_to_result, "fmu-start": fmu_start, "native-loop": native_loop}
+FIGURES = {"time-to-result": time_to_result, "fmu-start": fmu_start, "native-loop": native_loop,
+           "native-dsa380": native_dsa380}
 
 
 def step_time_entry(summary: dict) -> dict:

@@ -165,7 +165,26 @@ def fmu_page() -> str:
                + _variables_table(CATENARY, ("input", "output"))
                + "\n### Parameters\n\n"
                + _variables_table(CATENARY, ("parameter",)))
+    out.append(NATIVE_SECTION)
     return "".join(out)
+
+
+NATIVE_SECTION = """
+## Native FMUs (`pantocosim export-native`)
+
+C FMUs with no Python inside, for hosts without Python (HIL rigs, real-time targets, FMI tools
+on Windows): the same variables as the FMUs above, every parameter fixed at export (its
+exported value is accepted, another is refused with `fmi2Error` naming it), the internal step
+the scenario's `dt`, the start the one our master gives the Python FMU. Details, data file and
+timings in [Native FMUs for a HIL rig](../tutorials/hil.md).
+
+| FMU | what it models | limits |
+|---|---|---|
+| `catenary.fmu` | the linear catenary (constant matrices, exact dropper slackening) or the modal one; penalty contact inside with `contact_mode = 1` | the nonlinear catenary has no native form |
+| `en50318-2mass.fmu`, `dsa380-lumped3.fmu` | a lumped chain with constant matrices | without collector friction or a one-way damper; static start |
+| `dsa380-rigid.fmu` | the rigid DSA-380 (thesis 2.1.1), every option of the Python model, HHT-alpha with Newton on exact tangents | options and start fixed at export |
+| `dsa380-flexible.fmu` | the flexible-bar DSA-380 (thesis 2.2), the same engine | options and start fixed at export |
+"""
 
 
 def pages() -> dict[str, str]:

@@ -30,7 +30,7 @@ def test_case_filter_and_scenario_options(tmp_path):
     from pantocosim.core.errors import ParameterError
 
     assert bench.select_cases(None) == list(bench.CASES) + ["time-to-result", "fmu-start",
-                                                            "native-loop"]
+                                                            "native-loop", "native-dsa380"]
     assert bench.select_cases(["en50318-300", "en50318-300"]) == ["en50318-300"]
     assert bench.select_cases(["time-to-result"]) == ["time-to-result"]
     with pytest.raises(ParameterError, match="--case"):

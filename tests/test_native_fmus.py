@@ -282,10 +282,18 @@ def test_bad_inputs_get_the_python_fmus_statuses(exported):
     fmu.doStep(0.0, DT)
     ref.doStep(0.0, DT)
     assert fmu.getReal(out) == ref.getReal(out)
-    # a communication step that is not a whole number of internal steps: fmi2Error, and the
-    # instance takes no step after it
-    assert status_of(fmu.doStep, DT, 1.5 * DT) == ERROR
-    assert status_of(fmu.doStep, DT, DT) == ERROR
+    # a communication step that is not a whole number of internal steps, or more of them than
+    # the FMU takes in one call: refused, the instance steps on
+    assert status_of(fmu.doStep, DT, 1.5 * DT) == DISCARD
+    assert status_of(fmu.doStep, DT, 2e6) == DISCARD
+    # a contact force no pantograph applies is refused before the step
+    fmu.setReal(F, [1e300])
+    assert status_of(fmu.doStep, DT, DT) == DISCARD
+    fmu.setReal(F, [150.0])
+    ref.setReal(F, [150.0])
+    assert status_of(fmu.doStep, DT, DT) == OK
+    ref.doStep(DT, DT)
+    assert fmu.getReal(out) == ref.getReal(out)
     # a step that would take the pantograph off the contact wire is refused before it is taken
     far, vr2 = slave(cat, "pantocosim_catenary_native")
     assert status_of(far.doStep, 0.0, 10.0) == DISCARD
@@ -305,6 +313,8 @@ def test_bad_inputs_get_the_python_fmus_statuses(exported):
     pan, pvr = slave(exported["en50318-2mass"], "pantocosim_pantograph_native")
     pan.setReal([pvr["contact_force"]], [float("nan")])
     assert status_of(pan.doStep, 0.0, DT) == DISCARD
+    pan.setReal([pvr["contact_force"]], [150.0])
+    assert status_of(pan.doStep, 0.0, 2e6) == DISCARD           # 2e9 internal steps: refused
     pan.setReal([pvr["contact_force"]], [1e9])                 # throws the head off its range
     assert status_of(pan.doStep, 0.0, DT) == DISCARD
     assert status_of(pan.doStep, 0.0, DT) == DISCARD           # only a rollback recovers
@@ -352,6 +362,7 @@ def rewritten(folder: Path, tmp_path: Path, data: bytes) -> Path:
 
 def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tmp_path):
     from pantocosim.master.native.data_file import pack_data, read_data
+    from pantocosim.master.native.headers import fields
 
     cat = exported["catenary"]
     path = cat / "resources" / "model.pcsdata"
@@ -360,9 +371,10 @@ def test_a_damaged_or_foreign_data_file_is_an_error_naming_it(exported, host, tm
     damaged = bytearray(good)
     damaged[len(good) // 2] ^= 0x10
     sizes = dict(sections, sizes=sections["sizes"].copy())
-    sizes["sizes"][5] = 9                                      # pantographs
+    sizes["sizes"][fields("LIN_SIZE").index("PANTOGRAPHS")] = 9
     fast = dict(sections, scalars=sections["scalars"].copy())
-    fast["scalars"][6] = fast["scalars"][7]                    # speed = the wave speed
+    scalar = fields("CAT_SCALAR").index
+    fast["scalars"][scalar("SPEED")] = fast["scalars"][scalar("WAVE_SPEED")]
     pantograph = (exported["en50318-2mass"] / "resources" / "model.pcsdata").read_bytes()
     cases = {"checksum mismatch": bytes(damaged), "not a pantocosim data file": b"\x7fELF" * 40,
              "shorter than its": good[:20], "payload bytes": good[:-8],

@@ -1,197 +1,15 @@
 /*
- * The linear catenary as a native model (pcs_model.h): the closed-form HHT-alpha step of
- * pantocosim.core.affine_hht with exact dropper slackening (pantocosim.catenary.linear,
- * linear_droppers), the contact points of contact_point.py (3.11)-(3.13) and the penalty law
- * of interaction/penalty_contact.py (contact_mode 1), on the constants the Python model computed at
- * export (resources/model.pcsdata, pcs_data.h).
- *
- * A step (3.16): with the Newmark predictors q_p, v_p and q_{n+1} = q_p + Delta,
- *   A_s Delta = alpha f_n - c_f (C v_p + K d_p + r0) + c_f sum_k F_k n_k
- *               + c_f [sum_slack N_p b b + sum_committed beta k_a (b . v_p) b],
- * A = c_a M + c_f (c_v C + K) factored once (banded Cholesky), A_s = A less the slack
- * droppers' rank-one terms (Woodbury on the kept columns A^-1 b); the slack set is checked at
- * q_{n+1} and the step solved again when it changed. f_{n+1} = (alpha f_n - M a_{n+1}) / c_f.
- * Memory is allocated at instantiation only.
+ * What the linear and modal catenaries share (catenary.h): the contact-wire points of
+ * contact_point.py (3.11)-(3.13), the penalty law of interaction/penalty_contact.py
+ * (contact_mode 1), the communication step as internal steps of the model's own step
+ * (CatenaryStep), the FMU state and the variables.
  */
-#include "pcs_model.h"
-
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "catenary.h"
 
-#define MAX_SLACK_PASSES 20
-/* steps after which the kept products are formed again from the state (affine_hht.py) */
-#define RESYNC_STEPS 4096
-#define DROPPER_WIDTH 6
-
-unsigned pcs_model_kind(void) { return PCS_KIND_LINEAR_CATENARY; }
-
-/* ------------------------------------------------------------------ linear algebra */
-
-/* y = A x, A symmetric in lower band storage B[k n + j] = A[j + k, j]; ``below`` is work
-   (the two triangles apart, so that each loop vectorizes, as affine_kernels.sym_product) */
-static void band_product(const double *B, int bw, int n, const double *x, double *y,
-                         double *below, const unsigned char *used)
-{
-    int j, k;
-    for (j = 0; j < n; j++) {
-        y[j] = B[j] * x[j];
-        below[j] = 0.0;
-    }
-    for (k = 1; k <= bw; k++) {
-        if (!used[k]) continue;        /* an empty diagonal */
-        const double *d = B + (size_t)k * n, *xk = x + k;
-        double *bk = below + k;
-        for (j = 0; j + k < n; j++) y[j] += d[j] * xk[j];
-        for (j = 0; j + k < n; j++) bk[j] += d[j] * x[j];
-    }
-    for (j = 0; j < n; j++) y[j] += below[j];
-}
-
-static double band_at(const double *B, int bw, int n, int i, int j)
-{
-    int k = i - j;
-    return (k < 0 || k > bw) ? 0.0 : B[(size_t)k * n + j];
-}
-
-static void factor_rows(PcsModel *m);
-
-/* L = chol(c_a M + c_f (c_v (ar M + br K) + K)); -1 if not positive definite */
-static int factor(PcsModel *m, double c_a, double c_v, double c_f)
-{
-    int n = m->n, bw = m->bw, i, j, k;
-    double *L = m->L;
-    for (j = 0; j < n; j++)
-        for (k = 0; k <= bw; k++) {
-            double Mv = 0.0, Kv = 0.0;
-            if (j + k < n) {
-                Mv = band_at(m->M, m->bw_m, n, j + k, j);
-                Kv = band_at(m->K, m->bw_k, n, j + k, j);
-            }
-            L[(size_t)j * (bw + 1) + k] = c_a * Mv + c_f * (c_v * (m->ar * Mv + m->br * Kv) + Kv);
-        }
-    for (j = 0; j < n; j++) {
-        double *cj = L + (size_t)j * (bw + 1);
-        int last = j + bw < n - 1 ? j + bw : n - 1;
-        if (!(cj[0] > 0.0)) return -1;
-        cj[0] = sqrt(cj[0]);
-        for (i = 1; i <= last - j; i++) cj[i] /= cj[0];
-        for (k = j + 1; k <= last; k++) {       /* column k -= L[k, j] L[k.., j] */
-            double *ck = L + (size_t)k * (bw + 1);
-            double lkj = cj[k - j];
-            for (i = k; i <= last; i++) ck[i - k] -= cj[i - j] * lkj;
-        }
-    }
-    factor_rows(m);
-    return 0;
-}
-
-/* the rows of L (row i: L[i, i - bw .. i]) for the backward substitution */
-static void factor_rows(PcsModel *m)
-{
-    int n = m->n, bw = m->bw, i, k;
-    for (i = 0; i < n; i++)
-        for (k = 0; k <= bw; k++) {
-            int j = i - bw + k;
-            m->LR[(size_t)i * (bw + 1) + k] = j < 0 ? 0.0 : m->L[(size_t)j * (bw + 1) + (i - j)];
-        }
-    for (i = 0; i < n; i++) m->inv_diag[i] = 1.0 / m->L[(size_t)i * (bw + 1)];
-}
-
-/* x <- A^-1 x with the kept factor, forward by the columns of L and backward by its rows,
-   four at a time: a block's own triangle first, then one pass over the rows the block
-   touches (each entry of x read and written once per block, not once per column) */
-static void solve(const PcsModel *m, double *x)
-{
-    int n = m->n, bw = m->bw, w = bw + 1, i, j, j0;
-    const double *L = m->L, *LR = m->LR, *inv = m->inv_diag;
-    for (j0 = 0; j0 < n; j0 += 4) {
-        int jb = n - j0 < 4 ? n - j0 : 4, end = j0 + jb - 1 + bw < n - 1 ? j0 + jb - 1 + bw : n - 1;
-        for (j = j0; j < j0 + jb; j++) {           /* the block's triangle */
-            const double *cj = L + (size_t)j * w;
-            double xj = x[j] * inv[j];
-            x[j] = xj;
-            for (i = j + 1; i < j0 + jb && i - j <= bw; i++) x[i] -= cj[i - j] * xj;
-        }
-        if (jb == 4 && bw >= 4) {
-            const double *c0 = L + (size_t)j0 * w - j0, *c1 = c0 + w - 1, *c2 = c1 + w - 1,
-                         *c3 = c2 + w - 1;         /* c_k[i] = L[i, j0 + k] */
-            double x0 = x[j0], x1 = x[j0 + 1], x2 = x[j0 + 2], x3 = x[j0 + 3];
-            int full = j0 + bw < end ? j0 + bw : end;
-            for (i = j0 + 4; i <= full; i++)
-                x[i] -= c0[i] * x0 + c1[i] * x1 + c2[i] * x2 + c3[i] * x3;
-            for (i = full + 1; i <= end; i++) {    /* rows some columns do not reach */
-                double s = 0.0;
-                if (i - (j0 + 1) <= bw) s += c1[i] * x1;
-                if (i - (j0 + 2) <= bw) s += c2[i] * x2;
-                if (i - (j0 + 3) <= bw) s += c3[i] * x3;
-                x[i] -= s;
-            }
-        } else {
-            for (j = j0; j < j0 + jb; j++) {
-                const double *cj = L + (size_t)j * w - j;
-                double xj = x[j];
-                for (i = j0 + jb; i <= end && i - j <= bw; i++) x[i] -= cj[i] * xj;
-            }
-        }
-    }
-    for (j0 = n - 1; j0 >= 0; j0 -= 4) {           /* rows j0, j0 - 1, .., j0 - jb + 1 */
-        int jb = j0 + 1 < 4 ? j0 + 1 : 4, lo = j0 - jb + 1, first = lo - bw > 0 ? lo - bw : 0;
-        for (j = j0; j >= lo; j--) {               /* the block's triangle */
-            const double *rj = LR + (size_t)j * w + bw - j;    /* rj[k] = L[j, k] */
-            double xj = x[j] * inv[j];
-            x[j] = xj;
-            for (i = j - 1; i >= lo && j - i <= bw; i--) x[i] -= rj[i] * xj;
-        }
-        if (jb == 4 && bw >= 4) {
-            const double *r0 = LR + (size_t)j0 * w + bw - j0, *r1 = r0 - w + 1, *r2 = r1 - w + 1,
-                         *r3 = r2 - w + 1;         /* r_k[i] = L[j0 - k, i] */
-            double x0 = x[j0], x1 = x[j0 - 1], x2 = x[j0 - 2], x3 = x[j0 - 3];
-            int full = j0 - bw > first ? j0 - bw : first;
-            for (i = full; i < lo; i++)
-                x[i] -= r0[i] * x0 + r1[i] * x1 + r2[i] * x2 + r3[i] * x3;
-            for (i = first; i < full; i++) {       /* columns some rows do not reach */
-                double s = 0.0;
-                if (j0 - 1 - i <= bw) s += r1[i] * x1;
-                if (j0 - 2 - i <= bw) s += r2[i] * x2;
-                if (j0 - 3 - i <= bw) s += r3[i] * x3;
-                x[i] -= s;
-            }
-        } else {
-            for (j = j0; j >= lo; j--) {
-                const double *rj = LR + (size_t)j * w + bw - j;
-                double xj = x[j];
-                for (i = lo - 1; i >= first && j - i <= bw; i--) x[i] -= rj[i] * xj;
-            }
-        }
-    }
-}
-
-/* b_d . x */
-static double dropper_dot(const PcsModel *m, int d, const double *x)
-{
-    const int *idx = m->d_idx + (size_t)d * DROPPER_WIDTH;
-    const double *val = m->d_val + (size_t)d * DROPPER_WIDTH;
-    double s = 0.0;
-    int k;
-    for (k = 0; k < DROPPER_WIDTH; k++)
-        if (idx[k] >= 0) s += val[k] * x[idx[k]];
-    return s;
-}
-
-static void dropper_add(const PcsModel *m, int d, double c, double *x)
-{
-    const int *idx = m->d_idx + (size_t)d * DROPPER_WIDTH;
-    const double *val = m->d_val + (size_t)d * DROPPER_WIDTH;
-    int k;
-    for (k = 0; k < DROPPER_WIDTH; k++)
-        if (idx[k] >= 0) x[idx[k]] += c * val[k];
-}
-
-/* solve the small dense system A z = y (Gauss with partial pivoting, A overwritten);
-   -1 if singular */
 int pcs_dense_solve(double *A, double *y, int n)
 {
     int i, j, k;
@@ -225,25 +43,6 @@ int pcs_dense_solve(double *A, double *y, int n)
 }
 
 /* x <- A_s^-1 x for the removed rank-one terms (rows, s) of count r (Woodbury, lowrank.py) */
-static int woodbury(PcsModel *m, int r, double *x)
-{
-    int i, j;
-    if (r == 0) return 0;
-    for (i = 0; i < r; i++) {
-        for (j = 0; j < r; j++)
-            m->small[(size_t)i * r + j] = (i == j ? 1.0 : 0.0)
-                - m->s[i] * dropper_dot(m, m->rows[i], m->Z + (size_t)m->rows[j] * m->n);
-        m->zs[i] = m->s[i] * dropper_dot(m, m->rows[i], x);
-    }
-    if (pcs_dense_solve(m->small, m->zs, r) != 0) return -1;
-    for (j = 0; j < r; j++) {
-        const double *zj = m->Z + (size_t)m->rows[j] * m->n;
-        double c = m->zs[j];
-        for (i = 0; i < m->n; i++) x[i] += c * zj[i];
-    }
-    return 0;
-}
-
 /* ------------------------------------------------------------------ contact wire */
 
 static void hermite(double xi, double L, double *S)
@@ -270,7 +69,7 @@ static double dot4(const double *a, const double *b)
 }
 
 /* the contact-wire point at track position x (contact_point.py); -1 outside the wire */
-int pcs_locate(const PcsModel *m, double x, Point *p, char *err)
+int pcs_locate(const Catenary *m, double x, Point *p, char *err)
 {
     int lo = 0, hi = m->ne, k, it, i;
     double xi, L, S[4], D[4], slope;
@@ -317,66 +116,8 @@ int pcs_locate(const PcsModel *m, double x, Point *p, char *err)
 }
 
 /* (w . q, w . v + V dw . q) of a point, fixed DOFs at their reference height */
-static void wire_point(const PcsModel *m, const Point *p, const double *q, const double *v,
-                       double *z, double *vz)
-{
-    double zf = 0.0, vf = 0.0, sf = 0.0, off = 0.0, doff = 0.0;
-    int i;
-    for (i = 0; i < 4; i++) {
-        if (p->dof[i] >= 0) {
-            zf += p->w[i] * q[p->dof[i]];
-            vf += p->w[i] * v[p->dof[i]];
-            sf += p->dw[i] * q[p->dof[i]];
-        } else {
-            off += p->w[i] * p->zfix[i];
-            doff += p->dw[i] * p->zfix[i];
-        }
-    }
-    *z = zf + off;
-    *vz = vf + m->speed * (sf + doff);
-}
-
-static void point_add(const Point *p, double c, double *x)
-{
-    int i;
-    for (i = 0; i < 4; i++)
-        if (p->dof[i] >= 0) x[p->dof[i]] += c * p->w[i];
-}
-
-/* ------------------------------------------------------------------ the model */
-
-static int is_slack(const PcsModel *m, int d, double N) { return m->d_tension[d] && N < 0.0; }
-
-/* f = K (q - q_ref) + r0 - sum_slack N b - sum_k F_k n_k at rest (v = 0), the committed set */
-static void rest_forces(PcsModel *m, const double *F)
-{
-    int i, d, k;
-    for (i = 0; i < m->n; i++) m->tmp[i] = m->q[i] - m->q_ref[i];
-    band_product(m->K, m->bw_k, m->n, m->tmp, m->f, m->tmp2, m->used_k);
-    for (i = 0; i < m->n; i++) m->f[i] += m->r0[i];
-    for (d = 0; d < m->nd; d++) {
-        double N = m->d_N0[d] + m->d_ka[d] * dropper_dot(m, d, m->tmp);
-        m->committed[d] = is_slack(m, d, N) ? 1.0 : 0.0;
-        if (m->committed[d] != 0.0) dropper_add(m, d, -N, m->f);
-    }
-    for (k = 0; k < m->np; k++) point_add(&m->pts[k], -F[k], m->f);
-}
-
-static void update_outputs(PcsModel *m)
-{
-    int k, j;
-    if (m->modal) {
-        modal_outputs(m);
-        return;
-    }
-    for (k = 0; k < m->np; k++)
-        wire_point(m, &m->pts[k], m->q, m->v, &m->out_z[k], &m->out_v[k]);
-    for (j = 0; j < m->ns && j < CAT_MAX_SUPPORTS; j++)
-        m->uplift[j] = m->s_dof[j] >= 0 ? m->q[m->s_dof[j]] - m->s_z[j] : 0.0;
-}
-
 /* the penalty law (penalty_contact.py) */
-static double penalty(const PcsModel *m, double zp, double zw, double vp, double vw)
+static double penalty(const Catenary *m, double zp, double zw, double vp, double vw)
 {
     double gap = zp - zw, F;
     if (gap <= 0.0) return 0.0;
@@ -384,268 +125,7 @@ static double penalty(const PcsModel *m, double zp, double zw, double vp, double
     return F > 0.0 ? F : 0.0;
 }
 
-#define SECTION(dst, name, type, count)                                                   \
-    do {                                                                                  \
-        dst = pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG);          \
-        if (!dst) goto fail;                                                              \
-    } while (0)
-
-PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
-{
-    PcsModel *m;
-    const int *sizes;
-    const double *sc;
-    long n_def = 0;
-    size_t n, nd;
-    int k;
-    if (d->kind == PCS_KIND_MODAL_CATENARY) return modal_new(d, mem, err);
-    if (d->kind != PCS_KIND_LINEAR_CATENARY) {
-        snprintf(err, PCS_MSG, "data file %s: model kind %u, this FMU steps the linear "
-                 "catenary (kind %u)", d->path, d->kind, PCS_KIND_LINEAR_CATENARY);
-        return NULL;
-    }
-    m = (PcsModel *)mem->alloc(1, sizeof *m);
-    if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    SECTION(sizes, "sizes", PCS_TYPE_I32, 10);
-    m->n = sizes[0]; m->bw_m = sizes[1]; m->bw_k = sizes[2]; m->nd = sizes[3];
-    m->np = sizes[5]; m->ne = sizes[6]; m->ns = sizes[7]; m->spans = sizes[8];
-    m->model_code = sizes[9];
-    if (m->n < 1 || m->bw_m < 0 || m->bw_k < 0 || m->nd < 0 || sizes[4] != DROPPER_WIDTH
-        || m->np < 1 || m->np > CAT_MAX_PANTOGRAPHS || m->ne < 1 || m->ns < 0
-        || m->ns > CAT_MAX_SUPPORTS) {
-        snprintf(err, PCS_MSG, "data file %s: section sizes holds sizes this FMU cannot "
-                 "take (n = %d, pantographs = %d, supports = %d)", d->path, m->n, m->np, m->ns);
-        goto fail;
-    }
-    m->bw = m->bw_m > m->bw_k ? m->bw_m : m->bw_k;
-    n = (size_t)m->n;
-    nd = (size_t)m->nd;
-    SECTION(sc, "scalars", PCS_TYPE_F64, 16);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
-    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
-    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12];
-    m->rtol = sc[13];
-    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
-        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
-                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
-                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
-        goto fail;
-    }
-    if (!(m->h > 0.0) || !(m->x_max > m->x_min)) {
-        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
-                 "[%g, %g] m", d->path, m->h, m->x_min, m->x_max);
-        goto fail;
-    }
-    SECTION(m->M, "M_band", PCS_TYPE_F64, (m->bw_m + 1) * n);
-    SECTION(m->K, "K_band", PCS_TYPE_F64, (m->bw_k + 1) * n);
-    SECTION(m->q_ref, "q_ref", PCS_TYPE_F64, n);
-    SECTION(m->r0, "r0", PCS_TYPE_F64, n);
-    SECTION(m->q0, "q0", PCS_TYPE_F64, n);
-    SECTION(m->F0, "F0", PCS_TYPE_F64, m->np);
-    SECTION(m->x0, "x0", PCS_TYPE_F64, m->np);
-    SECTION(m->d_idx, "drop_idx", PCS_TYPE_I32, nd * DROPPER_WIDTH);
-    SECTION(m->d_val, "drop_val", PCS_TYPE_F64, nd * DROPPER_WIDTH);
-    SECTION(m->d_ka, "drop_ka", PCS_TYPE_F64, nd);
-    SECTION(m->d_N0, "drop_N0", PCS_TYPE_F64, nd);
-    SECTION(m->d_tension, "drop_tension", PCS_TYPE_I32, nd);
-    SECTION(m->w_xs, "wire_xs", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_xe, "wire_xe", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_Ex, "wire_Ex", PCS_TYPE_F64, 4 * m->ne);
-    SECTION(m->w_Le, "wire_Le", PCS_TYPE_F64, m->ne);
-    SECTION(m->w_dof, "wire_dof", PCS_TYPE_I32, 4 * m->ne);
-    SECTION(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * m->ne);
-    SECTION(m->s_dof, "support_dof", PCS_TYPE_I32, m->ns);
-    SECTION(m->s_z, "support_z", PCS_TYPE_F64, m->ns);
-    m->definition = (const char *)pcs_data_section(d, "definition", PCS_TYPE_I32, -1, &n_def,
-                                                   err, PCS_MSG);
-    if (!m->definition) goto fail;
-    if (n_def < 1 || m->definition[4 * n_def - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %s: section definition is not a string", d->path);
-        goto fail;
-    }
-    {   /* every index inside its array */
-        size_t i;
-        for (i = 0; i < nd * DROPPER_WIDTH; i++)
-            if (m->d_idx[i] < -1 || m->d_idx[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section drop_idx: index %d outside "
-                         "0..%d", d->path, m->d_idx[i], m->n - 1);
-                goto fail;
-            }
-        for (i = 0; i < 4 * (size_t)m->ne; i++)
-            if (m->w_dof[i] < -1 || m->w_dof[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section wire_dof: index %d outside "
-                         "0..%d", d->path, m->w_dof[i], m->n - 1);
-                goto fail;
-            }
-        for (i = 0; i < (size_t)m->ns; i++)
-            if (m->s_dof[i] < -1 || m->s_dof[i] >= m->n) {
-                snprintf(err, PCS_MSG, "data file %s: section support_dof: index %d outside "
-                         "0..%d", d->path, m->s_dof[i], m->n - 1);
-                goto fail;
-            }
-    }
-    m->L = (double *)mem->alloc((size_t)(m->bw + 1) * n, sizeof(double));
-    m->LR = (double *)mem->alloc((size_t)(m->bw + 1) * n, sizeof(double));
-    m->inv_diag = (double *)mem->alloc(n, sizeof(double));
-    m->Z = (double *)mem->alloc(nd * n + 1, sizeof(double));
-    m->state_len = 4 + CAT_MAX_PANTOGRAPHS * 2 + 9 * n + nd + 1;
-    m->state = (double *)mem->alloc(m->state_len, sizeof(double));
-    m->qp = (double *)mem->alloc(10 * n + (size_t)m->np * n, sizeof(double));
-    m->Np = (double *)mem->alloc(7 * nd + nd * nd + (size_t)m->np * nd + 8, sizeof(double));
-    m->rows = (int *)mem->alloc(nd + 1, sizeof(int));
-    m->used_m = (unsigned char *)mem->alloc((size_t)(m->bw_m + m->bw_k + 2), 1);
-    if (m->used_m) {
-        int k2;
-        size_t j2;
-        m->used_k = m->used_m + m->bw_m + 1;
-        for (k2 = 0; k2 <= m->bw_m; k2++)
-            for (j2 = 0; j2 < n; j2++)
-                if (m->M[(size_t)k2 * n + j2] != 0.0) { m->used_m[k2] = 1; break; }
-        for (k2 = 0; k2 <= m->bw_k; k2++)
-            for (j2 = 0; j2 < n; j2++)
-                if (m->K[(size_t)k2 * n + j2] != 0.0) { m->used_k[k2] = 1; break; }
-    }
-    if (!m->inv_diag || !m->used_m || !m->L || !m->LR || !m->Z || !m->state || !m->qp || !m->Np || !m->rows) {
-        snprintf(err, PCS_MSG, "no memory for a model of %d degrees of freedom", m->n);
-        goto fail;
-    }
-    m->t = m->state; m->n_steps = m->state + 1; m->failed = m->state + 2;
-    m->synced = m->state + 3;
-    m->prev = m->state + 4;                      /* inputs at t: 2 per pantograph */
-    m->q = m->prev + 2 * CAT_MAX_PANTOGRAPHS;
-    m->v = m->q + n; m->a = m->v + n; m->f = m->a + n;
-    m->Kd = m->f + n; m->Kv = m->Kd + n; m->Ka = m->Kv + n; m->Mv = m->Ka + n;
-    m->Ma = m->Mv + n; m->committed = m->Ma + n;
-    m->vp = m->qp + n; m->dp = m->vp + n; m->rhs = m->dp + n; m->R = m->rhs + n;
-    m->x = m->R + n; m->tmp = m->x + n; m->tmp2 = m->tmp + n; m->W = m->tmp2 + n;
-    m->bx = m->Np + nd; m->sl = m->bx + nd; m->sl_new = m->sl + nd; m->s = m->sl_new + nd;
-    m->y = m->s + nd; m->zs = m->y + nd; m->small = m->zs + nd; m->bW = m->small + nd * nd;
-    m->extrapolate = 1;
-    for (k = 0; k < m->np; k++) m->u_force[k] = m->F0[k];
-    return m;
-fail:
-    pcs_model_free(m, mem);
-    return NULL;
-}
-
-void pcs_model_free(PcsModel *m, const PcsMemory *mem)
-{
-    if (!m) return;
-    if (m->modal) {
-        modal_free(m, mem);
-        return;
-    }
-    if (m->L) mem->release(m->L);
-    if (m->LR) mem->release(m->LR);
-    if (m->inv_diag) mem->release(m->inv_diag);
-    if (m->Z) mem->release(m->Z);
-    if (m->state) mem->release(m->state);
-    if (m->qp) mem->release(m->qp);
-    if (m->Np) mem->release(m->Np);
-    if (m->rows) mem->release(m->rows);
-    if (m->used_m) mem->release(m->used_m);
-    mem->release(m);
-}
-
-/* the kept products P = [K (q - q_ref), K v, K a, M v, M a] from the state itself
-   (affine_kernels.state_products) */
-static void form_products(PcsModel *m)
-{
-    int i, n = m->n;
-    for (i = 0; i < n; i++) m->tmp[i] = m->q[i] - m->q_ref[i];
-    band_product(m->K, m->bw_k, n, m->tmp, m->Kd, m->tmp2, m->used_k);
-    band_product(m->K, m->bw_k, n, m->v, m->Kv, m->tmp2, m->used_k);
-    band_product(m->K, m->bw_k, n, m->a, m->Ka, m->tmp2, m->used_k);
-    band_product(m->M, m->bw_m, n, m->v, m->Mv, m->tmp2, m->used_m);
-    band_product(m->M, m->bw_m, n, m->a, m->Ma, m->tmp2, m->used_m);
-    *m->synced = *m->n_steps;
-}
-
-int pcs_initialize(PcsModel *m, char *err)
-{
-    int k, d, i;
-    size_t n = (size_t)m->n;
-    if (m->modal) return modal_initialize(m, err);
-    if (m->mode == 1) {
-        for (k = 0; k < m->np; k++)
-            if (!(m->F0[k] > 0.0)) {
-                snprintf(err, PCS_MSG, "contact_mode = 1 needs the static start of an exported "
-                         "static_force_%d > 0 (exported: %g N)", k + 1, m->F0[k]);
-                return PCS_ERROR;
-            }
-    }
-    *m->t = 0.0; *m->n_steps = 0.0; *m->failed = 0.0;
-    memcpy(m->q, m->q0, n * sizeof(double));
-    memset(m->v, 0, n * sizeof(double));
-    for (k = 0; k < m->np; k++)
-        if (pcs_locate(m, m->x0[k], &m->pts[k], err) != 0) return PCS_ERROR;
-    rest_forces(m, m->F0);
-    /* a0 = -M^-1 f0 (the mass matrix factored like the Newton matrix of c_a = 1) */
-    if (factor(m, 1.0, 0.0, 0.0) != 0) {
-        snprintf(err, PCS_MSG, "the mass matrix is not positive definite");
-        return PCS_ERROR;
-    }
-    for (i = 0; i < m->n; i++) m->a[i] = -m->f[i];
-    solve(m, m->a);
-    m->c_a = 1.0 / (m->beta * m->h * m->h);
-    m->c_v = m->gamma / (m->beta * m->h);
-    m->c_f = 1.0 + m->alpha;
-    if (factor(m, m->c_a, m->c_v, m->c_f) != 0) {
-        snprintf(err, PCS_MSG, "the Newton matrix of h = %g s is not positive definite", m->h);
-        return PCS_ERROR;
-    }
-    for (d = 0; d < m->nd; d++) {          /* the dropper columns A^-1 b_d */
-        double *z = m->Z + (size_t)d * n;
-        memset(z, 0, n * sizeof(double));
-        dropper_add(m, d, 1.0, z);
-        solve(m, z);
-    }
-    form_products(m);
-    update_outputs(m);
-    for (k = 0; k < m->np; k++) {
-        double zw = m->out_z[k];
-        m->out_F[k] = m->F0[k];
-        m->z_start[k] = zw + m->F0[k] / m->k_h;
-        if (m->mode == 0) {
-            m->prev[2 * k] = m->F0[k];
-            m->u_force[k] = m->F0[k];
-        } else {
-            m->prev[2 * k] = m->z_start[k];
-            m->prev[2 * k + 1] = 0.0;
-            m->u_z[k] = m->z_start[k];
-            m->u_v[k] = 0.0;
-        }
-    }
-    m->iterations = 0.0;
-    m->initialised = 1;
-    return PCS_OK;
-}
-
-/* the step's slack terms into R (from rhs) and the removed rank-one terms (rows, s) */
-static int slack_terms(PcsModel *m)
-{
-    int d, r = 0;
-    memcpy(m->R, m->rhs, (size_t)m->n * sizeof(double));
-    for (d = 0; d < m->nd; d++) {
-        int sl = m->sl[d] != 0.0, dm = m->committed[d] != 0.0;
-        double coef = 0.0, sd;
-        if (!(sl || dm)) continue;
-        if (sl) coef += m->Np[d];
-        if (dm) coef += m->br * m->d_ka[d] * dropper_dot(m, d, m->vp);
-        dropper_add(m, d, m->c_f * coef, m->R);
-        sd = m->c_f * m->d_ka[d] * ((sl ? 1.0 : 0.0) + (dm ? m->c_v * m->br : 0.0));
-        if (sd != 0.0) {
-            m->rows[r] = d;
-            m->s[r] = sd;
-            r++;
-        }
-    }
-    return r;
-}
-
-/* the penalty forces F of the prescribed pantographs (z_p, v_p) with the wire affine in F:
-   z_w = z0 + G F, v_w = v0 + H F (condensed_forces of penalty_contact.py with P = 0) */
-void pcs_penalty_forces(const PcsModel *m, const double *dz, const double *dv,
+int pcs_penalty_forces(const Catenary *m, const double *dz, const double *dv,
                         const double *G, const double *H, double *F)
 {
     int np = m->np, it, i, j, active[CAT_MAX_PANTOGRAPHS], trial[CAT_MAX_PANTOGRAPHS];
@@ -662,7 +142,7 @@ void pcs_penalty_forces(const PcsModel *m, const double *dz, const double *dv,
         }
         if (pcs_dense_solve(A, y, np) != 0) {
             for (i = 0; i < np; i++) F[i] = NAN;
-            return;
+            return -1;
         }
         for (i = 0; i < np; i++) F[i] = y[i];
         for (i = 0; i < np; i++) {
@@ -674,151 +154,19 @@ void pcs_penalty_forces(const PcsModel *m, const double *dz, const double *dv,
             trial[i] = gap > 0.0 && m->k_h * gap + m->c_h * rel > 0.0;
             changed = changed || trial[i] != active[i];
         }
-        if (!changed || it == 2 * np + 1) break;
+        if (!changed) return 0;
         for (i = 0; i < np; i++) active[i] = trial[i];
     }
+    return -1;                 /* the active set did not settle: the last forces in F */
 }
 
 /* one internal step of h with forces F (mode 0) or pantograph heights zp, vp (mode 1);
    the contact points at t + h are in m->pts; F is written in mode 1 */
-static int step(PcsModel *m, double *F, const double *zp, const double *vpan, char *err)
+int cat_step(void *model, double t, double H, char *err)
 {
-    int n = m->n, nd = m->nd, np = m->np, i, d, k, j, r, passes = 0;
-    double h = m->h, cq = (0.5 - m->beta) * h * h, cv = (1.0 - m->gamma) * h;
-    double c_f = m->c_f;
-    if (*m->n_steps - *m->synced >= RESYNC_STEPS) form_products(m);
-    for (i = 0; i < n; i++) {
-        m->qp[i] = m->q[i] + h * m->v[i] + cq * m->a[i];
-        m->vp[i] = m->v[i] + cv * m->a[i];
-        m->dp[i] = m->qp[i] - m->q_ref[i];
-    }
-    for (i = 0; i < n; i++) {        /* C v_p + K d_p from the kept products */
-        double y = m->ar * (m->Mv[i] + cv * m->Ma[i]) + m->br * (m->Kv[i] + cv * m->Ka[i])
-                   + m->Kd[i] + h * m->Kv[i] + cq * m->Ka[i];
-        m->rhs[i] = m->alpha * m->f[i] - c_f * (y + m->r0[i]);
-    }
-    if (m->mode == 0)
-        for (k = 0; k < np; k++) point_add(&m->pts[k], c_f * F[k], m->rhs);
-    for (d = 0; d < nd; d++) {
-        m->Np[d] = m->d_ka[d] * dropper_dot(m, d, m->dp) + m->d_N0[d];
-        m->sl[d] = is_slack(m, d, m->Np[d]) ? 1.0 : 0.0;
-    }
-    for (;;) {
-        int changed = 0;
-        if (passes >= MAX_SLACK_PASSES) {
-            snprintf(err, PCS_MSG, "the slack set does not settle at t = %.6g s after %d "
-                     "passes", *m->t + h, passes);
-            return PCS_DISCARD;
-        }
-        passes++;
-        r = slack_terms(m);
-        memcpy(m->x, m->R, (size_t)n * sizeof(double));
-        solve(m, m->x);
-        if (woodbury(m, r, m->x) != 0) {
-            snprintf(err, PCS_MSG, "the slack droppers' Woodbury matrix is singular at t = "
-                     "%.6g s", *m->t + h);
-            return PCS_DISCARD;
-        }
-        if (m->mode == 1) {     /* the load responses W_k, the condensed penalty contact */
-            double z0[CAT_MAX_PANTOGRAPHS], v0[CAT_MAX_PANTOGRAPHS], G[16], H[16];
-            double dz[CAT_MAX_PANTOGRAPHS], dv[CAT_MAX_PANTOGRAPHS];
-            for (k = 0; k < np; k++) {
-                double *w = m->W + (size_t)k * n;
-                memset(w, 0, (size_t)n * sizeof(double));
-                point_add(&m->pts[k], c_f, w);
-                solve(m, w);
-                if (woodbury(m, r, w) != 0) {
-                    snprintf(err, PCS_MSG, "the slack droppers' Woodbury matrix is singular");
-                    return PCS_DISCARD;
-                }
-            }
-            for (i = 0; i < n; i++) {
-                m->tmp[i] = m->qp[i] + m->x[i];
-                m->tmp2[i] = m->vp[i] + m->c_v * m->x[i];
-            }
-            for (k = 0; k < np; k++) {
-                const Point *p = &m->pts[k];
-                wire_point(m, p, m->tmp, m->tmp2, &z0[k], &v0[k]);
-                for (j = 0; j < np; j++) {
-                    const double *w = m->W + (size_t)j * n;
-                    double g = 0.0, s = 0.0;
-                    for (i = 0; i < 4; i++)
-                        if (p->dof[i] >= 0) {
-                            g += p->w[i] * w[p->dof[i]];
-                            s += p->dw[i] * w[p->dof[i]];
-                        }
-                    G[k * np + j] = g;
-                    H[k * np + j] = m->c_v * g + m->speed * s;
-                }
-                dz[k] = zp[k] - z0[k];
-                dv[k] = vpan[k] - v0[k];
-            }
-            pcs_penalty_forces(m, dz, dv, G, H, F);
-            for (k = 0; k < np; k++)
-                if (!isfinite(F[k])) {
-                    snprintf(err, PCS_MSG, "the penalty contact is singular at t = %.6g s",
-                             *m->t + h);
-                    return PCS_DISCARD;
-                }
-            for (d = 0; d < nd; d++)
-                for (k = 0; k < np; k++)
-                    m->bW[(size_t)k * nd + d] = dropper_dot(m, d, m->W + (size_t)k * n);
-        }
-        for (d = 0; d < nd; d++) {
-            double bd = dropper_dot(m, d, m->x);
-            if (m->mode == 1)
-                for (k = 0; k < np; k++) bd += F[k] * m->bW[(size_t)k * nd + d];
-            m->bx[d] = bd;
-            m->sl_new[d] = is_slack(m, d, m->Np[d] + m->d_ka[d] * bd) ? 1.0 : 0.0;
-            changed = changed || m->sl_new[d] != m->sl[d];
-        }
-        if (!changed) break;
-        memcpy(m->sl, m->sl_new, (size_t)nd * sizeof(double));
-    }
-    if (m->mode == 1)
-        for (k = 0; k < np; k++) {
-            const double *w = m->W + (size_t)k * n;
-            for (i = 0; i < n; i++) m->x[i] += F[k] * w[i];
-        }
-    /* A Delta = R (+ the loads of mode 1) + the removed rank-one terms at Delta; K Delta
-       from the step's own equation, M Delta by one product (affine_kernels.advance) */
-    memcpy(m->tmp2, m->R, (size_t)n * sizeof(double));
-    if (m->mode == 1)
-        for (k = 0; k < np; k++) point_add(&m->pts[k], c_f * F[k], m->tmp2);
-    for (j = 0; j < r; j++) dropper_add(m, m->rows[j], m->s[j] * m->bx[m->rows[j]], m->tmp2);
-    band_product(m->M, m->bw_m, n, m->x, m->tmp, m->W, m->used_m);
-    {
-        double c_M = m->c_a + c_f * m->c_v * m->ar, inv_K = 1.0 / (c_f * (1.0 + m->c_v * m->br));
-        double c_a = m->c_a, c_v = m->c_v;
-        for (i = 0; i < n; i++) {
-            double KD = (m->tmp2[i] - c_M * m->tmp[i]) * inv_K, MD = m->tmp[i];
-            m->Kd[i] = m->Kd[i] + h * m->Kv[i] + cq * m->Ka[i] + KD;
-            m->Kv[i] = m->Kv[i] + cv * m->Ka[i] + c_v * KD;
-            m->Ka[i] = c_a * KD;
-            m->Mv[i] = m->Mv[i] + cv * m->Ma[i] + c_v * MD;
-            m->Ma[i] = c_a * MD;
-        }
-        for (i = 0; i < n; i++) {
-            double dl = m->x[i];
-            m->f[i] = (m->alpha * m->f[i] - m->Ma[i]) / c_f;
-            m->q[i] = m->qp[i] + dl;
-            m->v[i] = m->vp[i] + c_v * dl;
-            m->a[i] = c_a * dl;
-        }
-    }
-    memcpy(m->committed, m->sl, (size_t)nd * sizeof(double));
-    *m->t += h;
-    *m->n_steps += 1.0;
-    m->iterations += passes;
-    return PCS_OK;
-}
-
-double pcs_time(const PcsModel *m) { return *m->t; }
-
-int pcs_do_step(PcsModel *m, double t, double H, char *err)
-{
+    Catenary *m = (Catenary *)model;
     int k, i, n_sub, status;
-    double ratio, u[CAT_MAX_PANTOGRAPHS], zp[CAT_MAX_PANTOGRAPHS], vp[CAT_MAX_PANTOGRAPHS];
+    double u[CAT_MAX_PANTOGRAPHS], zp[CAT_MAX_PANTOGRAPHS], vp[CAT_MAX_PANTOGRAPHS];
     double nw[2 * CAT_MAX_PANTOGRAPHS];
     (void)t;
     if (!m->initialised) {
@@ -829,36 +177,23 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
         snprintf(err, PCS_MSG, "doStep after a failed step: roll back with a saved FMU state");
         return PCS_DISCARD;
     }
-    ratio = H / m->h;
-    n_sub = (int)floor(ratio + 0.5);
-    if (!(H > 0.0) || n_sub < 1 || fabs(ratio - n_sub) > 1e-9 * (ratio > 1.0 ? ratio : 1.0)) {
-        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->h);
-        return PCS_ERROR;
-    }
+    if ((n_sub = (int)pcs_substeps(H, m->h, err)) < 0) return PCS_DISCARD;
     for (k = 0; k < m->np; k++) {            /* inputs at t + H, checked before any change */
-        if (m->mode == 0) {
-            if (!(isfinite(m->u_force[k]) && m->u_force[k] >= 0.0)) {
-                snprintf(err, PCS_MSG, "contact_force_%d = %.17g: must be finite and >= 0",
-                         k + 1, m->u_force[k]);
-                return PCS_DISCARD;
-            }
-            nw[2 * k] = m->u_force[k];
-            nw[2 * k + 1] = 0.0;
-        } else {
-            if (!isfinite(m->u_z[k])) {
-                snprintf(err, PCS_MSG, "pantograph_height_%d = %.17g: must be finite", k + 1,
-                         m->u_z[k]);
-                return PCS_DISCARD;
-            }
-            if (!isfinite(m->u_v[k])) {
-                snprintf(err, PCS_MSG, "pantograph_velocity_%d = %.17g: must be finite", k + 1,
-                         m->u_v[k]);
-                return PCS_DISCARD;
-            }
-            nw[2 * k] = m->u_z[k];
-            nw[2 * k + 1] = m->u_v[k];
-        }
+        char name[40];
+        snprintf(name, sizeof name, "contact_force_%d", k + 1);
+        if (m->mode == 0
+            && pcs_within(name, m->u_force[k], 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
+            return PCS_DISCARD;
+        snprintf(name, sizeof name, "pantograph_height_%d", k + 1);
+        if (m->mode == 1
+            && pcs_within(name, m->u_z[k], -PCS_MAX_HEIGHT, PCS_MAX_HEIGHT, " m", err) != 0)
+            return PCS_DISCARD;
+        snprintf(name, sizeof name, "pantograph_velocity_%d", k + 1);
+        if (m->mode == 1 && pcs_within(name, m->u_v[k], -PCS_MAX_VELOCITY, PCS_MAX_VELOCITY,
+                                       " m/s", err) != 0)
+            return PCS_DISCARD;
+        nw[2 * k] = m->mode == 0 ? m->u_force[k] : m->u_z[k];
+        nw[2 * k + 1] = m->mode == 0 ? 0.0 : m->u_v[k];
     }
     {   /* the points of the whole step must lie on the wire */
         double t_end = *m->t;
@@ -890,34 +225,43 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
                                    : m->prev[2 * k + 1] + (nw[2 * k + 1] - m->prev[2 * k + 1]) * s;
             }
         }
-        status = m->modal ? modal_step(m, u, zp, vp, err) : step(m, u, zp, vp, err);
+        status = m->own->step(m, u, zp, vp, err);
         if (status != PCS_OK) {
             if (i > 1) *m->failed = 1.0;    /* part of the step was taken */
             return status;
         }
     }
     for (k = 0; k < 2 * m->np; k++) m->prev[k] = nw[k];
-    update_outputs(m);
+    m->own->outputs(m);
     for (k = 0; k < m->np; k++)
         m->out_F[k] = m->mode == 0 ? nw[2 * k]
                                    : penalty(m, zp[k], m->out_z[k], vp[k], m->out_v[k]);
     return PCS_OK;
 }
 
-size_t pcs_state_bytes(const PcsModel *m) { return m->state_len * sizeof(double); }
-
-void pcs_state_save(const PcsModel *m, void *buffer)
+size_t cat_state_bytes(const void *model)
 {
-    memcpy(buffer, m->state, pcs_state_bytes(m));
+    return ((const Catenary *)model)->state_len * sizeof(double);
 }
 
-void pcs_state_restore(PcsModel *m, const void *buffer)
+void cat_state_save(const void *model, void *buffer)
 {
+    memcpy(buffer, ((const Catenary *)model)->state, cat_state_bytes(model));
+}
+
+void cat_state_restore(void *model, const void *buffer)
+{
+    memcpy(((Catenary *)model)->state, buffer, cat_state_bytes(model));
+}
+
+/* the outputs at the state's time (the inputs at t as the last step left them) */
+void cat_outputs(void *model)
+{
+    Catenary *m = (Catenary *)model;
     int k;
-    memcpy(m->state, buffer, pcs_state_bytes(m));
     for (k = 0; k < m->np; k++)
         pcs_locate(m, m->x0[k] + m->speed * *m->t, &m->pts[k], NULL);
-    update_outputs(m);
+    m->own->outputs(m);
     for (k = 0; k < m->np; k++)
         m->out_F[k] = m->mode == 0 ? m->prev[2 * k]
                                    : penalty(m, m->prev[2 * k], m->out_z[k], m->prev[2 * k + 1],
@@ -943,13 +287,14 @@ static int fixed_int(const char *name, int exported, int value, char *err)
     return PCS_ERROR;
 }
 
-static int per_pantograph(const PcsModel *m, unsigned vr, unsigned base)
+static int per_pantograph(const Catenary *m, unsigned vr, unsigned base)
 {
     return vr >= base && vr < base + (unsigned)m->np ? (int)(vr - base) : -1;
 }
 
-int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err)
+int cat_get_real(void *model, unsigned vr, double *value, char *err)
 {
+    Catenary *m = (Catenary *)model;
     int k;
     switch (vr) {
     case CAT_VR_SPEED_KMH: *value = m->speed * 3.6; return PCS_OK;
@@ -980,8 +325,9 @@ int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err)
     return PCS_ERROR;
 }
 
-int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *err)
+int cat_set_real(void *model, unsigned vr, double value, int initialised, char *err)
 {
+    Catenary *m = (Catenary *)model;
     int k;
     if ((k = per_pantograph(m, vr, CAT_VR_CONTACT_FORCE)) >= 0) { m->u_force[k] = value; return PCS_OK; }
     if ((k = per_pantograph(m, vr, CAT_VR_PANTOGRAPH_HEIGHT)) >= 0) { m->u_z[k] = value; return PCS_OK; }
@@ -1020,8 +366,9 @@ int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_integer(PcsModel *m, unsigned vr, int *value, char *err)
+int cat_get_integer(void *model, unsigned vr, int *value, char *err)
 {
+    Catenary *m = (Catenary *)model;
     switch (vr) {
     case CAT_VR_N_PANTOGRAPHS: *value = m->np; return PCS_OK;
     case CAT_VR_SPANS: *value = m->spans; return PCS_OK;
@@ -1033,8 +380,9 @@ int pcs_get_integer(PcsModel *m, unsigned vr, int *value, char *err)
     return PCS_ERROR;
 }
 
-int pcs_set_integer(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+int cat_set_integer(void *model, unsigned vr, int value, int initialised, char *err)
 {
+    Catenary *m = (Catenary *)model;
     if (initialised) {
         snprintf(err, PCS_MSG, "Integer %u is a parameter: it is set before initialisation "
                  "only", vr);
@@ -1058,15 +406,17 @@ int pcs_set_integer(PcsModel *m, unsigned vr, int value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_boolean(PcsModel *m, unsigned vr, int *value, char *err)
+int cat_get_boolean(void *model, unsigned vr, int *value, char *err)
 {
+    Catenary *m = (Catenary *)model;
     if (vr == CAT_VR_EXTRAPOLATE_HEIGHTS) { *value = m->extrapolate; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Boolean variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
-int pcs_set_boolean(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+int cat_set_boolean(void *model, unsigned vr, int value, int initialised, char *err)
 {
+    Catenary *m = (Catenary *)model;
     if (vr == CAT_VR_EXTRAPOLATE_HEIGHTS && !initialised) {
         m->extrapolate = value != 0;
         return PCS_OK;
@@ -1076,15 +426,17 @@ int pcs_set_boolean(PcsModel *m, unsigned vr, int value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_string(PcsModel *m, unsigned vr, const char **value, char *err)
+int cat_get_string(void *model, unsigned vr, const char **value, char *err)
 {
+    Catenary *m = (Catenary *)model;
     if (vr == CAT_VR_CATENARY_DEFINITION) { *value = m->definition; return PCS_OK; }
     snprintf(err, PCS_MSG, "no String variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
-int pcs_set_string(PcsModel *m, unsigned vr, const char *value, int initialised, char *err)
+int cat_set_string(void *model, unsigned vr, const char *value, int initialised, char *err)
 {
+    Catenary *m = (Catenary *)model;
     if (vr == CAT_VR_CATENARY_DEFINITION && !initialised && value
         && strcmp(value, m->definition) == 0)
         return PCS_OK;
@@ -1096,4 +448,128 @@ int pcs_set_string(PcsModel *m, unsigned vr, const char *value, int initialised,
     }
     snprintf(err, PCS_MSG, "no String parameter of value reference %u", vr);
     return PCS_ERROR;
+}
+
+void cat_start(Catenary *m)
+{
+    int k;
+    for (k = 0; k < m->np; k++) {
+        m->out_F[k] = m->F0[k];
+        m->z_start[k] = m->out_z[k] + m->F0[k] / m->k_h;
+        if (m->mode == 0) {
+            m->prev[2 * k] = m->F0[k];
+            m->u_force[k] = m->F0[k];
+        } else {
+            m->prev[2 * k] = m->z_start[k];
+            m->prev[2 * k + 1] = 0.0;
+            m->u_z[k] = m->z_start[k];
+            m->u_v[k] = 0.0;
+        }
+    }
+    m->iterations = 0.0;
+    m->initialised = 1;
+}
+
+/* ------------------------------------------------------------------ reading */
+
+int cat_check_sizes(const Catenary *m, const PcsData *d, char *err)
+{
+    if (m->np >= 1 && m->np <= CAT_MAX_PANTOGRAPHS && m->nd >= 0 && m->nd <= PCS_MAX_DROPPERS
+        && m->ne >= 1 && m->ne <= PCS_MAX_DOFS && m->ns >= 0 && m->ns <= CAT_MAX_SUPPORTS)
+        return 0;
+    snprintf(err, PCS_MSG, "data file %.400s: section sizes: pantographs %d (1..%d), droppers "
+             "%d (0..%d), wire elements %d (1..%d), supports %d (0..%d)", d->path, m->np,
+             CAT_MAX_PANTOGRAPHS, m->nd, PCS_MAX_DROPPERS, m->ne, PCS_MAX_DOFS, m->ns,
+             CAT_MAX_SUPPORTS);
+    return -1;
+}
+
+#define READ(dst, name, type, count)                                                      \
+    do {                                                                                  \
+        dst = pcs_data_section(d, name, type, count, NULL, err, PCS_MSG);                 \
+        if (!dst) return -1;                                                              \
+    } while (0)
+
+static int wire_dofs(const Catenary *m, const PcsData *d, int dofs, char *err)
+{
+    size_t i;
+    for (i = 0; i < 4 * (size_t)m->ne; i++)
+        if (m->w_dof[i] < -1 || m->w_dof[i] >= dofs) {
+            snprintf(err, PCS_MSG, "data file %.400s: section wire_dof: index %d outside "
+                     "-1..%d", d->path, m->w_dof[i], dofs - 1);
+            return -1;
+        }
+    return 0;
+}
+
+int cat_read_common(Catenary *m, const PcsData *d, const double *sc, int dofs, char *err)
+{
+    size_t nd = (size_t)m->nd, np = (size_t)m->np, ne = (size_t)m->ne;
+    m->h = sc[CAT_SCALAR_STEP];
+    m->alpha = sc[CAT_SCALAR_ALPHA];
+    m->beta = sc[CAT_SCALAR_BETA];
+    m->gamma = sc[CAT_SCALAR_GAMMA];
+    m->ar = sc[CAT_SCALAR_RAYLEIGH_MASS];
+    m->br = sc[CAT_SCALAR_RAYLEIGH_STIFFNESS];
+    m->speed = sc[CAT_SCALAR_SPEED];
+    m->wave = sc[CAT_SCALAR_WAVE_SPEED];
+    m->k_h = sc[CAT_SCALAR_CONTACT_STIFFNESS];
+    m->c_h = sc[CAT_SCALAR_CONTACT_DAMPING];
+    m->x_min = sc[CAT_SCALAR_WIRE_START];
+    m->x_max = sc[CAT_SCALAR_WIRE_END];
+    m->cutoff = sc[CAT_SCALAR_MODAL_CUTOFF];
+    m->rtol = sc[CAT_SCALAR_NEWTON_RTOL];
+    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
+        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
+                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
+                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
+        return -1;
+    }
+    if (!(m->h > 0.0) || !(m->x_max > m->x_min) || !(m->beta > 0.0) || !(m->k_h > 0.0)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
+                 "[%g, %g] m, HHT beta %g, contact stiffness %g N/m (all must be > 0)",
+                 d->path, m->h, m->x_min, m->x_max, m->beta, m->k_h);
+        return -1;
+    }
+    READ(m->F0, "F0", PCS_TYPE_F64, np);
+    READ(m->x0, "x0", PCS_TYPE_F64, np);
+    READ(m->d_ka, "drop_ka", PCS_TYPE_F64, nd);
+    READ(m->d_N0, "drop_N0", PCS_TYPE_F64, nd);
+    READ(m->d_tension, "drop_tension", PCS_TYPE_I32, nd);
+    READ(m->w_xs, "wire_xs", PCS_TYPE_F64, ne);
+    READ(m->w_xe, "wire_xe", PCS_TYPE_F64, ne);
+    READ(m->w_Ex, "wire_Ex", PCS_TYPE_F64, 4 * ne);
+    READ(m->w_Le, "wire_Le", PCS_TYPE_F64, ne);
+    READ(m->w_dof, "wire_dof", PCS_TYPE_I32, 4 * ne);
+    READ(m->w_zfix, "wire_zfix", PCS_TYPE_F64, 4 * ne);
+    m->definition = pcs_data_text(d, "definition", err, PCS_MSG);
+    if (!m->definition) return -1;
+    m->extrapolate = 1;
+    memcpy(m->u_force, m->F0, np * sizeof(double));
+    return wire_dofs(m, d, dofs, err);
+}
+
+int cat_arena(Catenary *m, const PcsData *d, const PcsMemory *mem,
+              void (*carve)(Catenary *m, PcsArena *a), char *err)
+{
+    double mib = 1024.0 * 1024.0;
+    carve(m, &m->arena);
+    if (m->arena.overflow || (double)m->arena.used + (double)d->size > PCS_MAX_BYTES) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d coordinates and %d droppers "
+                 "need %s%.0f MiB with the data, above the limit of %.0f MiB", d->path, m->n,
+                 m->nd, m->arena.overflow ? "more than " : "",
+                 ((double)m->arena.used + (double)d->size) / mib, PCS_MAX_BYTES / mib);
+        return -1;
+    }
+    if (pcs_arena_open(&m->arena, mem) != 0) {
+        snprintf(err, PCS_MSG, "no memory for a model of %d coordinates (%.0f MiB)", m->n,
+                 (double)m->arena.size / mib);
+        return -1;
+    }
+    carve(m, &m->arena);
+    if (pcs_arena_full(&m->arena) != 0) {
+        snprintf(err, PCS_MSG, "the model took other blocks than it measured");
+        return -1;
+    }
+    return 0;
 }

@@ -47,7 +47,7 @@ struct Modal {
 };
 
 /* the screen's tables (modal_step._screen_tables) and an empty reference */
-static void screen_tables(PcsModel *m)
+static void screen_tables(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, nd = m->nd, d, b, j, n;
@@ -77,116 +77,103 @@ static void screen_tables(PcsModel *m)
 
 #define TABLE(dst, name, count)                                                           \
     do {                                                                                  \
-        dst = pcs_data_section(d, name, PCS_TYPE_F64, (long)(count), NULL, err, PCS_MSG);  \
+        dst = pcs_data_section(d, name, PCS_TYPE_F64, count, NULL, err, PCS_MSG);         \
         if (!dst) goto fail;                                                              \
     } while (0)
 
-PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
+/* the model's work and state memory: measured (the arena not open) or taken */
+static void carve(Catenary *m, PcsArena *a)
 {
-    PcsModel *m;
+    struct Modal *md = m->modal;
+    size_t N = (size_t)md->N, nd = (size_t)m->nd, K = (size_t)md->K, np = (size_t)m->np;
+    size_t nb = (size_t)md->nb;
+    size_t ndK = pcs_mul(nd, K), ndnd = pcs_mul(nd, nd), ndnb = pcs_mul(nd, nb);
+    m->state = (double *)pcs_arena_take(a, m->state_len, sizeof(double));
+    md->inv_diag = (double *)pcs_arena_take(a, pcs_add(pcs_add(ndK, ndnd), K + 1),
+                                            sizeof(double));
+    md->Wc = (double *)pcs_arena_take(a, (3 * np + 8) * N + K, sizeof(double));
+    md->ys = (double *)pcs_arena_take(a, pcs_add(ndnd, 6 * nd + 8), sizeof(double));
+    md->rows = (int *)pcs_arena_take(a, nd + 1, sizeof(int));
+    md->T32 = (float *)pcs_arena_take(a, pcs_add(ndK, K + 1), sizeof(float));
+    md->Tb = (double *)pcs_arena_take(a, pcs_add(pcs_mul(2, ndnb), 3 * nd + K + 2 * nb + 1),
+                                      sizeof(double));
+}
+
+static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err);
+static void modal_outputs(Catenary *m);
+static const CatenaryStep MODAL = {modal_step, modal_outputs};
+static void modal_free(void *model, const PcsMemory *mem);
+
+static void *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
+{
+    Catenary *m;
     struct Modal *md;
     const int *sizes;
     const double *sc;
-    long n_def = 0;
-    size_t N, nd, K;
-    int k;
-    m = (PcsModel *)mem->alloc(1, sizeof *m);
-    md = (struct Modal *)mem->alloc(1, sizeof *md);
+    size_t N, nd, K, nS;
+    m = (Catenary *)pcs_alloc(mem, 1, sizeof *m);
+    md = (struct Modal *)pcs_alloc(mem, 1, sizeof *md);
     if (!m || !md) {
-        if (m) mem->release(m);
-        if (md) mem->release(md);
+        pcs_free(mem, m);
+        pcs_free(mem, md);
         snprintf(err, PCS_MSG, "no memory");
         return NULL;
     }
     m->modal = md;
-    sizes = pcs_data_section(d, "sizes", PCS_TYPE_I32, 12, NULL, err, PCS_MSG);
+    m->own = &MODAL;
+    sizes = pcs_data_section(d, "sizes", PCS_TYPE_I32, MOD_SIZES, NULL, err, PCS_MSG);
     if (!sizes) goto fail;
-    md->N = sizes[0]; md->m = sizes[1]; md->nz = sizes[2]; md->nx = sizes[3]; m->nd = sizes[4];
-    m->np = sizes[5]; m->ne = sizes[6]; md->nsup = m->ns = sizes[7]; md->nS = sizes[8];
-    md->band = sizes[9]; m->spans = sizes[10]; m->model_code = sizes[11];
-    md->K = md->m + md->nz;
-    if (md->m < 1 || md->nz < 0 || md->nx < 0 || md->nx > m->np || m->nd < 0 || m->np < 1
-        || m->np > NP || m->ne < 1 || m->ns < 0 || m->ns > CAT_MAX_SUPPORTS || md->nS < 1
-        || md->band < 0 || md->N != md->K + md->nx) {
-        snprintf(err, PCS_MSG, "data file %.400s: section sizes holds sizes this FMU cannot "
-                 "take (coordinates %d = modes %d + droppers %d + pantographs %d, supports %d)",
-                 d->path, md->N, md->m, md->nz, md->nx, m->ns);
+    md->N = sizes[MOD_SIZE_COORDINATES];
+    md->m = sizes[MOD_SIZE_MODES];
+    md->nz = sizes[MOD_SIZE_DROPPER_COORDINATES];
+    md->nx = sizes[MOD_SIZE_PANTOGRAPH_COORDINATES];
+    m->nd = sizes[MOD_SIZE_DROPPERS];
+    m->np = sizes[MOD_SIZE_PANTOGRAPHS];
+    m->ne = sizes[MOD_SIZE_WIRE_ELEMENTS];
+    md->nsup = m->ns = sizes[MOD_SIZE_SUPPORTS];
+    md->nS = sizes[MOD_SIZE_WIRE_DOFS];
+    md->band = sizes[MOD_SIZE_BAND];
+    m->spans = sizes[MOD_SIZE_SPANS];
+    m->model_code = sizes[MOD_SIZE_MODEL_CODE];
+    if (cat_check_sizes(m, d, err) != 0) goto fail;
+    if (md->m < 1 || md->m > PCS_MAX_DOFS || md->nz < 0 || md->nz > PCS_MAX_DROPPERS
+        || md->nx < 0 || md->nx > m->np || md->nS < 1 || md->nS > PCS_MAX_DOFS
+        || md->band < 0 || md->band > PCS_MAX_BAND || md->N != md->m + md->nz + md->nx) {
+        snprintf(err, PCS_MSG, "data file %.400s: section sizes: coordinates %d = modes %d "
+                 "(1..%d) + droppers %d (0..%d) + pantographs %d (0..%d), wire DOFs %d (1..%d), "
+                 "band %d (0..%d)", d->path, md->N, md->m, PCS_MAX_DOFS, md->nz,
+                 PCS_MAX_DROPPERS, md->nx, m->np, md->nS, PCS_MAX_DOFS, md->band, PCS_MAX_BAND);
         goto fail;
     }
+    md->K = md->m + md->nz;
     m->n = md->N;
     N = (size_t)md->N;
     nd = (size_t)m->nd;
     K = (size_t)md->K;
-    TABLE(sc, "scalars", 18);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->ar = sc[4];
-    m->br = sc[5]; m->speed = sc[6]; m->wave = sc[7]; m->k_h = sc[8]; m->c_h = sc[9];
-    m->x_min = sc[10]; m->x_max = sc[11]; m->cutoff = sc[12]; m->rtol = sc[13];
-    md->kbar = sc[16]; md->beta_r = sc[17];
-    if (!(m->speed >= 0.0 && m->speed < m->wave)) {
-        snprintf(err, PCS_MSG, "data file %.400s: speed_kmh = %.17g: must be below the contact "
-                 "wire's wave speed c = %.0f km/h (at or above it the wire cannot carry the "
-                 "moving load)", d->path, m->speed * 3.6, m->wave * 3.6);
+    nS = (size_t)md->nS;
+    TABLE(sc, "scalars", MOD_SCALARS);
+    md->kbar = sc[MOD_SCALAR_DROPPER_STIFFNESS];
+    md->beta_r = sc[CAT_SCALAR_RAYLEIGH_STIFFNESS];
+    if (md->nz > 0 && !(md->kbar > 0.0)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: dropper stiffness scale %g "
+                 "(must be > 0)", d->path, md->kbar);
         goto fail;
     }
-    if (!(m->h > 0.0) || !(m->x_max > m->x_min) || (md->nz > 0 && !(md->kbar > 0.0))) {
-        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s, wire "
-                 "[%g, %g] m, dropper stiffness scale %g", d->path, m->h, m->x_min, m->x_max,
-                 md->kbar);
-        goto fail;
-    }
-    TABLE(md->Phi_S, "Phi_S", (size_t)md->nS * md->m);
-    TABLE(md->Q_S, "Q_S", (size_t)md->nS * md->nz);
-    TABLE(md->C_band, "C_band", (size_t)md->nS * (2 * md->band + 1));
-    TABLE(md->omega2, "omega2", md->m);
-    TABLE(md->zeta_c, "zeta_c", md->m);
+    if (cat_read_common(m, d, sc, md->nS, err) != 0) goto fail;
+    TABLE(md->Phi_S, "Phi_S", pcs_mul(nS, (size_t)md->m));
+    TABLE(md->Q_S, "Q_S", pcs_mul(nS, (size_t)md->nz));
+    TABLE(md->C_band, "C_band", pcs_mul(nS, 2 * (size_t)md->band + 1));
+    TABLE(md->omega2, "omega2", (size_t)md->m);
+    TABLE(md->zeta_c, "zeta_c", (size_t)md->m);
     TABLE(md->r0, "r0", N);
-    TABLE(md->T_K, "T_K", nd * K);
-    TABLE(md->Phi_sup, "Phi_sup", (size_t)m->ns * md->m);
-    TABLE(md->Q_sup, "Q_sup", (size_t)m->ns * md->nz);
-    TABLE(md->C_sup, "C_sup", (size_t)m->ns * md->nS);
+    TABLE(md->T_K, "T_K", pcs_mul(nd, K));
+    TABLE(md->Phi_sup, "Phi_sup", pcs_mul((size_t)m->ns, (size_t)md->m));
+    TABLE(md->Q_sup, "Q_sup", pcs_mul((size_t)m->ns, (size_t)md->nz));
+    TABLE(md->C_sup, "C_sup", pcs_mul((size_t)m->ns, nS));
     TABLE(m->q0, "q0", N);
-    TABLE(m->F0, "F0", m->np);
-    TABLE(m->x0, "x0", m->np);
-    TABLE(m->d_ka, "drop_ka", nd);
-    TABLE(m->d_N0, "drop_N0", nd);
-    m->d_tension = pcs_data_section(d, "drop_tension", PCS_TYPE_I32, (long)nd, NULL, err,
-                                    PCS_MSG);
-    if (!m->d_tension) goto fail;
-    TABLE(m->w_xs, "wire_xs", m->ne);
-    TABLE(m->w_xe, "wire_xe", m->ne);
-    TABLE(m->w_Ex, "wire_Ex", 4 * (size_t)m->ne);
-    TABLE(m->w_Le, "wire_Le", m->ne);
-    TABLE(m->w_zfix, "wire_zfix", 4 * (size_t)m->ne);
-    m->w_dof = pcs_data_section(d, "wire_dof", PCS_TYPE_I32, 4L * m->ne, NULL, err, PCS_MSG);
-    if (!m->w_dof) goto fail;
-    for (k = 0; k < 4 * m->ne; k++)
-        if (m->w_dof[k] < -1 || m->w_dof[k] >= md->nS) {
-            snprintf(err, PCS_MSG, "data file %.400s: section wire_dof: index %d outside "
-                     "0..%d", d->path, m->w_dof[k], md->nS - 1);
-            goto fail;
-        }
-    m->definition = (const char *)pcs_data_section(d, "definition", PCS_TYPE_I32, -1, &n_def,
-                                                   err, PCS_MSG);
-    if (!m->definition) goto fail;
-    if (n_def < 1 || m->definition[4 * n_def - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %.400s: section definition is not a string", d->path);
-        goto fail;
-    }
     m->state_len = 4 + 2 * NP + 4 * N + nd;
-    m->state = (double *)mem->alloc(m->state_len, sizeof(double));
-    md->inv_diag = (double *)mem->alloc(K + nd * K + nd * nd + 1, sizeof(double));
-    md->Wc = (double *)mem->alloc(2 * (size_t)m->np * N + 8 * N + (size_t)m->np * N + K,
-                                  sizeof(double));
-    md->ys = (double *)mem->alloc(6 * nd + nd * nd + 8, sizeof(double));
-    md->rows = (int *)mem->alloc(nd + 1, sizeof(int));
     md->nb = (md->K + SCREEN_BLOCK - 1) / SCREEN_BLOCK;
-    md->T32 = (float *)mem->alloc(nd * K + K + 1, sizeof(float));
-    md->Tb = (double *)mem->alloc(2 * nd * (size_t)md->nb + 3 * nd + K + 2 * (size_t)md->nb + 1,
-                                  sizeof(double));
-    if (!m->state || !md->inv_diag || !md->Wc || !md->ys || !md->rows || !md->T32 || !md->Tb) {
-        snprintf(err, PCS_MSG, "no memory for a modal model of %d coordinates", md->N);
-        goto fail;
-    }
+    if (cat_arena(m, d, mem, carve, err) != 0) goto fail;
     md->U = md->inv_diag + K;
     md->gram = md->U + nd * K;
     md->Wcx = md->Wc + (size_t)m->np * N;
@@ -206,31 +193,24 @@ PcsModel *modal_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->synced = m->state + 3; m->prev = m->state + 4;
     m->q = m->prev + 2 * NP; m->v = m->q + N; m->a = m->v + N; m->f = m->a + N;
     m->committed = m->f + N;
-    m->extrapolate = 1;
-    for (k = 0; k < m->np; k++) m->u_force[k] = m->F0[k];
     return m;
 fail:
     modal_free(m, mem);
     return NULL;
 }
 
-void modal_free(PcsModel *m, const PcsMemory *mem)
+static void modal_free(void *model, const PcsMemory *mem)
 {
-    struct Modal *md = m->modal;
-    if (md->inv_diag) mem->release(md->inv_diag);
-    if (md->Wc) mem->release(md->Wc);
-    if (md->ys) mem->release(md->ys);
-    if (md->rows) mem->release(md->rows);
-    if (md->T32) mem->release(md->T32);
-    if (md->Tb) mem->release(md->Tb);
-    if (m->state) mem->release(m->state);
-    mem->release(md);
-    mem->release(m);
+    Catenary *m = (Catenary *)model;
+    if (!m) return;
+    pcs_arena_close(&m->arena, mem);
+    pcs_free(mem, m->modal);
+    pcs_free(mem, m);
 }
 
 /* the contact rows and residual at the points m->pts (modal_kernels.point_rows,
    residual_flexibility); -1 when two pantographs lie outside the tabulated band */
-static int geometry(PcsModel *m)
+static int geometry(Catenary *m)
 {
     struct Modal *md = m->modal;
     int np = m->np, mm = md->m, nz = md->nz, N = md->N, k, j, i, a, b;
@@ -294,7 +274,7 @@ static int geometry(PcsModel *m)
     return 0;
 }
 
-static int locate_all(PcsModel *m, double t, char *err)
+static int locate_all(Catenary *m, double t, char *err)
 {
     int k;
     for (k = 0; k < m->np; k++)
@@ -316,7 +296,7 @@ static double row_dot(const double *row, const double *x, int n)
     return s;
 }
 
-static int slack_at(const PcsModel *m, int d, const double *y)
+static int slack_at(const Catenary *m, int d, const double *y)
 {
     const struct Modal *md = m->modal;
     return m->d_tension[d]
@@ -324,7 +304,7 @@ static int slack_at(const PcsModel *m, int d, const double *y)
 }
 
 /* out[:K] = the forces the slack and committed droppers no longer carry (slack_forces) */
-static void slack_forces(const PcsModel *m, const double *slack, const double *y,
+static void slack_forces(const Catenary *m, const double *slack, const double *y,
                          const double *v, double *out)
 {
     const struct Modal *md = m->modal;
@@ -341,7 +321,7 @@ static void slack_forces(const PcsModel *m, const double *slack, const double *y
 }
 
 /* the Woodbury rows (rows, s) of the slack set and the committed set (removed_stiffness) */
-static void woodbury_rows(PcsModel *m, const double *slack)
+static void woodbury_rows(Catenary *m, const double *slack)
 {
     struct Modal *md = m->modal;
     int d;
@@ -358,7 +338,7 @@ static void woodbury_rows(PcsModel *m, const double *slack)
 }
 
 /* out = A^-1 (scale r) (modal_kernels.diag_woodbury); -1 if the small matrix is singular */
-static int diag_woodbury(PcsModel *m, const double *r, double scale, double *out)
+static int diag_woodbury(Catenary *m, const double *r, double scale, double *out)
 {
     struct Modal *md = m->modal;
     int K = md->K, nx = md->nx, np = m->np, nr = md->n_rows, i, j, a, b;
@@ -385,7 +365,7 @@ static int diag_woodbury(PcsModel *m, const double *r, double scale, double *out
 }
 
 /* delta_free and W for the slack set md->slack (solve_step) */
-static int solve_step(PcsModel *m)
+static int solve_step(Catenary *m)
 {
     struct Modal *md = m->modal;
     int N = md->N, k, d, i, active = 0;
@@ -405,7 +385,7 @@ static int solve_step(PcsModel *m)
 }
 
 /* the diagonal and the droppers' Gram matrix of the step's coefficients (woodbury_base) */
-static void woodbury_base(PcsModel *m)
+static void woodbury_base(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, mm = md->m, nd = m->nd, i, d, e;
@@ -423,7 +403,7 @@ static void woodbury_base(PcsModel *m)
 }
 
 /* f_rest at (y, v) with the loads F and the committed set (ModalCatenary.evaluate) */
-static void rest_forces(PcsModel *m, const double *y, const double *v, const double *F,
+static void rest_forces(Catenary *m, const double *y, const double *v, const double *F,
                         double *f)
 {
     struct Modal *md = m->modal;
@@ -443,7 +423,7 @@ static void rest_forces(PcsModel *m, const double *y, const double *v, const dou
         for (i = 0; i < N; i++) f[i] -= md->Wc[(size_t)j * N + i] * F[j];
 }
 
-void modal_outputs(PcsModel *m)
+static void modal_outputs(Catenary *m)
 {
     struct Modal *md = m->modal;
     int N = md->N, K = md->K, mm = md->m, nz = md->nz, np = m->np, k, j, i, r;
@@ -487,8 +467,9 @@ void modal_outputs(PcsModel *m)
     }
 }
 
-int modal_initialize(PcsModel *m, char *err)
+static int modal_initialize(void *model, char *err)
 {
+    Catenary *m = (Catenary *)model;
     struct Modal *md = m->modal;
     int N = md->N, k, d, i;
     for (k = 0; k < m->np; k++)
@@ -510,21 +491,7 @@ int modal_initialize(PcsModel *m, char *err)
     m->c_f = 1.0 + m->alpha;
     woodbury_base(m);
     modal_outputs(m);
-    for (k = 0; k < m->np; k++) {
-        m->out_F[k] = m->F0[k];
-        m->z_start[k] = m->out_z[k] + m->F0[k] / m->k_h;
-        if (m->mode == 0) {
-            m->prev[2 * k] = m->F0[k];
-            m->u_force[k] = m->F0[k];
-        } else {
-            m->prev[2 * k] = m->z_start[k];
-            m->prev[2 * k + 1] = 0.0;
-            m->u_z[k] = m->z_start[k];
-            m->u_v[k] = 0.0;
-        }
-    }
-    m->iterations = 0.0;
-    m->initialised = 1;
+    cat_start(m);
     return PCS_OK;
 }
 
@@ -545,7 +512,7 @@ static float dot32(const float *a, const float *b, int n)
    settle most droppers; the others take their row in single precision with a bound of its
    error, in double precision when that is too close; when more than an eighth are open,
    every row and a new reference. The set is the double-precision one, to round-off. */
-static void screen_slack(PcsModel *m)
+static void screen_slack(Catenary *m)
 {
     struct Modal *md = m->modal;
     int K = md->K, nd = m->nd, nb = md->nb, d, b, j, open = 0, refresh;
@@ -606,7 +573,7 @@ static void screen_slack(PcsModel *m)
 
 /* contact_mode 1: the penalty forces F of the pantographs at zp, vp with the wire at t + h
    affine in F, z_w = z_free + G F, v_w = v_free + H F (interaction/condensed.py) */
-static int contact_forces(PcsModel *m, const double *zp, const double *vp, double *F)
+static int contact_forces(Catenary *m, const double *zp, const double *vp, double *F)
 {
     struct Modal *md = m->modal;
     int N = md->N, np = m->np, k, j, i;
@@ -628,13 +595,10 @@ static int contact_forces(PcsModel *m, const double *zp, const double *vp, doubl
             H[k * np + j] = m->c_v * G[k * np + j] + m->speed * row_dot(dw, wl, N);
         }
     }
-    pcs_penalty_forces(m, dz, dv, G, H, F);
-    for (k = 0; k < np; k++)
-        if (!isfinite(F[k])) return -1;
-    return 0;
+    return pcs_penalty_forces(m, dz, dv, G, H, F);
 }
 
-int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char *err)
+static int modal_step(Catenary *m, double *F, const double *zp, const double *vp, char *err)
 {
     struct Modal *md = m->modal;
     int N = md->N, mm = md->m, K = md->K, np = m->np, i, j, k, d, passes = 0;
@@ -676,8 +640,9 @@ int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char 
             return PCS_DISCARD;
         }
         if (m->mode == 1 && contact_forces(m, zp, vp, F) != 0) {
-            snprintf(err, PCS_MSG, "modal catenary: the penalty contact is singular at t = "
-                     "%.6g s", *m->t + h);
+            snprintf(err, PCS_MSG, "modal catenary: the penalty contact has no solution at "
+                     "t = %.6g s (singular, or its active set does not settle in %d passes)",
+                     *m->t + h, 2 * np + 2);
             return PCS_DISCARD;
         }
         for (i = 0; i < N; i++) {       /* add_loads */
@@ -704,3 +669,6 @@ int modal_step(PcsModel *m, double *F, const double *zp, const double *vp, char 
     m->iterations += passes;
     return PCS_OK;
 }
+
+const PcsModelType pcs_modal_catenary = CATENARY_TABLE(
+    "modal catenary", PCS_KIND_MODAL_CATENARY, modal_new, modal_free, modal_initialize);

@@ -1,7 +1,7 @@
 /*
  * A constant-matrix pantograph (the lumped chains of pantocosim.pantograph.lumped, their
  * linear_form: M a + C v + K q + B w = 0 with w = (h_ref, F_up, F)) as a native model
- * (pcs_model.h), stepped with the closed-form HHT-alpha step of core/hht.py (_linear_step):
+ * (its model table: pcs_lumped_pantograph), stepped with the closed-form HHT-alpha step of core/hht.py (_linear_step):
  *
  *   S a_{n+1} = alpha f_n - (1 + alpha) (C v_p + K q_p + B w_{n+1}),
  *   S = M + (1 + alpha) (gamma h C + beta h^2 K),
@@ -16,8 +16,10 @@
 #include <string.h>
 
 #include "lumped_vars.h"
+#include "pcs_layout.h"
+#include "pcs_limits.h"
 
-struct PcsModel {
+typedef struct {
     int n;
     double h, alpha, beta, gamma, lo, hi, static_force, aero_c1, aero_c2, speed_kmh,
         height0, F0, friction, smoothing;
@@ -29,43 +31,50 @@ struct PcsModel {
     double *q, *v, *a, *f;
     double w[3], force_in, iterations;
     int initialised, extrapolate;
-};
-
-unsigned pcs_model_kind(void) { return PCS_KIND_LUMPED_PANTOGRAPH; }
+} Lumped;
 
 #define SECTION(dst, name, type, count)                                                   \
     do {                                                                                  \
-        dst = pcs_data_section(d, name, type, (long)(count), NULL, err, PCS_MSG);          \
+        dst = pcs_data_section(d, name, type, count, NULL, err, PCS_MSG);                 \
         if (!dst) goto fail;                                                              \
     } while (0)
 
-PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
+static void *lumped_new(const PcsData *d, const PcsMemory *mem, char *err)
 {
-    PcsModel *m;
+    Lumped *m;
     const int *sizes;
     const double *sc;
-    long n_text = 0;
     size_t n;
-    if (d->kind != PCS_KIND_LUMPED_PANTOGRAPH) {
-        snprintf(err, PCS_MSG, "data file %.400s: model kind %u, this FMU steps a lumped "
-                 "pantograph (kind %u)", d->path, d->kind, PCS_KIND_LUMPED_PANTOGRAPH);
-        return NULL;
-    }
-    m = (PcsModel *)mem->alloc(1, sizeof *m);
+    m = (Lumped *)pcs_alloc(mem, 1, sizeof *m);
     if (!m) { snprintf(err, PCS_MSG, "no memory"); return NULL; }
-    SECTION(sizes, "sizes", PCS_TYPE_I32, 2);
-    m->n = sizes[0];
+    SECTION(sizes, "sizes", PCS_TYPE_I32, PAN_SIZES);
+    m->n = sizes[PAN_SIZE_MASSES];
     if (m->n < 1 || m->n > PAN_MAX_DOFS) {
         snprintf(err, PCS_MSG, "data file %.400s: section sizes: %d masses, this FMU takes "
                  "1..%d", d->path, m->n, PAN_MAX_DOFS);
         goto fail;
     }
     n = (size_t)m->n;
-    SECTION(sc, "scalars", PCS_TYPE_F64, 16);
-    m->h = sc[0]; m->alpha = sc[1]; m->beta = sc[2]; m->gamma = sc[3]; m->lo = sc[4];
-    m->hi = sc[5]; m->static_force = sc[6]; m->aero_c1 = sc[7]; m->aero_c2 = sc[8];
-    m->speed_kmh = sc[9]; m->height0 = sc[10]; m->F0 = sc[11]; m->friction = sc[12];
-    m->smoothing = sc[13];
+    SECTION(sc, "scalars", PCS_TYPE_F64, PAN_SCALARS);
+    m->h = sc[PAN_SCALAR_STEP];
+    m->alpha = sc[PAN_SCALAR_ALPHA];
+    m->beta = sc[PAN_SCALAR_BETA];
+    m->gamma = sc[PAN_SCALAR_GAMMA];
+    m->lo = sc[PAN_SCALAR_HEIGHT_MIN];
+    m->hi = sc[PAN_SCALAR_HEIGHT_MAX];
+    m->static_force = sc[PAN_SCALAR_STATIC_FORCE];
+    m->aero_c1 = sc[PAN_SCALAR_AERO_C1];
+    m->aero_c2 = sc[PAN_SCALAR_AERO_C2];
+    m->speed_kmh = sc[PAN_SCALAR_SPEED_KMH];
+    m->height0 = sc[PAN_SCALAR_INITIAL_HEIGHT];
+    m->F0 = sc[PAN_SCALAR_INITIAL_FORCE];
+    m->friction = sc[PAN_SCALAR_FRICTION_FORCE];
+    m->smoothing = sc[PAN_SCALAR_FRICTION_SMOOTHING];
+    if (!(m->h > 0.0) || !(m->hi >= m->lo)) {
+        snprintf(err, PCS_MSG, "data file %.400s: section scalars: internal step %g s (> 0), "
+                 "heights %g .. %g m", d->path, m->h, m->lo, m->hi);
+        goto fail;
+    }
     SECTION(m->M, "M", PCS_TYPE_F64, n * n);
     SECTION(m->C, "C", PCS_TYPE_F64, n * n);
     SECTION(m->K, "K", PCS_TYPE_F64, n * n);
@@ -75,13 +84,8 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
     SECTION(m->a0, "a0", PCS_TYPE_F64, n);
     SECTION(m->f0, "f0", PCS_TYPE_F64, n);
     SECTION(m->S_inv_data, "S_inv", PCS_TYPE_F64, n * n);
-    m->preset = (const char *)pcs_data_section(d, "preset", PCS_TYPE_I32, -1, &n_text, err,
-                                               PCS_MSG);
+    m->preset = pcs_data_text(d, "preset", err, PCS_MSG);
     if (!m->preset) goto fail;
-    if (n_text < 1 || m->preset[4 * n_text - 1] != '\0') {
-        snprintf(err, PCS_MSG, "data file %.400s: section preset is not a string", d->path);
-        goto fail;
-    }
     m->q = m->state + 4;
     m->v = m->q + n;
     m->a = m->v + n;
@@ -89,17 +93,14 @@ PcsModel *pcs_model_new(const PcsData *d, const PcsMemory *mem, char *err)
     m->force_in = m->F0;
     return m;
 fail:
-    mem->release(m);
+    pcs_free(mem, m);
     return NULL;
 }
 
-void pcs_model_free(PcsModel *m, const PcsMemory *mem)
-{
-    if (m) mem->release(m);
-}
+static void lumped_free(void *model, const PcsMemory *mem) { pcs_free(mem, model); }
 
 /* f = C v + K q + B w */
-static void rest(PcsModel *m, const double *q, const double *v, double *f)
+static void rest(Lumped *m, const double *q, const double *v, double *f)
 {
     int n = m->n, i, j;
     for (i = 0; i < n; i++) {
@@ -110,8 +111,9 @@ static void rest(PcsModel *m, const double *q, const double *v, double *f)
     }
 }
 
-int pcs_initialize(PcsModel *m, char *err)
+static int lumped_initialize(void *model, char *err)
 {
+    Lumped *m = (Lumped *)model;
     size_t n = (size_t)m->n;
     (void)err;
     m->state[0] = 0.0;
@@ -132,7 +134,7 @@ int pcs_initialize(PcsModel *m, char *err)
     return PCS_OK;
 }
 
-static void step(PcsModel *m, double F)
+static void step(Lumped *m, double F)
 {
     int n = m->n, i, j;
     double h = m->h, cq = (0.5 - m->beta) * h * h, cv = (1.0 - m->gamma) * h;
@@ -161,12 +163,11 @@ static void step(PcsModel *m, double F)
     rest(m, q, v, f);
 }
 
-double pcs_time(const PcsModel *m) { return m->state[0]; }
-
-int pcs_do_step(PcsModel *m, double t, double H, char *err)
+static int lumped_step(void *model, double t, double H, char *err)
 {
+    Lumped *m = (Lumped *)model;
     int n_sub, i;
-    double ratio, F = m->force_in, F_prev = m->state[2], u = F, z;
+    double F = m->force_in, F_prev = m->state[2], u = F, z;
     double saved[4 + 4 * PAN_MAX_DOFS];
     if (!m->initialised) {
         snprintf(err, PCS_MSG, "doStep before the FMU was initialised");
@@ -176,17 +177,9 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
         snprintf(err, PCS_MSG, "doStep after a refused step: roll back with a saved FMU state");
         return PCS_DISCARD;
     }
-    ratio = H / m->h;
-    n_sub = (int)floor(ratio + 0.5);
-    if (!(H > 0.0) || n_sub < 1 || fabs(ratio - n_sub) > 1e-9 * (ratio > 1.0 ? ratio : 1.0)) {
-        snprintf(err, PCS_MSG, "communication step %.17g s is not a whole number of internal "
-                 "steps of %.17g s (the step this FMU was exported for)", H, m->h);
-        return PCS_ERROR;
-    }
-    if (!(isfinite(F) && F >= 0.0)) {
-        snprintf(err, PCS_MSG, "contact_force = %.17g: must be finite and >= 0", F);
+    if ((n_sub = (int)pcs_substeps(H, m->h, err)) < 0
+        || pcs_within("contact_force", F, 0.0, PCS_MAX_CONTACT_FORCE, " N", err) != 0)
         return PCS_DISCARD;
-    }
     if (m->extrapolate) {
         if (m->state[0] == 0.0) u = m->state[3];
         F = 2.0 * u - m->state[3];
@@ -211,16 +204,25 @@ int pcs_do_step(PcsModel *m, double t, double H, char *err)
     return PCS_OK;
 }
 
-size_t pcs_state_bytes(const PcsModel *m) { return (4 + 4 * (size_t)m->n) * sizeof(double); }
-
-void pcs_state_save(const PcsModel *m, void *buffer)
+static size_t lumped_state_bytes(const void *model)
 {
-    memcpy(buffer, m->state, pcs_state_bytes(m));
+    return (4 + 4 * (size_t)((const Lumped *)model)->n) * sizeof(double);
 }
 
-void pcs_state_restore(PcsModel *m, const void *buffer)
+static void lumped_state_save(const void *model, void *buffer)
 {
-    memcpy(m->state, buffer, pcs_state_bytes(m));
+    memcpy(buffer, ((const Lumped *)model)->state, lumped_state_bytes(model));
+}
+
+static void lumped_state_restore(void *model, const void *buffer)
+{
+    memcpy(((Lumped *)model)->state, buffer, lumped_state_bytes(model));
+}
+
+/* the contact force the state's last step applied */
+static void lumped_outputs(void *model)
+{
+    Lumped *m = (Lumped *)model;
     m->w[2] = m->state[2];
 }
 
@@ -235,8 +237,9 @@ static int fixed_real(const char *name, double exported, double value, char *err
     return PCS_ERROR;
 }
 
-int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err)
+static int lumped_get_real(void *model, unsigned vr, double *value, char *err)
 {
+    Lumped *m = (Lumped *)model;
     switch (vr) {
     case PAN_VR_CONTACT_FORCE: *value = m->force_in; return PCS_OK;
     case PAN_VR_CONTACT_HEIGHT: *value = m->initialised ? m->q[0] : m->q0[0]; return PCS_OK;
@@ -258,8 +261,9 @@ int pcs_get_real(PcsModel *m, unsigned vr, double *value, char *err)
     return PCS_ERROR;
 }
 
-int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *err)
+static int lumped_set_real(void *model, unsigned vr, double value, int initialised, char *err)
 {
+    Lumped *m = (Lumped *)model;
     if (vr == PAN_VR_CONTACT_FORCE) {
         m->force_in = value;
         return PCS_OK;
@@ -288,16 +292,18 @@ int pcs_set_real(PcsModel *m, unsigned vr, double value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_integer(PcsModel *m, unsigned vr, int *value, char *err)
+static int lumped_get_integer(void *model, unsigned vr, int *value, char *err)
 {
+    Lumped *m = (Lumped *)model;
     (void)m;
     if (vr == PAN_VR_START_MODE) { *value = 0; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Integer variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
-int pcs_set_integer(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+static int lumped_set_integer(void *model, unsigned vr, int value, int initialised, char *err)
 {
+    Lumped *m = (Lumped *)model;
     (void)m;
     if (vr == PAN_VR_START_MODE && !initialised && value == 0) return PCS_OK;
     if (vr == PAN_VR_START_MODE) {
@@ -309,16 +315,18 @@ int pcs_set_integer(PcsModel *m, unsigned vr, int value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_boolean(PcsModel *m, unsigned vr, int *value, char *err)
+static int lumped_get_boolean(void *model, unsigned vr, int *value, char *err)
 {
+    Lumped *m = (Lumped *)model;
     if (vr == PAN_VR_ONE_WAY_DAMPER) { *value = 0; return PCS_OK; }
     if (vr == PAN_VR_FORCE_EXTRAPOLATION) { *value = m->extrapolate; return PCS_OK; }
     snprintf(err, PCS_MSG, "no Boolean variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
-int pcs_set_boolean(PcsModel *m, unsigned vr, int value, int initialised, char *err)
+static int lumped_set_boolean(void *model, unsigned vr, int value, int initialised, char *err)
 {
+    Lumped *m = (Lumped *)model;
     if (initialised) {
         snprintf(err, PCS_MSG, "Boolean %u is a parameter: set before initialisation only", vr);
         return PCS_ERROR;
@@ -337,16 +345,25 @@ int pcs_set_boolean(PcsModel *m, unsigned vr, int value, int initialised, char *
     return PCS_ERROR;
 }
 
-int pcs_get_string(PcsModel *m, unsigned vr, const char **value, char *err)
+static int lumped_get_string(void *model, unsigned vr, const char **value, char *err)
 {
+    Lumped *m = (Lumped *)model;
     if (vr == PAN_VR_PRESET) { *value = m->preset; return PCS_OK; }
     snprintf(err, PCS_MSG, "no String variable of value reference %u", vr);
     return PCS_ERROR;
 }
 
-int pcs_set_string(PcsModel *m, unsigned vr, const char *value, int initialised, char *err)
+static int lumped_set_string(void *model, unsigned vr, const char *value, int initialised, char *err)
 {
+    Lumped *m = (Lumped *)model;
     (void)m; (void)value; (void)initialised;
     snprintf(err, PCS_MSG, "String %u cannot be set (the pantograph is fixed at export)", vr);
     return PCS_ERROR;
 }
+
+const PcsModelType pcs_lumped_pantograph = {
+    "lumped pantograph", PCS_KIND_LUMPED_PANTOGRAPH, lumped_new, lumped_free,
+    lumped_initialize, lumped_step, lumped_outputs, lumped_state_bytes, lumped_state_save,
+    lumped_state_restore, lumped_get_real, lumped_set_real, lumped_get_integer,
+    lumped_set_integer, lumped_get_boolean, lumped_set_boolean, lumped_get_string,
+    lumped_set_string};

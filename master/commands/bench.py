@@ -21,7 +21,8 @@ def add_parser(sub):
                    "with a cold and a warm set-up cache, fmu-start: the catenary FMU's "
                    "instantiate-to-first-step time in fmpy, cold and warm, native-loop: the "
                    "native C FMUs of export-native stepped from a C loop beside the Python "
-                   "catenary FMU and the floor solve); skips the cold first run and the span "
+                   "catenary FMU and the floor solve, native-dsa380: the native rigid "
+                   "and flexible DSA-380 FMUs' doStep in that loop beside the Python FMUs'); skips the cold first run and the span "
                    "scaling")
     return p
 

@@ -1,5 +1,5 @@
-"""``pantocosim export-native``: the scenario's catenary and constant-matrix pantographs as
-native C FMUs (no Python inside; docs/tutorials/hil.md)."""
+"""``pantocosim export-native``: the scenario's catenary and pantographs as native C FMUs
+(no Python inside; docs/tutorials/hil.md)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,12 @@ def add_parser(sub):
     p = sub.add_parser("export-native", help="write native C FMUs of a scenario (HIL rigs, "
                        "any FMI host)",
                        description="Write the scenario's catenary (linear or modal model) and "
-                       "its constant-matrix pantographs (lumped chains) as co-simulation FMUs "
+                       "its pantographs (lumped chains with constant matrices, the rigid and "
+                       "the flexible DSA-380) as co-simulation FMUs "
                        "whose binaries hold no Python: the Python models compute the constant "
                        "matrices, droppers, contact-wire geometry and start state once, into "
-                       "resources/model.pcsdata; C steps them with the same closed-form "
-                       "HHT-alpha step. Each FMU carries its C sources and binaries for linux64 "
+                       "resources/model.pcsdata; C steps them with the same HHT-alpha step "
+                       "(closed form, or Newton for the DSA-380). Each FMU carries its C sources and binaries for linux64 "
                        "(gcc) and win64 (mingw-w64, when installed). The internal step is the "
                        "scenario's dt: a communication step is a whole number of it.")
     p.add_argument("scenario", metavar="SCENARIO", help="scenario name or TOML file")
@@ -44,6 +45,7 @@ def run(args) -> int:
 
     sc = load_scenario(args.scenario)
     require_port_contact(sc, "a native FMU export")
+    own_model = sc.catenary_model
     changes = {"catenary_model": args.catenary_model}
     if args.modal_cutoff_hz is not None:
         check_number("--modal-cutoff-hz", args.modal_cutoff_hz, positive=True)
@@ -62,6 +64,10 @@ def run(args) -> int:
         folder.discard()
     for path in written:
         print(f"wrote {out / path.name}")
+    if own_model not in ("linear", "modal"):
+        print(f"catenary: the scenario's {own_model} model has no native form (its matrices "
+              f"change with the wire's shape); wrote the {args.catenary_model} model "
+              "(--catenary-model); the nonlinear one stays a Python FMU")
     for k, why in kept:
         print(f"pantograph {k + 1} ({sc.pantographs[k].model}): {why}; it stays a Python FMU")
     return 0

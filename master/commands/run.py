@@ -27,6 +27,11 @@ def add_parser(sub):
     p.add_argument("--coupling", default="monolithic", choices=["monolithic", *SCHEME_NAMES],
                    help="monolithic reference solve, or co-simulation of the FMUs: explicit "
                    "(= jacobi), gauss-seidel, implicit (iterative with rollback)")
+    p.add_argument("--native-pantographs", action="store_true",
+                   help="co-simulation: run each pantograph that has a native form (lumped "
+                   "chains with constant matrices, the rigid and the flexible DSA-380) as a "
+                   "native C FMU exported for the run (pantocosim export-native), the others "
+                   "and the catenary as Python FMUs")
     p.add_argument("--accelerator", default=DEFAULT_ACCELERATOR, choices=list(ACCELERATORS),
                    help="interface acceleration of the implicit coupling")
     p.add_argument("--catenary-model", default=None, choices=["nonlinear", "linear", "modal"],
@@ -193,6 +198,12 @@ def simulate(args, scenario, coupling: str, out: Path):
     from pantocosim.master.run import prepare, run_monolithic
 
     plan = None
+    if args.native_pantographs and coupling == "monolithic":
+        from pantocosim.core.errors import ParameterError
+
+        raise ParameterError("--native-pantographs", True, "runs the pantographs as native "
+                             "FMUs in a co-simulation: give --coupling jacobi, gauss-seidel or "
+                             "implicit")
     if coupling != "monolithic":
         from pantocosim.master.cosim import fmu_paths
         from pantocosim.master.scenario import require_port_contact
@@ -207,7 +218,11 @@ def simulate(args, scenario, coupling: str, out: Path):
         result = run_monolithic(prep, out, progress=progress, realtime=args.realtime)
     else:
         from pantocosim.master.cosim import run_cosim
+        from pantocosim.master.native.models import native_pantographs
 
-        result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
-                           progress=progress, realtime=args.realtime, plan=plan)
+        with native_pantographs(prep, plan, args.native_pantographs) as (plan, notes):
+            for note in notes:
+                print(note)
+            result = run_cosim(prep, out, scheme=coupling, accelerator=args.accelerator,
+                               progress=progress, realtime=args.realtime, plan=plan)
     return dataclasses.replace(result, coupling=args.coupling)   # the name the user gave

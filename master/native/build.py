@@ -6,8 +6,6 @@ with the system's C compiler, win64 with mingw-w64)."""
 from __future__ import annotations
 
 import hashlib
-import os
-import re
 import shutil
 import subprocess
 import tempfile
@@ -16,34 +14,26 @@ from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-import pantocosim
 from pantocosim.core.errors import ParameterError
 from pantocosim.master.fmu.embedding import compiler
 from pantocosim.master.native.data_file import DATA_FILE, write_data
+# value_references stays importable from here (the models' exporters read it)
+from pantocosim.master.native.headers import SOURCE_DIR, header_numbers, value_references
 
-#: the C sources of the native models (installed with the package as pantocosim/native)
-SOURCE_DIR = Path(pantocosim.__file__).resolve().parent / "native"
+__all__ = ["SOURCE_DIR", "CFLAGS", "NativeModel", "Variable", "build_fmu", "model_table",
+           "value_references"]
+
 #: warnings are errors: the sources compile clean with any C99 compiler
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 MINGW = "x86_64-w64-mingw32-gcc"
 
 
-#: FMI 3.0 value references are unique across types: the offsets of the model's Integer,
-#: Boolean and String references (pcs_model.h)
 def fmi3_bases() -> dict[str, int]:
-    text = (SOURCE_DIR / "pcs_model.h").read_text()
-    bases = {m.group(1): int(m.group(2))
-             for m in re.finditer(r"#define PCS_FMI3_(\w+)_BASE (\d+)u", text)}
-    return {"Integer": bases["INT32"], "Boolean": bases["BOOLEAN"], "String": bases["STRING"],
-            "Real": 0}
-
-
-def value_references(header: str) -> dict[str, int]:
-    """The ``#define PREFIX_VR_NAME number`` lines of a model's header in
-    :data:`SOURCE_DIR`: {NAME: number} (the one place the value references are numbered)."""
-    text = (SOURCE_DIR / header).read_text()
-    return {m.group(1): int(m.group(2))
-            for m in re.finditer(r"#define \w+?_VR_(\w+) (\d+)", text)}
+    """FMI 3.0 value references are unique across types: the offsets of the model's Integer,
+    Boolean and String references (pcs_model.h)."""
+    n = header_numbers("pcs_model.h")
+    return {"Integer": int(n["PCS_FMI3_INT32_BASE"]), "Boolean": int(n["PCS_FMI3_BOOLEAN_BASE"]),
+            "String": int(n["PCS_FMI3_STRING_BASE"]), "Real": 0}
 
 
 @dataclass
@@ -194,14 +184,28 @@ def build_description_fmi3(identifier: str, c_files: list[str]) -> str:
 
 @dataclass(frozen=True)
 class NativeModel:
-    """What goes into a native FMU besides its variables: the model's C files and headers."""
+    """What goes into a native FMU besides its variables: the model's C files and headers
+    and the model tables (``PcsModelType``, pcs_model.h) its binary holds."""
 
     sources: tuple         # its C files, e.g. catenary.c
     headers: tuple         # its headers, the first one numbering the value references
+    tables: tuple          # its model tables, e.g. pcs_linear_catenary
 
 
-COMMON_SOURCES = ("pcs_data.c",)
-COMMON_HEADERS = ("pcs_data.h", "pcs_model.h")
+COMMON_SOURCES = ("pcs_instance.c", "pcs_memory.c", "pcs_data.c", "pcs_limits.c")
+COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h",
+                  "pcs_limits.h", "pcs_float.h", "pcs_layout.h")
+#: the generated list of a binary's models (pcs_model_table)
+TABLE_SOURCE = "model_table.c"
+
+
+def model_table(model: NativeModel) -> str:
+    """model_table.c: the models the FMU's binary holds, found by their data file's kind."""
+    names = ", ".join(f"&{t}" for t in model.tables)
+    return ("/* The models of this FMU (written by pantocosim export-native). */\n"
+            '#include "pcs_model.h"\n\n'
+            + "".join(f"extern const PcsModelType {t};\n" for t in model.tables)
+            + f"\nconst PcsModelType *const pcs_model_table[] = {{{names}, NULL}};\n")
 @dataclass(frozen=True)
 class Front:
     """An FMI version's interface files and binary folders."""
@@ -272,13 +276,14 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
     if fmi not in FRONTS:
         raise ParameterError("--fmi", fmi, f"native FMUs are written for FMI {', '.join(map(str, FRONTS))}")
     files = source_files(model, fmi)
-    c_files = [n for n in files if n.endswith(".c")]
+    c_files = [n for n in files if n.endswith(".c")] + [TABLE_SOURCE]
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         src = root / "sources"
         src.mkdir()
         for n, p in files.items():
             shutil.copyfile(p, src / n)
+        (src / TABLE_SOURCE).write_text(model_table(model))
         (root / "resources").mkdir()
         data = write_data(root / "resources" / DATA_FILE, kind, sections)
         guid = "{" + str(hashlib.sha256(data).hexdigest()[:32]) + "}"

@@ -5,8 +5,9 @@ hosts the FMUs are built for (the byte-order mark tells):
 
 ====================  ==========================================================
 header, 40 bytes      ``PCSDATA\\0``, uint32 version (1), uint32 byte-order mark
-                      0x01020304, uint32 model kind (1 linear catenary, 2 modal
-                      catenary, 3 lumped pantograph), uint32 sections, uint64
+                      0x01020304, uint32 model kind (``PCS_KIND_`` of pcs_data.h:
+                      1 linear catenary, 2 modal catenary, 3 lumped pantograph, 4
+                      rigid DSA-380, 5 flexible DSA-380), uint32 sections, uint64
                       payload bytes, uint64 FNV-1a 64 checksum of the payload
 section, 40 + data    char name[24] (NUL padded), uint32 type (1 float64, 2 int32),
                       uint32 0, uint64 count, the values padded to 8 bytes
@@ -21,11 +22,14 @@ import numpy as np
 from numba import njit
 
 from pantocosim.core.errors import ParameterError
+from pantocosim.master.native.headers import kind as kind_code
 
 MAGIC = b"PCSDATA\0"
 VERSION = 1
 BYTE_ORDER_MARK = 0x01020304
-KINDS = {"linear": 1, "modal": 2, "lumped": 3}
+KINDS = {"linear": kind_code("LINEAR_CATENARY"), "modal": kind_code("MODAL_CATENARY"),
+         "lumped": kind_code("LUMPED_PANTOGRAPH"), "dsa380-rigid": kind_code("DSA380_RIGID"),
+         "dsa380-flexible": kind_code("DSA380_FLEXIBLE")}
 TYPES = {np.dtype(np.float64): 1, np.dtype(np.int32): 2}
 DATA_FILE = "model.pcsdata"
 
