@@ -61,6 +61,29 @@ def test_not_positive_definite_gives_none():
     assert BandedCholesky.factor(ab) is None
 
 
+def test_factor_layout_rows_and_several_right_hand_sides():
+    """The kept factor: LT[j, 0] = 1 / L[j, j], LT[j, k] = L[j + k, j], and its rows
+    R[j, k] = L[j, j - k] for the back substitution, on sizes below, at and above the band
+    width; a block of right-hand sides is solved as each alone."""
+    rng = np.random.default_rng(5)
+    for n, kd in ((1, 0), (2, 1), (7, 3), (60, 4), (300, 18)):
+        A, ab = _spd_band(n, kd, seed=n)
+        solve = BandedCholesky.factor(ab)
+        L = np.linalg.cholesky(A)
+        tol = 1e-13 * np.abs(L).max()
+        for j in range(n):
+            assert abs(1.0 / solve.LT[j, 0] - L[j, j]) <= tol
+            k = min(kd, n - 1 - j)
+            assert np.abs(solve.LT[j, 1:k + 1] - L[j + 1:j + k + 1, j]).max(initial=0.0) <= tol
+            if solve.R is not None:
+                m = min(j, kd)
+                expected = np.array([L[j, j - k] for k in range(1, m + 1)])
+                assert np.abs(solve.R[j, 1:m + 1] - expected).max(initial=0.0) <= tol
+                assert not solve.R[j, m + 1:].any()
+        R2 = rng.standard_normal((n, 3))
+        assert same_solution(solve(R2), sla.solve(A, R2), A, kd)
+
+
 def test_band_solve_every_shape_against_lapack():
     """The two-rows-at-a-time substitution on even and odd sizes, band widths 1, 2, 3, about
     half and all of n, and beyond n (each width compiles a kernel: not every one between)."""

@@ -257,6 +257,29 @@ def test_slack_droppers_and_bitwise_rollback(small):
     assert all(np.array_equal(x, y) for x, y in zip(a, c))
 
 
+def test_residual_damping_leaves_out_the_committed_slack_droppers(small):
+    """f_rest = C v + F_elast - F_weight (3.26) with C the Rayleigh damping less the share
+    beta K0_d of the droppers slack at the last commit, against the damping matrix
+    assembled on the sparse pattern."""
+    m = CatenaryModel(small, x0=[40.0], speed=80.0)
+    n = m.n_dofs
+    rng = np.random.default_rng(7)
+    q = m.q_static + 1e-4 * rng.standard_normal(n)
+    v, a = rng.standard_normal(n), rng.standard_normal(n)
+    S = m.structure
+    f, _, _ = S.internal(S.full(q), False)
+    for slack in (np.zeros(len(m.mesh.dropper_bars), bool),
+                  rng.random(len(m.mesh.dropper_bars)) < 0.4):
+        m.set_internal_state({"slack": slack})
+        ev = m.evaluate(0.0, q, v, a, None, tangent=False)
+        C = m._damping(slack)
+        expected = C @ v + f[S.free] - m.weight
+        assert np.abs(ev.f_rest - expected).max() <= 1e-13 * np.abs(C @ v).max()
+        assert np.abs(ev.f_inertia - m.M @ a).max() <= 1e-13 * np.abs(m.M @ a).max()
+    taut = m._damping(np.zeros_like(slack)) @ v
+    assert slack.any() and np.abs(C @ v - taut).max() > 1e-6 * np.abs(taut).max()
+
+
 def test_modes_cli(small, capsys):
     assert main(["modes", str(small), "--count", "6", "--json"]) == 0
     f = json.loads(capsys.readouterr().out)["frequencies_hz"]

@@ -22,10 +22,7 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: stale references left where another change is rewriting the file: (file, role, target)
 #: -> why; each must still be there (test below), so the entry goes when the file is fixed
-KNOWN_STALE = {
-    ("fmus/core/hht.py", "func", ".stepper.warm_up"): "hht.py is being split (its own change)",
-    ("fmus/core/hht.py", "class", "LinearForm"): "hht.py is being split (its own change)",
-}
+KNOWN_STALE: dict = {}
 ROLE = re.compile(r":(mod|func|class|data|meth|attr|exc|obj):`~?([^`<>]+?)`")
 
 

@@ -191,6 +191,23 @@ def test_step_lower_bound_table(tmp_path):
         assert 0.0 < number(r[3]) <= number(r[2]) < 1e6   # best <= median, in microseconds
 
 
+def test_factor_policy_study(tmp_path):
+    """Every threshold converges the same steps: iterations between 1 and the limit, the
+    tightest threshold factorizing and at least as often as the loosest, and the contact
+    force within the Newton tolerance's reach of the runs' setting."""
+    page = tmp_path / "page.md"
+    page.write_text("<!-- factorizations:start -->\n<!-- factorizations:end -->\n")
+    out = script("factor_policy_study.py", "--scenario", SHORT, "--steps", 40, "--docs", page,
+                 cwd=tmp_path)
+    rows = [rows_of(out, k)[0] for k in ("1", "2 (runs)", "3", "4")]
+    its = [number(r[1]) for r in rows]
+    facts = [number(r[2]) for r in rows]
+    assert all(1.0 <= x < 30.0 for x in its)
+    assert facts[0] > 0.0 and facts[0] >= facts[3] >= 0.0
+    assert rows[1][4] == "0" and all(number(r[4]) < 1e-2 for r in rows if r[4] != "0")
+    assert "| 2 (runs) |" in page.read_text()
+
+
 def test_performance_page_tables_are_the_bench_files(tmp_path):
     """docs/performance.md's tables are what scripts/performance_tables.py writes from
     docs/bench.json and docs/bench-fast-models.json: rewriting them changes nothing, and a

@@ -251,3 +251,34 @@ def test_non_finite_residual_stops_the_step(bad):
     integ.initialize(0.0, [1.0, 0.0, 0.0])
     with pytest.raises(ConvergenceError, match="non-finite"):
         integ.step(1e-3)
+
+
+def test_factor_policy_keeps_reuses_and_drops_a_factorization():
+    """ACROSS_STEPS keeps the factorization for steps of the same size until a step needs
+    more than refresh_after iterations; an iteration past refresh_after + 4 factorizes;
+    NEVER factorizes at every iteration; PER_STEP reuses the first one of a redone step."""
+    from pantocosim.core.factor_reuse import FactorPolicy, Factorization
+
+    f = Factorization(structure_key=None, h=1e-3, matrix=None, solve=None)
+    s = HHTSettings(reuse_factorization=FactorReuse.ACROSS_STEPS, refresh_after=2)
+    p = FactorPolicy(s)
+    assert p.start(1e-3, None) is None
+    p.finish(2, f)
+    assert p.start(1e-3, None) is f and p.start(2e-3, None) is None
+    assert not p.needs_tangent(6, f) and p.needs_tangent(7, f) and p.needs_tangent(0, None)
+    p.finish(3, f)
+    assert p.stale and p.start(1e-3, None) is None
+    # a step redone from the same state takes what its first pass made at iteration 0
+    g = Factorization(structure_key=None, h=1e-3, matrix=None, solve=None)
+    assert p.start(1e-3, "a") is None
+    p.made(0, g)
+    assert p.start(1e-3, "a") is g and p.start(1e-3, "b") is None
+    assert p.start(2e-3, "a") is None
+    p.start(1e-3, "c")
+    p.made(1, f)                                        # not at the first iteration
+    assert p.start(1e-3, "c") is None
+    s.reuse_factorization = FactorReuse.PER_STEP
+    assert p.start(1e-3, "a") is g
+    s.reuse_factorization = FactorReuse.NEVER          # read at each use
+    assert p.start(1e-3, "a") is None
+    assert not p.needs_tangent(0, f) and p.needs_tangent(1, f)

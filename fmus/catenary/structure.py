@@ -34,6 +34,15 @@ def scatter_add(out, idx, vals):
             out[k] += vals[i]
 
 
+@njit(cache=True)
+def _band_storage(data, src, dst, rows, n):
+    """(rows, n) band storage holding data[src[i]] at flat position dst[i], zero elsewhere."""
+    out = np.zeros(rows * n)
+    for i in range(src.shape[0]):
+        out[dst[i]] = data[src[i]]
+    return out.reshape(rows, n)
+
+
 class Element(Protocol):
     """What an element set gives the structure (see ``docs/architecture.md``).
 
@@ -154,9 +163,8 @@ class Structure:
 
     def lower_band(self, data) -> np.ndarray:
         """(bandwidth + 1, n) lower band storage (LAPACK 'L') of pattern data."""
-        ab = np.zeros((self.bandwidth + 1) * self.n_free)
-        ab[self.band_dst] = data[self.band_src]
-        return ab.reshape(self.bandwidth + 1, self.n_free)
+        return _band_storage(data, self.band_src, self.band_dst, self.bandwidth + 1,
+                             self.n_free)
 
     @property
     def mass(self) -> sp.csr_matrix:

@@ -141,15 +141,15 @@ def _sum_columns(store, span, slots, values, out):
             out[i] += c * col[i]
 
 
-def _rows(LT: np.ndarray) -> np.ndarray:
+@njit(cache=True)
+def _factor_rows(LT, R):
     """The factor's rows R[j, k] = L[j, j - k] (zero for j < k) from its columns as rows
     LT[j, k] = L[j + k, j]; the reciprocal diagonal stays in column 0."""
     n, w = LT.shape
-    R = np.zeros_like(LT)
-    R[:, 0] = LT[:, 0]
-    for k in range(1, min(w, n)):
-        R[k:, k] = LT[:n - k, k]
-    return R
+    for j in range(n):
+        R[j, 0] = LT[j, 0]
+        for k in range(1, w):
+            R[j, k] = LT[j - k, k] if j >= k else 0.0
 
 
 @dataclass
@@ -200,27 +200,43 @@ class BandedCholesky:
     #: unit-vector solves kept (each n floats)
     cache_size = 48
 
-    def __init__(self, cb: np.ndarray):
-        self.cb = cb
-        self.n = cb.shape[1]
-        self.LT = np.array(cb.T, order="C")         # factor columns as rows (band_solve)
-        self.LT[:, 0] = 1.0 / self.LT[:, 0]
+    def __init__(self, LT: np.ndarray, cb: np.ndarray | None = None):
+        self.n = LT.shape[0]
+        self._cb = cb
+        #: the factor's columns as rows, LT[j, 0] = 1 / L[j, j], LT[j, k] = L[j + k, j]
+        self.LT = LT
         #: the substitution with the pending sums in registers (:mod:`.band_window`), which
         #: also needs the factor's rows R[j, k] = L[j, j - k]; None: :func:`band_solve`
         self._window = band_window.solver(self.LT.shape[1])
-        self.R = _rows(self.LT) if self._window is not None else None
+        self.R = None
+        if self._window is not None:
+            self.R = np.empty_like(LT)
+            _factor_rows(LT, self.R)
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
-        self._store = np.zeros((self.cache_size, self.n))
+        self._store = np.empty((self.cache_size, self.n))   # a row is zeroed when taken
         self._span = np.zeros((self.cache_size, 2), dtype=np.int64)
         self._solved = 0                  # columns solved so far (a row may have changed)
         self._last_slots = None           # ((dofs, _solved), rows) of the last solve_sparse
 
     @classmethod
     def factor(cls, ab: np.ndarray) -> "BandedCholesky | None":
+        """By LAPACK (dpbtrf) from the lower band storage ``ab`` (overwritten)."""
         cb, info = dpbtrf(ab, lower=1, overwrite_ab=1)
-        return cls(cb) if info == 0 else None
+        if info != 0:
+            return None
+        LT = np.array(cb.T, order="C")
+        LT[:, 0] = 1.0 / LT[:, 0]
+        return cls(LT, cb)
+
+    @property
+    def cb(self) -> np.ndarray:
+        """The factor in LAPACK's lower band storage (for dpbtrs)."""
+        if self._cb is None:
+            self._cb = np.array(self.LT.T, order="C")
+            self._cb[0] = 1.0 / self._cb[0]
+        return self._cb
 
     def __call__(self, rhs: np.ndarray) -> np.ndarray:
         rhs = np.asarray(rhs, dtype=float)

@@ -20,44 +20,17 @@ q_{n+1} with v and a expressed through (3.18); convergence is checked with the e
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from enum import Enum
 from typing import Any
 
 import numpy as np
 from numba import njit
 
 from .errors import ConvergenceError, ParameterError
+from .factor_reuse import FactorPolicy, FactorReuse, Factorization
 from .hht_defaults import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX  # noqa: F401
 from .model import SecondOrderModel
 from .state_label import new_label
 from .stepper_contract import StepReport
-
-
-class FactorReuse(Enum):
-    """When the Newton matrix is factorized (:attr:`HHTSettings.reuse_factorization`)."""
-
-    #: full Newton: at every iteration
-    NEVER = "never"
-    #: at the first iteration of each step, reused within the step (chord method); a step
-    #: redone from the same state (co-simulation rollback) reuses it too
-    PER_STEP = "per-step"
-    #: also reused across steps while the model's structure_key and the step size are
-    #: unchanged (modified Newton)
-    ACROSS_STEPS = "across-steps"
-
-
-@dataclass(frozen=True)
-class Factorization:
-    """A factorized Newton matrix c_a M + c_f (c_v C + K) kept for reuse."""
-
-    #: the model's ``structure_key`` at the evaluation it was made from
-    structure_key: Any
-    #: the step size it was made for [s]
-    h: float
-    #: the Newton matrix (a deserialized state factorizes it again, bit for bit)
-    matrix: Any
-    #: ``model.factorize(matrix)``; None in a picklable state
-    solve: Any
 
 
 @dataclass
@@ -271,6 +244,49 @@ def _vector(x, n: int) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64).reshape(n)
 
 
+class _Convergence:
+    """The tests of a Newton iteration: the residual against the size of the forces in it,
+    the energy norm |dq . R| against the first iteration's (thesis 3.3.2), or a correction
+    at the round-off of q."""
+
+    def __init__(self, rtol: float, etol: float):
+        self.rtol, self.etol = rtol, etol
+        self.e0 = self.e_prev = None
+        self.dq_size = self.q_size = 0.0       # set by the first update
+        self.done = False
+
+    def converged(self, res_norm: float, scale: float) -> bool:
+        done = res_norm <= self.rtol * max(scale, 1e-300)
+        if not done and self.e_prev is not None and self.e0 is not None:
+            done = self.e_prev <= self.etol * self.e0 or self.dq_size <= 1e-15 * self.q_size
+        self.done = done
+        return done
+
+    def update(self, q, x, R):
+        """q - x (the Newton correction dq = -x), recording the energy and the sizes."""
+        q, e, self.dq_size, self.q_size = _newton_update(q, x, R)
+        if self.e0 is None:
+            self.e0 = max(e, 1e-300)
+        self.e_prev = e
+        return q
+
+
+@dataclass
+class _StepEnd:
+    """A converged Newton step: t_{n+1}, q, v, a, the last evaluation, the iterations taken,
+    the residual, the factorizations made and the factorization in use."""
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    ev: Any
+    iterations: int
+    residual: float
+    refactorizations: int
+    factor: Factorization | None
+
+
 @dataclass
 class ClosedFormStep:
     """The closed-form step of a model with a :class:`~.model.LinearForm`: its matrices,
@@ -311,10 +327,8 @@ class HHTIntegrator:
         self.a = np.zeros(n)
         self.a_prev = None      # a_{n-1}, for the linear predictor
         self.f_rest = np.zeros(n)
-        self._stale = False     # refactorize at the next step (reuse across steps)
         self.inputs = None
-        self._factor: Factorization | None = None
-        self._redo_memo = None  # "step" policy: (step start, factorization of its first iterate)
+        self._policy = FactorPolicy(self.settings)
         self._label = new_label()    # of the current state (:mod:`.state_label`)
         #: the steps taken from the last state stepped from: (its label, h, {inputs key: end
         #: state}). A step redone from that state (a co-simulation rollback) with inputs
@@ -359,7 +373,7 @@ class HHTIntegrator:
 
     def prepare(self, h: float) -> None:
         """Nothing to pay ahead: the first Newton step factorizes (a warm-up step pays it,
-        :func:`~.stepper.warm_up`)."""
+        :func:`~.stepper_contract.warm_up`)."""
 
     # ------------------------------------------------------------------ setup
     def initialize(self, t0: float, q0, v0=None, inputs0=None, a0=None) -> None:
@@ -381,8 +395,7 @@ class HHTIntegrator:
         self.f_rest = np.array(ev.f_rest, dtype=float)
         self.a_prev = None
         self.n_steps = 0
-        self._factor = None
-        self._stale = False
+        self._policy.reset()
         self._label, self._last_step = new_label(), None
         self._bind_linear()
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
@@ -392,106 +405,100 @@ class HHTIntegrator:
         """Advance from t to t + h with the coupling inputs valid at t + h."""
         if self._linear is not None:
             return self._step_linear(h, inputs)
-        s = self.settings
-        alpha, beta, gamma = s.alpha, s.beta, s.gamma
-        c_a, c_v, c_f = s.newton_coefficients(h)
-        model = self.model
-        t1 = self.t + h
         inputs = None if inputs is None else np.asarray(inputs, dtype=float)
-
         start = self._label
-        a_guess = self.a
         passes = self._passes_from(start, h)
         seen = passes.get(_inputs_key(inputs)) if passes else None
         if seen is not None:
             return self._repeat(seen, inputs)
+        predicted = self._predict(h)
+        factor = self._policy.start(h, start)
+        end = self._newton(h, inputs, predicted, factor)
+        info = self._commit(end, inputs)
+        self._remember(start, h, passes, end.residual)
+        return info
+
+    def _predict(self, h: float):
+        """(q_p, v_p, first iterate, alpha f_rest_n) of a step of size h, (3.16)-(3.17),
+        with the settings' predictor of a_{n+1}."""
+        s = self.settings
+        a_guess = self.a
         if s.predictor == "linear" and self.a_prev is not None:
             a_guess = 2.0 * self.a - self.a_prev
-        q_p, v_p, q, hist = _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, alpha,
-                                     beta, gamma)
-        n = q.shape[0]
+        return _predict(self.q, self.v, self.a, a_guess, self.f_rest, h, s.alpha, s.beta,
+                        s.gamma)
 
-        reuse = s.reuse_factorization
-        factor = self._factor if reuse is FactorReuse.ACROSS_STEPS and not self._stale else None
-        if factor is not None and factor.h != h:
-            factor = None
-        # "step" policy: a step redone from the same state (co-simulation rollback) meets the
-        # same predictor, hence the same first Newton matrix: reuse its factorization
-        redo_key = None
-        if reuse is FactorReuse.PER_STEP:
-            redo_key = (self.t, h, self.q.tobytes(), self.v.tobytes(), self.a.tobytes(),
-                        None if self.a_prev is None else self.a_prev.tobytes())
-            memo = self._redo_memo
-            if memo is not None and memo[0] == redo_key:
-                factor = memo[1]
+    def _newton(self, h: float, inputs, predicted, factor) -> "_StepEnd":
+        """Newton-Raphson on q_{n+1} from the predicted iterate: R of (3.16) with v, a from
+        (3.18), the Newton matrix factorized as the policy says."""
+        s, model, policy = self.settings, self.model, self._policy
+        c_a, c_v, c_f = s.newton_coefficients(h)
+        q_p, v_p, q, hist = predicted
+        t1 = self.t + h
+        n = q.shape[0]
+        test = _Convergence(s.rtol, s.etol)
         refactorizations = 0
-        e0 = None
-        e_prev = None
-        dq_size = q_size = 0.0       # set by the first Newton update
-        res_norm = np.inf
         for k in range(s.max_iterations + 1):
             a, v = _iterate_kinematics(q, q_p, v_p, c_a, c_v)
-            need_tangent = (factor is None or (k > s.refresh_after + 4)
-                            or (reuse is FactorReuse.NEVER and k > 0))
-            ev = model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
-            if factor is not None and not need_tangent and ev.structure_key != factor.structure_key:
-                need_tangent = True
-                ev = model.evaluate(t1, q, v, a, inputs, tangent=True)
+            ev, need_tangent = self._evaluate(t1, q, v, a, inputs, factor, k)
             R, res_norm, scale = _hht_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
                                                hist, c_f)
-            scale = max(scale, 1e-300)
             if not np.isfinite(res_norm):
                 raise ConvergenceError(
                     f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",
                     time=t1, step=self.n_steps + 1, residual=res_norm)
-            converged = res_norm <= s.rtol * scale
-            if not converged and e_prev is not None and e0 is not None:
-                # energy norm, or a correction already at round-off level of q
-                converged = e_prev <= s.etol * e0 or dq_size <= 1e-15 * q_size
-            if converged:
-                break
-            if k == s.max_iterations:
+            if test.converged(res_norm, scale) or k == s.max_iterations:
                 break
             if need_tangent:
                 S = model.effective_matrix(ev, c_a, c_v, c_f)
                 factor = Factorization(ev.structure_key, h, S, model.factorize(S))
+                policy.made(k, factor)
                 refactorizations += 1
-                if k == 0 and redo_key is not None:
-                    self._redo_memo = (redo_key, factor)
-            q, e, dq_size, q_size = _newton_update(
-                q, _vector(model.newton_solve(factor.solve, ev, R), n), R)
-            if e0 is None:
-                e0 = max(e, 1e-300)
-            e_prev = e
-        if not converged:
+            q = test.update(q, _vector(model.newton_solve(factor.solve, ev, R), n), R)
+        if not test.done:
             raise ConvergenceError(
                 f"HHT Newton-Raphson did not converge at t = {t1:.6g} s (step "
                 f"{self.n_steps + 1}, h = {h:.3g} s): residual {res_norm:.3e} after "
                 f"{s.max_iterations} iterations", time=t1, step=self.n_steps + 1,
                 residual=res_norm)
-        self.t = t1
+        return _StepEnd(t1, q, v, a, ev, k, res_norm, refactorizations, factor)
+
+    def _evaluate(self, t1, q, v, a, inputs, factor, k: int):
+        """The model at iterate k, with the tangent when the policy factorizes: always
+        without a kept factorization, and when the structure key moved away from it."""
+        need_tangent = self._policy.needs_tangent(k, factor)
+        ev = self.model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
+        if not need_tangent and ev.structure_key != factor.structure_key:
+            need_tangent = True
+            ev = self.model.evaluate(t1, q, v, a, inputs, tangent=True)
+        return ev, need_tangent
+
+    def _commit(self, end: "_StepEnd", inputs) -> StepReport:
+        """Take the converged step: the new state, the counters, the kept factorization."""
+        self.t = end.t
         self.a_prev = self.a
-        self.q, self.v, self.a = q, v, a
-        self.f_rest = np.array(ev.f_rest, dtype=float)
+        self.q, self.v, self.a = end.q, end.v, end.a
+        self.f_rest = np.array(end.ev.f_rest, dtype=float)
         self.inputs = None if inputs is None else inputs.copy()
         self.n_steps += 1
-        self.total_iterations += k
-        self.total_factorizations += refactorizations
-        if reuse is FactorReuse.ACROSS_STEPS:
-            self._factor = factor
-            self._stale = k > s.refresh_after
-        model.commit(self.t, self.q, self.v, self.a, self.inputs)
-        info = StepReport(iterations=k, residual=res_norm, refactorizations=refactorizations)
+        self.total_iterations += end.iterations
+        self.total_factorizations += end.refactorizations
+        self._policy.finish(end.iterations, end.factor)
+        self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
         self._label = new_label()
-        end = {"t": t1, "q": q, "v": v, "a": a, "a_prev": self.a_prev, "f_rest": self.f_rest,
-               "factor": self._factor, "stale": self._stale, "residual": res_norm,
-               "label": self._label}
+        return StepReport(iterations=end.iterations, residual=end.residual,
+                          refactorizations=end.refactorizations)
+
+    def _remember(self, start, h: float, passes: dict | None, residual: float) -> None:
+        """Keep the step's end state under its inputs for a redo from ``start``."""
+        end = {"t": self.t, "q": self.q, "v": self.v, "a": self.a, "a_prev": self.a_prev,
+               "f_rest": self.f_rest, "factor": self._policy.factor,
+               "stale": self._policy.stale, "residual": residual, "label": self._label}
         passes = passes or {}
         if len(passes) >= KEPT_PASSES:
             passes.pop(next(iter(passes)))
         passes[_inputs_key(self.inputs)] = end
         self._last_step = (start, h, passes)
-        return info
 
     def _passes_from(self, start, h: float) -> dict | None:
         """The steps of size h taken from the state labelled ``start`` (by their inputs)."""
@@ -504,13 +511,14 @@ class HHTIntegrator:
         self.q, self.v, self.a, self.a_prev, self.f_rest = (
             end[k].copy() for k in ("q", "v", "a", "a_prev", "f_rest"))
         self.inputs = None if inputs is None else inputs.copy()
-        self._factor, self._stale, self._label = end["factor"], end["stale"], end["label"]
+        self._policy.factor, self._policy.stale = end["factor"], end["stale"]
+        self._label = end["label"]
         self.n_steps += 1
         self.model.commit(self.t, self.q, self.v, self.a, self.inputs)
         return StepReport(iterations=0, residual=end["residual"])
 
     def _step_linear(self, h: float, inputs) -> StepReport:
-        """The closed-form step of a :class:`LinearForm` model: writes q, v, a, a_prev,
+        """The closed-form step of a :class:`~.model.LinearForm` model: writes q, v, a, a_prev,
         f_rest and inputs in place (no allocation once the arrays exist)."""
         lin = self._linear
         C, K, B, w = lin.C, lin.K, lin.B, lin.w
@@ -567,12 +575,12 @@ class HHTIntegrator:
             "t": self.t, "n_steps": self.n_steps,
             "q": self.q.copy(), "v": self.v.copy(), "a": self.a.copy(),
             "a_prev": None if self.a_prev is None else self.a_prev.copy(),
-            "stale": self._stale,
+            "stale": self._policy.stale,
             "f_rest": self.f_rest.copy(),
             "inputs": None if self.inputs is None else self.inputs.copy(),
             # the factorization is immutable once made: keep a reference (in-memory) and the
             # matrix it came from (so a deserialized state refactorizes bitwise identically)
-            "factor": self._factor,
+            "factor": self._policy.factor,
             "model": self.model.get_internal_state(),
             "label": self._label,
         }
@@ -585,13 +593,13 @@ class HHTIntegrator:
         self.a = np.array(state["a"], dtype=float)
         a_prev = state.get("a_prev")
         self.a_prev = None if a_prev is None else np.array(a_prev, dtype=float)
-        self._stale = bool(state.get("stale", False))
+        self._policy.stale = bool(state.get("stale", False))
         self.f_rest = np.array(state["f_rest"], dtype=float)
         self.inputs = None if state["inputs"] is None else np.array(state["inputs"], float)
         factor = state.get("factor")
         if factor is not None and factor.solve is None:
             factor = replace(factor, solve=self.model.factorize(factor.matrix))
-        self._factor = factor
+        self._policy.factor = factor
         self._label = state.get("label") or new_label()
         self.model.set_internal_state(state.get("model"))
 
