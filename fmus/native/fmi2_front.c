@@ -113,7 +113,8 @@ fmi2Status fmi2Reset(fmi2Component comp) { RETURN(pcs_reset(C, "fmi2Reset")); }
     {                                                                                     \
         size_t i;                                                                         \
         PcsValue v;                                                                       \
-        if (pcs_values(C, #NAME, 0, n, vr, value) != PCS_OK) return fmi2Error;            \
+        if (pcs_values(C, #NAME, PCS_READ_ANY, n, vr, value) != PCS_OK)                   \
+            return fmi2Error;                                                             \
         for (i = 0; i < n; i++) {                                                         \
             if (pcs_get(C, #NAME, PCS, vr[i], &v) != PCS_OK) return fmi2Error;            \
             value[i] = FROM;                                                              \
@@ -132,7 +133,8 @@ GET(fmi2GetString, PCS_STRING, fmi2String, v.string)
     {                                                                                     \
         size_t i;                                                                         \
         PcsValue v;                                                                       \
-        if (pcs_values(C, #NAME, 1, n, vr, value) != PCS_OK) return fmi2Error;            \
+        if (pcs_values(C, #NAME, PCS_WRITE, n, vr, value) != PCS_OK)                      \
+            return fmi2Error;                                                             \
         for (i = 0; i < n; i++) {                                                         \
             v.FIELD = TO;                                                                 \
             if (pcs_set(C, #NAME, PCS, vr[i], &v) != PCS_OK) return fmi2Error;            \

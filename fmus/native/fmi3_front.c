@@ -136,7 +136,8 @@ static int model_vr(fmi3Instance instance, const char *call, fmi3ValueReference 
 static int arrays(fmi3Instance instance, const char *call, int set, size_t nvr,
                   const void *vr, const void *values, size_t n_values)
 {
-    if (pcs_values(C, call, set, nvr, vr, values) != PCS_OK) return -1;
+    if (pcs_values(C, call, set ? PCS_WRITE : PCS_READ_INITIALISED, nvr, vr, values) != PCS_OK)
+        return -1;
     if (n_values != nvr) {
         pcs_refuse(C, call, "one value per value reference (no arrays)");
         return -1;

@@ -204,11 +204,13 @@ int pcs_step(PcsInstance *c, const char *call, double t, double h)
 
 /* ------------------------------------------------------------------ variables */
 
-int pcs_values(PcsInstance *c, const char *call, int set, size_t n, const void *vr,
+int pcs_values(PcsInstance *c, const char *call, PcsAccess access, size_t n, const void *vr,
                const void *values)
 {
-    unsigned mask = set ? BIT(PCS_INSTANTIATED) | BIT(PCS_INITIALISATION) | BIT(PCS_STEPPING)
-                        : ANY;
+    unsigned mask = access == PCS_WRITE
+                        ? BIT(PCS_INSTANTIATED) | BIT(PCS_INITIALISATION) | BIT(PCS_STEPPING)
+                    : access == PCS_READ_INITIALISED ? ANY & ~BIT(PCS_INSTANTIATED)
+                                                     : ANY;
     if (ready(c, call, mask) != PCS_OK) return PCS_ERROR;
     if (n > 0 && (!vr || !values)) return pcs_refuse(c, call, "NULL arrays");
     return PCS_OK;

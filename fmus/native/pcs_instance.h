@@ -62,8 +62,13 @@ int pcs_report(PcsInstance *c, int status, const char *text);
    not the instance) */
 int pcs_refuse(PcsInstance *c, const char *call, const char *text);
 
-/* before n values are read (set = 0) or written: the phase, the model and the arrays */
-int pcs_values(PcsInstance *c, const char *call, int set, size_t n, const void *vr,
+/* how values are accessed: written (up to step mode), read in any phase (FMI 2.0, whose
+   hosts may read start values when instantiated) or read from initialisation mode on (FMI
+   3.0, whose standard makes a read when instantiated an Error) */
+typedef enum { PCS_READ_ANY, PCS_READ_INITIALISED, PCS_WRITE } PcsAccess;
+
+/* before n values are accessed: the phase, the model and the arrays */
+int pcs_values(PcsInstance *c, const char *call, PcsAccess access, size_t n, const void *vr,
                const void *values);
 /* one value; a value reference the model does not have, or a value it refuses, is an Error
    that keeps the phase */

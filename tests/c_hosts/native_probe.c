@@ -376,48 +376,503 @@ static int step3(fmi3Instance c, double t, double h)
     return fmi3DoStep(c, t, h, fmi3True, &ev, &term, &early, &last);
 }
 
-static void fmi3_sequences(const char *dir, const char *percent_dir)
+/* the phases an instance is brought to before one call (fmi3 standard, co-simulation without
+   event mode): instantiated, initialisation mode, step mode (one step taken), terminated, and
+   an instance whose Reset failed (its data file gone) */
+enum { I3_INSTANTIATED, I3_INIT, I3_STEP, I3_TERMINATED, I3_FAILED_RESET, I3_PHASES };
+static const char *const PHASE3[] = {"instantiated", "initialisation mode", "step mode",
+                                     "terminated", "after a failed Reset"};
+
+/* the data file of dir moved away (back = 0) or back (back = 1) */
+static void move_data(const char *dir, int back)
 {
-    fmi3Instance c;
-    fmi3ValueReference F = CAT_FORCE, t0 = 0, mode = FMI3_INT32 + CAT_MODE, z = CAT_HEIGHT;
-    fmi3Float64 x = 0.0, f = 150.0, nan = NAN;
-    fmi3Int32 i32 = 0;
+    char path[1100], moved[1120];
+    snprintf(path, sizeof path, "%s/resources/model.pcsdata", dir);
+    snprintf(moved, sizeof moved, "%s.moved", path);
+    if (back) rename(moved, path);
+    else rename(path, moved);
+}
+
+static fmi3Instance in_phase3(const char *dir, int phase)
+{
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    if (!c) return NULL;
+    if (phase == I3_INIT)
+        fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    if (phase == I3_STEP || phase == I3_TERMINATED) {
+        start3(c);
+        step3(c, 0.0, DT);
+    }
+    if (phase == I3_TERMINATED) fmi3Terminate(c);
+    if (phase == I3_FAILED_RESET) {
+        move_data(dir, 0);
+        fmi3Reset(c);
+        move_data(dir, 1);
+    }
+    return c;
+}
+
+enum { C3_ENTER, C3_EXIT, C3_STEP, C3_TERMINATE, C3_GET, C3_GET_TIME, C3_GET_INT, C3_GET_BOOL,
+       C3_GET_STRING, C3_SET, C3_SET_INT, C3_GETSTATE, C3_SETSTATE, C3_SIZE, C3_SERIALIZE,
+       C3_DESERIALIZE, C3_FREESTATE, C3_DEBUG, C3_UNSUPPORTED, C3_RESET, C3_CALLS };
+static const char *const CALL3[] = {
+    "EnterInitializationMode", "ExitInitializationMode", "DoStep", "Terminate", "GetFloat64",
+    "GetFloat64 of the time", "GetInt32", "GetBoolean", "GetString", "SetFloat64", "SetInt32",
+    "GetFMUState", "SetFMUState of a step-mode state", "SerializedFMUStateSize",
+    "SerializeFMUState", "DeserializeFMUState", "FreeFMUState", "SetDebugLogging",
+    "EnterEventMode (not supported)", "Reset"};
+
+/* the standard's status of each call in each phase (FMI 3.0, the state machine of
+   co-simulation; a call not allowed in the current state "must return fmi3Error"): Get in
+   initialisation mode, step mode and terminated; Set of inputs and tunable parameters up to
+   step mode, of a fixed one (contact_mode) before step mode; FMU states in every phase but
+   after an Error that left no model; Reset in every phase. One refusal is the FMU's own: a
+   step-mode state is not set before the model is initialised (Error). */
+static int want3(int call, int phase)
+{
+    const int inst = phase == I3_INSTANTIATED, init = phase == I3_INIT,
+              step = phase == I3_STEP, term = phase == I3_TERMINATED,
+              failed = phase == I3_FAILED_RESET;
+    switch (call) {
+    case C3_ENTER: return inst ? fmi3OK : fmi3Error;
+    case C3_EXIT: return init ? fmi3OK : fmi3Error;
+    case C3_STEP: case C3_TERMINATE: return step ? fmi3OK : fmi3Error;
+    case C3_GET: case C3_GET_TIME: case C3_GET_INT: case C3_GET_BOOL: case C3_GET_STRING:
+        return (init || step || term) ? fmi3OK : fmi3Error;
+    case C3_SET: return (inst || init || step) ? fmi3OK : fmi3Error;
+    case C3_SET_INT: return (inst || init) ? fmi3OK : fmi3Error;
+    case C3_GETSTATE: case C3_SIZE: case C3_SERIALIZE: case C3_DESERIALIZE:
+        return failed ? fmi3Error : fmi3OK;
+    case C3_SETSTATE: return (step || term) ? fmi3OK : fmi3Error;
+    case C3_FREESTATE: case C3_DEBUG: case C3_RESET: return fmi3OK;
+    default: return fmi3Error;
+    }
+}
+
+/* a serialised step-mode state of the FMU in dir (for the calls that take one) */
+static fmi3Byte *saved_blob;
+static size_t saved_size;
+
+static int call3(fmi3Instance c, int call, fmi3FMUState own)
+{
+    fmi3ValueReference z = CAT_HEIGHT, t = 0, F = CAT_FORCE, mode = FMI3_INT32 + CAT_MODE,
+                       np = FMI3_INT32 + 1, extrapolate = 20000u + 1, definition = 30000u + 1;
+    fmi3Float64 x = 0.0, f = 150.0;
+    fmi3Int32 i = 0, zero = 0;
+    fmi3Boolean b = fmi3False;
+    fmi3String str = NULL;
     fmi3FMUState st = NULL;
+    size_t size = 0;
+    fmi3Byte buffer[64];
+    int s;
+    switch (call) {
+    case C3_ENTER: return fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    case C3_EXIT: return fmi3ExitInitializationMode(c);
+    case C3_STEP: return step3(c, DT, DT);
+    case C3_TERMINATE: return fmi3Terminate(c);
+    case C3_GET: return fmi3GetFloat64(c, &z, 1, &x, 1);
+    case C3_GET_TIME: return fmi3GetFloat64(c, &t, 1, &x, 1);
+    case C3_GET_INT: return fmi3GetInt32(c, &np, 1, &i, 1);
+    case C3_GET_BOOL: return fmi3GetBoolean(c, &extrapolate, 1, &b, 1);
+    case C3_GET_STRING: return fmi3GetString(c, &definition, 1, &str, 1);
+    case C3_SET: return fmi3SetFloat64(c, &F, 1, &f, 1);
+    case C3_SET_INT: return fmi3SetInt32(c, &mode, 1, &zero, 1);
+    case C3_GETSTATE:
+        s = fmi3GetFMUState(c, &st);
+        if (st) fmi3FreeFMUState(c, &st);
+        return s;
+    case C3_SETSTATE: return fmi3SetFMUState(c, own);
+    case C3_SIZE: return fmi3SerializedFMUStateSize(c, own, &size);
+    case C3_SERIALIZE:
+        if (fmi3SerializedFMUStateSize(c, own, &size) != fmi3OK) return fmi3SerializeFMUState(
+            c, own, buffer, sizeof buffer);
+        {
+            fmi3Byte *out = (fmi3Byte *)calloc(size, 1);
+            s = fmi3SerializeFMUState(c, own, out, size);
+            free(out);
+        }
+        return s;
+    case C3_DESERIALIZE:
+        s = fmi3DeserializeFMUState(c, saved_blob, saved_size, &st);
+        if (st) fmi3FreeFMUState(c, &st);
+        return s;
+    case C3_FREESTATE:
+        st = NULL;
+        return fmi3FreeFMUState(c, &st);
+    case C3_DEBUG: return fmi3SetDebugLogging(c, fmi3True, 0, NULL);
+    case C3_UNSUPPORTED: return fmi3EnterEventMode(c);
+    case C3_RESET: return fmi3Reset(c);
+    }
+    return -1;
+}
+
+/* every call in every phase, each on a fresh instance; then the instance goes on: after an
+   Error that keeps the model a Reset brings it back, and it initialises and steps again */
+static void phases3(const char *dir)
+{
+    int phase, call;
+    char what[200];
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3FMUState st = NULL;
+    if (!c) return;
+    start3(c);
+    step3(c, 0.0, DT);
+    fmi3GetFMUState(c, &st);
+    fmi3SerializedFMUStateSize(c, st, &saved_size);
+    saved_blob = (fmi3Byte *)calloc(saved_size, 1);
+    fmi3SerializeFMUState(c, st, saved_blob, saved_size);
+    fmi3FreeFMUState(c, &st);
+    fmi3FreeInstance(c);
+    for (phase = 0; phase < I3_PHASES; phase++)
+        for (call = 0; call < C3_CALLS; call++) {
+            fmi3FMUState own = NULL;
+            int s;
+            c = in_phase3(dir, phase);
+            if (!c) {
+                check_true(0, "fmi3 an instance in every phase");
+                continue;
+            }
+            /* a state of this instance in step mode, taken by deserialising (possible in
+               every phase with a model) */
+            if (phase != I3_FAILED_RESET) fmi3DeserializeFMUState(c, saved_blob, saved_size, &own);
+            s = call3(c, call, own);
+            snprintf(what, sizeof what, "fmi3 %s %s", CALL3[call], PHASE3[phase]);
+            check(s, want3(call, phase), what);
+            snprintf(what, sizeof what, "fmi3 after %s %s: Reset, initialisation and a step",
+                     CALL3[call], PHASE3[phase]);
+            if (own) fmi3FreeFMUState(c, &own);
+            s = fmi3Reset(c);
+            if (s == fmi3OK) s = start3(c);
+            if (s == fmi3OK) s = step3(c, 0.0, DT);
+            check(s, fmi3OK, what);
+            fmi3FreeInstance(c);
+        }
+    free(saved_blob);
+    saved_blob = NULL;
+}
+
+static void null_instance3(const char *dir)
+{
+    fmi3ValueReference F = CAT_FORCE;
+    fmi3Float64 x = 0.0;
+    fmi3Int32 i = 0;
+    fmi3Boolean b = fmi3False;
+    fmi3String str = NULL;
+    fmi3FMUState st = NULL;
+    size_t size = 0;
+    fmi3Byte blob[8] = {0};
+    int call;
+    char what[120];
     check(step3(NULL, 0.0, DT), fmi3Error, "fmi3 NULL instance: DoStep");
     check(fmi3GetFloat64(NULL, &F, 1, &x, 1), fmi3Error, "fmi3 NULL instance: GetFloat64");
+    check(fmi3SetFloat64(NULL, &F, 1, &x, 1), fmi3Error, "fmi3 NULL instance: SetFloat64");
+    check(fmi3GetInt32(NULL, &F, 1, &i, 1), fmi3Error, "fmi3 NULL instance: GetInt32");
+    check(fmi3SetInt32(NULL, &F, 1, &i, 1), fmi3Error, "fmi3 NULL instance: SetInt32");
+    check(fmi3GetBoolean(NULL, &F, 1, &b, 1), fmi3Error, "fmi3 NULL instance: GetBoolean");
+    check(fmi3SetBoolean(NULL, &F, 1, &b, 1), fmi3Error, "fmi3 NULL instance: SetBoolean");
+    check(fmi3GetString(NULL, &F, 1, &str, 1), fmi3Error, "fmi3 NULL instance: GetString");
+    check(fmi3SetString(NULL, &F, 1, &str, 1), fmi3Error, "fmi3 NULL instance: SetString");
+    check(fmi3EnterInitializationMode(NULL, fmi3False, 0.0, 0.0, fmi3False, 0.0), fmi3Error,
+          "fmi3 NULL instance: EnterInitializationMode");
+    check(fmi3ExitInitializationMode(NULL), fmi3Error, "fmi3 NULL instance: "
+          "ExitInitializationMode");
+    check(fmi3Terminate(NULL), fmi3Error, "fmi3 NULL instance: Terminate");
+    check(fmi3Reset(NULL), fmi3Error, "fmi3 NULL instance: Reset");
+    check(fmi3GetFMUState(NULL, &st), fmi3Error, "fmi3 NULL instance: GetFMUState");
     check(fmi3SetFMUState(NULL, NULL), fmi3Error, "fmi3 NULL instance: SetFMUState");
+    check(fmi3FreeFMUState(NULL, &st), fmi3Error, "fmi3 NULL instance: FreeFMUState");
+    check(fmi3SerializedFMUStateSize(NULL, st, &size), fmi3Error,
+          "fmi3 NULL instance: SerializedFMUStateSize");
+    check(fmi3SerializeFMUState(NULL, st, blob, sizeof blob), fmi3Error,
+          "fmi3 NULL instance: SerializeFMUState");
+    check(fmi3DeserializeFMUState(NULL, blob, sizeof blob, &st), fmi3Error,
+          "fmi3 NULL instance: DeserializeFMUState");
+    check(fmi3SetDebugLogging(NULL, fmi3True, 0, NULL), fmi3Error,
+          "fmi3 NULL instance: SetDebugLogging");
+    for (call = C3_UNSUPPORTED; call == C3_UNSUPPORTED; call++) {
+        snprintf(what, sizeof what, "fmi3 NULL instance: %s", CALL3[call]);
+        check(call3(NULL, call, NULL), fmi3Error, what);
+    }
     fmi3FreeInstance(NULL);
     check_true(instantiate3(dir, fmi3True) == NULL, "fmi3 event mode refused: NULL");
-    c = instantiate3(percent_dir, fmi3False);
-    check_true(c != NULL, "fmi3 a resource path holding %41 is taken as it is");
-    fmi3FreeInstance(c);
-    c = instantiate3(dir, fmi3False);
+    check_true(fmi3InstantiateCoSimulation("probe", "", NULL, fmi3False, fmi3False, fmi3False,
+                                           fmi3False, NULL, 0, NULL, logger3, NULL) == NULL,
+               "fmi3 Instantiate without a resource path: NULL");
+    check_true(instantiate3("/nowhere", fmi3False) == NULL, "fmi3 Instantiate of a missing "
+               "folder: NULL");
+    check_true(fmi3InstantiateModelExchange("probe", "", dir, fmi3False, fmi3False, NULL,
+                                            logger3) == NULL,
+               "fmi3 InstantiateModelExchange of a co-simulation FMU: NULL");
+}
+
+/* value references, array sizes, NULL arrays, values and steps the FMU cannot take */
+static void arguments3(const char *dir)
+{
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3ValueReference F = CAT_FORCE, z = CAT_HEIGHT, t0 = 0, bad[] = {99999, 9999, 10999,
+                       20999, 30999, 0xFFFFFFFFu}, two[2] = {CAT_HEIGHT, 99999},
+                       mode = FMI3_INT32 + CAT_MODE;
+    fmi3Float64 x = 0.0, xs[2] = {0.0, 0.0}, f = 150.0, z1 = 0.0, z2 = 1.0,
+                forces[] = {NAN, INFINITY, -INFINITY, -1.0, 1e300},
+                h[] = {NAN, -DT, 0.0, 1.5 * DT, 1e9, INFINITY, -INFINITY},
+                times[] = {NAN, INFINITY, 0.5, -DT};
+    fmi3Int32 i32 = 0, modes[] = {-1, 2, 0x7FFFFFFF};
+    fmi3FMUState st = NULL;
+    size_t k;
+    char what[160];
     if (!c) return;
-    check(step3(c, 0.0, DT), fmi3Error, "fmi3 DoStep when instantiated");
-    check(fmi3Terminate(c), fmi3Error, "fmi3 Terminate when instantiated");
+    check(fmi3GetFloat64(c, &z, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 when instantiated");
+    check(fmi3SetFloat64(c, &bad[0], 1, &f, 1), fmi3Error, "fmi3 SetFloat64 of value reference "
+          "99999 when instantiated");
+    check(fmi3SetFloat64(c, NULL, 0, NULL, 0), fmi3OK, "fmi3 SetFloat64 of nvr = 0, NULL arrays "
+          "when instantiated");
+    check(fmi3GetFMUState(c, NULL), fmi3Error, "fmi3 GetFMUState into a NULL pointer");
+    for (k = 0; k < sizeof modes / sizeof modes[0]; k++) {
+        snprintf(what, sizeof what, "fmi3 SetInt32 contact_mode = %d", modes[k]);
+        check(fmi3SetInt32(c, &mode, 1, &modes[k], 1), fmi3Error, what);
+    }
+    check(fmi3EnterInitializationMode(c, fmi3False, 0.0, NAN, fmi3False, 0.0), fmi3Error,
+          "fmi3 EnterInitializationMode at a NaN start time");
+    check(fmi3EnterInitializationMode(c, fmi3False, 0.0, INFINITY, fmi3False, 0.0), fmi3Error,
+          "fmi3 EnterInitializationMode at an infinite start time");
+    check(start3(c), fmi3OK, "fmi3 initialisation after refused calls");
+    check(fmi3SetInt32(c, &mode, 1, &i32, 1), fmi3Error, "fmi3 SetInt32 of a structural "
+          "parameter in step mode");
+    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3OK, "fmi3 SetFloat64 contact force");
+    check(step3(c, 0.0, DT), fmi3OK, "fmi3 DoStep");
     check(fmi3GetFloat64(c, &F, 1, &x, 2), fmi3Error, "fmi3 GetFloat64 of nValues != nvr");
     check(fmi3GetInt32(c, &F, 1, &i32, 1), fmi3Error, "fmi3 GetInt32 of a Float64 reference");
-    check(fmi3GetInt32(c, &mode, 1, &i32, 1), fmi3OK, "fmi3 GetInt32 contact_mode");
-    check(start3(c), fmi3OK, "fmi3 initialisation");
-    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3OK, "fmi3 SetFloat64");
-    check(step3(c, 0.0, DT), fmi3OK, "fmi3 DoStep");
+    check(fmi3GetFloat64(c, &mode, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 of an Int32 reference");
+    for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        snprintf(what, sizeof what, "fmi3 GetFloat64 of value reference %u", bad[k]);
+        check(fmi3GetFloat64(c, &bad[k], 1, &x, 1), fmi3Error, what);
+        snprintf(what, sizeof what, "fmi3 SetFloat64 of value reference %u", bad[k]);
+        check(fmi3SetFloat64(c, &bad[k], 1, &f, 1), fmi3Error, what);
+        snprintf(what, sizeof what, "fmi3 GetInt32 of value reference %u", bad[k]);
+        check(fmi3GetInt32(c, &bad[k], 1, &i32, 1), fmi3Error, what);
+    }
+    check(fmi3GetFloat64(c, two, 2, xs, 2), fmi3Error, "fmi3 GetFloat64 of a known and an "
+          "unknown value reference");
+    check(fmi3SetFloat64(c, &t0, 1, &f, 1), fmi3Error, "fmi3 SetFloat64 of the time");
+    check(fmi3GetFloat64(c, NULL, 0, NULL, 0), fmi3OK, "fmi3 GetFloat64 of nvr = 0, NULL arrays");
+    check(fmi3SetFloat64(c, NULL, 0, NULL, 0), fmi3OK, "fmi3 SetFloat64 of nvr = 0, NULL arrays");
+    check(fmi3GetInt32(c, NULL, 0, NULL, 0), fmi3OK, "fmi3 GetInt32 of nvr = 0, NULL arrays");
+    check(fmi3GetFloat64(c, &z, 1, NULL, 1), fmi3Error, "fmi3 GetFloat64 into a NULL array");
+    check(fmi3GetFloat64(c, NULL, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 of a NULL reference "
+          "array");
+    check(fmi3SetFloat64(c, &F, 1, NULL, 1), fmi3Error, "fmi3 SetFloat64 of a NULL array");
+    check(fmi3SetInt32(c, &mode, 1, NULL, 1), fmi3Error, "fmi3 SetInt32 of a NULL array");
+    check(fmi3SerializedFMUStateSize(c, NULL, NULL), fmi3Error, "fmi3 SerializedFMUStateSize "
+          "of a NULL state");
     check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3OK, "fmi3 GetFloat64 time");
     check_true(x == DT, "fmi3 time after one step");
-    check(step3(c, DT, 1.5 * DT), fmi3Discard, "fmi3 DoStep of 1.5 internal steps");
-    fmi3SetFloat64(c, &F, 1, &nan, 1);
-    check(step3(c, DT, DT), fmi3Discard, "fmi3 DoStep under a NaN force");
+    for (k = 0; k < sizeof times / sizeof times[0]; k++) {
+        snprintf(what, sizeof what, "fmi3 DoStep at currentCommunicationPoint = %g", times[k]);
+        check(step3(c, times[k], DT), fmi3Discard, what);
+    }
+    for (k = 0; k < sizeof h / sizeof h[0]; k++) {
+        snprintf(what, sizeof what, "fmi3 DoStep of h = %g", h[k]);
+        check(step3(c, DT, h[k]), fmi3Discard, what);
+    }
+    for (k = 0; k < sizeof forces / sizeof forces[0]; k++) {
+        snprintf(what, sizeof what, "fmi3 DoStep under a contact force of %g N", forces[k]);
+        fmi3SetFloat64(c, &F, 1, &forces[k], 1);
+        check(step3(c, DT, DT), fmi3Discard, what);
+    }
     fmi3SetFloat64(c, &F, 1, &f, 1);
+    check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3OK, "fmi3 GetFloat64 time after the Discards");
+    check_true(x == DT, "fmi3 a Discarded step keeps the time");
     check(fmi3GetFMUState(c, &st), fmi3OK, "fmi3 GetFMUState");
     check(step3(c, DT, DT), fmi3OK, "fmi3 DoStep after the refused ones");
-    check(fmi3GetFloat64(c, &z, 1, &x, 1), fmi3OK, "fmi3 GetFloat64 wire height");
+    check(fmi3GetFloat64(c, &z, 1, &z1, 1), fmi3OK, "fmi3 GetFloat64 wire height");
+    check(fmi3GetFMUState(c, &st), fmi3OK, "fmi3 GetFMUState into a state it took");
     check(fmi3SetFMUState(c, st), fmi3OK, "fmi3 SetFMUState");
+    check(step3(c, 2 * DT, DT), fmi3OK, "fmi3 DoStep after SetFMUState");
+    check(step3(c, 3 * DT, DT), fmi3OK, "fmi3 DoStep again");
+    check(fmi3SetFMUState(c, st), fmi3OK, "fmi3 SetFMUState back two steps");
+    check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3OK, "fmi3 GetFloat64 time after SetFMUState");
+    check_true(x == 2 * DT, "fmi3 SetFMUState sets the time");
     check(fmi3Terminate(c), fmi3OK, "fmi3 Terminate");
     check(step3(c, 2 * DT, DT), fmi3Error, "fmi3 DoStep after Terminate");
+    check(fmi3Terminate(c), fmi3Error, "fmi3 Terminate twice");
+    check(fmi3GetFloat64(c, &z, 1, &z2, 1), fmi3OK, "fmi3 GetFloat64 when terminated");
+    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3Error, "fmi3 SetFloat64 when terminated");
     check(fmi3Reset(c), fmi3OK, "fmi3 Reset");
     check(fmi3SetFMUState(c, st), fmi3Error, "fmi3 SetFMUState before the model is "
           "initialised again");
+    check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 time after Reset "
+          "(instantiated)");
+    check(start3(c), fmi3OK, "fmi3 initialisation after Reset");
+    check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3OK, "fmi3 GetFloat64 time after Reset");
+    check_true(x == 0.0, "fmi3 Reset sets the time back to 0");
+    fmi3SetFloat64(c, &F, 1, &f, 1);
+    check(step3(c, 0.0, DT), fmi3OK, "fmi3 DoStep after Reset");
+    check(step3(c, DT, DT), fmi3OK, "fmi3 second DoStep after Reset");
+    fmi3GetFloat64(c, &z, 1, &z2, 1);
+    check_true(z1 == z2, "fmi3 Reset and reuse repeats the run bit for bit");
     check(fmi3FreeFMUState(c, &st), fmi3OK, "fmi3 FreeFMUState");
+    check_true(st == NULL, "fmi3 FreeFMUState clears the pointer");
+    check(fmi3FreeFMUState(c, &st), fmi3OK, "fmi3 FreeFMUState of NULL");
     fmi3FreeInstance(c);
+}
+
+/* a step and start time away from 0 */
+static void start_time3(const char *dir)
+{
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3ValueReference t0 = 0;
+    fmi3Float64 x = 0.0;
+    if (!c) return;
+    check(fmi3EnterInitializationMode(c, fmi3False, 0.0, 2.0, fmi3True, 3.0), fmi3OK,
+          "fmi3 EnterInitializationMode at t = 2 s");
+    check(fmi3ExitInitializationMode(c), fmi3OK, "fmi3 ExitInitializationMode at t = 2 s");
+    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 DoStep at 0 s of an FMU at 2 s");
+    check(step3(c, 2.0, DT), fmi3OK, "fmi3 DoStep at 2 s");
+    fmi3GetFloat64(c, &t0, 1, &x, 1);
+    check_true(x == 2.0 + DT, "fmi3 time after a step from 2 s");
+    fmi3FreeInstance(c);
+}
+
+/* serialised states: truncated, damaged, empty, garbage, another model's, a NaN time */
+static void serialised3(const char *cat, const char *pan)
+{
+    fmi3Instance a = instantiate3(cat, fmi3False), b = instantiate3(pan, fmi3False);
+    fmi3FMUState sa = NULL, sb = NULL, got = NULL;
+    fmi3Byte *ba, *bb, junk[64];
+    size_t na = 0, nb = 0;
+    double nan = NAN;
+    unsigned long long sum;
+    if (!a || !b) {
+        check_true(0, "fmi3 two instances");
+        return;
+    }
+    start3(a);
+    start3(b);
+    step3(a, 0.0, DT);
+    step3(b, 0.0, DT);
+    fmi3GetFMUState(a, &sa);
+    fmi3GetFMUState(b, &sb);
+    check(fmi3SerializedFMUStateSize(a, sa, &na), fmi3OK, "fmi3 SerializedFMUStateSize");
+    check(fmi3SerializedFMUStateSize(a, sb, &nb), fmi3Error, "fmi3 SerializedFMUStateSize of "
+          "another instance's state");
+    fmi3SerializedFMUStateSize(b, sb, &nb);
+    ba = (fmi3Byte *)calloc(na, 1);
+    bb = (fmi3Byte *)calloc(nb, 1);
+    check(fmi3SerializeFMUState(a, sa, ba, na - 1), fmi3Error, "fmi3 SerializeFMUState into a "
+          "short buffer");
+    check(fmi3SerializeFMUState(a, sa, NULL, na), fmi3Error, "fmi3 SerializeFMUState into "
+          "NULL");
+    check(fmi3SerializeFMUState(a, sa, ba, na), fmi3OK, "fmi3 SerializeFMUState");
+    check(fmi3SerializeFMUState(b, sb, bb, nb), fmi3OK, "fmi3 SerializeFMUState of the "
+          "pantograph");
+    check(fmi3SerializeFMUState(a, sb, ba, na), fmi3Error, "fmi3 SerializeFMUState of another "
+          "instance's state");
+    check(fmi3SetFMUState(a, sb), fmi3Error, "fmi3 SetFMUState of another instance's state");
+    check(fmi3FreeFMUState(a, &sb), fmi3Error, "fmi3 FreeFMUState of another instance's state");
+    check(fmi3DeserializeFMUState(a, ba, na - 1, &got), fmi3Error, "fmi3 DeserializeFMUState "
+          "of a truncated state");
+    check(fmi3DeserializeFMUState(a, ba, 0, &got), fmi3Error, "fmi3 DeserializeFMUState of 0 "
+          "bytes");
+    check(fmi3DeserializeFMUState(a, NULL, na, &got), fmi3Error, "fmi3 DeserializeFMUState of "
+          "NULL");
+    check(fmi3DeserializeFMUState(a, ba, na, NULL), fmi3Error, "fmi3 DeserializeFMUState into a "
+          "NULL pointer");
+    memset(junk, 0x5A, sizeof junk);
+    check(fmi3DeserializeFMUState(a, junk, sizeof junk, &got), fmi3Error,
+          "fmi3 DeserializeFMUState of garbage");
+    check(fmi3DeserializeFMUState(a, bb, nb, &got), fmi3Error, "fmi3 DeserializeFMUState of "
+          "another model's state");
+    ba[na - 1] ^= 0x40;
+    check(fmi3DeserializeFMUState(a, ba, na, &got), fmi3Error, "fmi3 DeserializeFMUState of a "
+          "damaged state");
+    ba[na - 1] ^= 0x40;
+    check_true(got == NULL, "fmi3 no state from a refused one");
+    check(fmi3DeserializeFMUState(a, ba, na, &got), fmi3OK, "fmi3 DeserializeFMUState");
+    check(fmi3SetFMUState(a, got), fmi3OK, "fmi3 SetFMUState of a deserialised state");
+    check(fmi3SetFMUState(b, got), fmi3Error, "fmi3 SetFMUState of the catenary's state into "
+          "the pantograph");
+    fmi3FreeFMUState(a, &got);
+    memcpy(ba + 40, &nan, 8);          /* the time (serialised layout: pcs_instance.c) */
+    sum = fnv1a((const unsigned char *)ba + 40, na - 40);
+    memcpy(ba + 32, &sum, 8);
+    check(fmi3DeserializeFMUState(a, ba, na, &got), fmi3Error, "fmi3 DeserializeFMUState of a "
+          "state with a NaN time");
+    check_true(got == NULL, "fmi3 no state from a NaN time");
+    fmi3FreeFMUState(a, &sa);
+    fmi3FreeFMUState(b, &sb);
+    free(ba);
+    free(bb);
+    fmi3FreeInstance(a);
+    fmi3FreeInstance(b);
+}
+
+/* a pantograph: a step it cannot take is a Discard that leaves it usable */
+static void pantograph3(const char *dir)
+{
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3ValueReference F = PAN_FORCE;
+    fmi3Float64 f = 100.0, huge = 1e300, nan = NAN;
+    if (!c) return;
+    start3(c);
+    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3OK, "fmi3 pantograph SetFloat64");
+    check(step3(c, 0.0, 2e6), fmi3Discard, "fmi3 pantograph DoStep of 2e6 s");
+    check(step3(c, 0.0, INFINITY), fmi3Discard, "fmi3 pantograph DoStep of an infinite h");
+    fmi3SetFloat64(c, &F, 1, &huge, 1);
+    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 pantograph DoStep under 1e300 N");
+    fmi3SetFloat64(c, &F, 1, &nan, 1);
+    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 pantograph DoStep under a NaN force");
+    fmi3SetFloat64(c, &F, 1, &f, 1);
+    check(step3(c, 0.0, DT), fmi3OK, "fmi3 pantograph DoStep after the Discards");
+    fmi3FreeInstance(c);
+}
+
+/* a Reset that fails (data file gone) leaves an instance that refuses everything but Reset
+   and FreeInstance, without touching the missing model */
+static void failed_reset3(const char *dir)
+{
+    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3ValueReference z = CAT_HEIGHT, t0 = 0;
+    fmi3Float64 x = 0.0;
+    fmi3FMUState st = NULL;
+    fmi3Byte blob[64] = {0};
+    if (!c) return;
+    start3(c);
+    move_data(dir, 0);
+    check(fmi3Reset(c), fmi3Error, "fmi3 Reset with the data file gone");
+    check(fmi3Reset(c), fmi3Error, "fmi3 Reset again with the data file gone");
+    move_data(dir, 1);
+    check(fmi3GetFloat64(c, &z, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 after a failed Reset");
+    check(fmi3GetFloat64(c, &t0, 1, &x, 1), fmi3Error, "fmi3 GetFloat64 of the time after a "
+          "failed Reset");
+    check(fmi3SetFloat64(c, &z, 1, &x, 1), fmi3Error, "fmi3 SetFloat64 after a failed Reset");
+    check(fmi3GetFMUState(c, &st), fmi3Error, "fmi3 GetFMUState after a failed Reset");
+    check(fmi3SetFMUState(c, (fmi3FMUState)blob), fmi3Error, "fmi3 SetFMUState after a failed "
+          "Reset");
+    check(fmi3DeserializeFMUState(c, blob, sizeof blob, &st), fmi3Error,
+          "fmi3 DeserializeFMUState after a failed Reset");
+    check(step3(c, 0.0, DT), fmi3Error, "fmi3 DoStep after a failed Reset");
+    check(fmi3Terminate(c), fmi3Error, "fmi3 Terminate after a failed Reset");
+    check(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0), fmi3Error,
+          "fmi3 EnterInitializationMode after a failed Reset");
+    check(fmi3Reset(c), fmi3OK, "fmi3 Reset with the data file back");
+    check(start3(c), fmi3OK, "fmi3 initialisation after the second Reset");
+    check(step3(c, 0.0, DT), fmi3OK, "fmi3 DoStep after the second Reset");
+    fmi3FreeInstance(c);
+}
+
+static void fmi3_sequences(const char *cat, const char *pan, const char *percent_dir)
+{
+    fmi3Instance c;
+    null_instance3(cat);
+    c = instantiate3(percent_dir, fmi3False);
+    check_true(c != NULL, "fmi3 a resource path holding %41 is taken as it is");
+    fmi3FreeInstance(c);
+    phases3(cat);
+    arguments3(cat);
+    start_time3(cat);
+    serialised3(cat, pan);
+    pantograph3(pan);
+    failed_reset3(cat);
 }
 
 int main(int argc, char **argv)
@@ -432,7 +887,7 @@ int main(int argc, char **argv)
     steps2(argv[2]);
     failed_reset2(argv[2]);
     two_instances2(argv[2], argv[3]);
-    fmi3_sequences(argv[2], argv[4]);
+    fmi3_sequences(argv[2], argv[3], argv[4]);
     printf("failures: %d\n", failures);
     return failures;
 }
