@@ -29,7 +29,7 @@ from pantocosim.master.folder_lock import FolderLock
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.pacing import StepClock
 from pantocosim.master.results.recorder import Recorder
-from pantocosim.master.run.finish import COSIM_COUNTERS, RunResult, column_names
+from pantocosim.master.run.outcome import COSIM_COUNTERS, RunResult, column_names
 from pantocosim.master.run.setup import Prepared
 from pantocosim.master.run.stepping import progress_bar
 from pantocosim.master.scenario import require_port_contact, scenario_catenary

@@ -471,7 +471,7 @@ def test_failing_run_leaves_earlier_results_intact(tmp_path, capsys, monkeypatch
                             raising=False)
         extra = []
     else:
-        import pantocosim.master.run.finish as run_results
+        import pantocosim.master.run.outcome as run_results
 
         def full(path, data):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))

@@ -55,7 +55,7 @@ THIRD_PARTY_DEFERRED = {
     ("pantocosim.master.thirdparty.", "child"):
         "a third-party master's child process: numpy and scipy.sparse.linalg before any FMU "
         "loads (docs/pythonfmu-notes.md, B5); CoFmuPy's child runs in that tool's own venv",
-    ("pantocosim.master.run.finish", "finish"):
+    ("pantocosim.master.run.outcome", "finish"):
         "`resource` exists on POSIX only",
     ("pantocosim.master.stability", "departures"):
         "scipy.special (0.14 s) serves only a finished run's departures",

@@ -30,7 +30,7 @@ class Anchor:
 
 
 class MeshParts:
-    """Bars, point masses and springs added one by one; :meth:`finish` makes element sets."""
+    """Bars, point masses and springs added one by one; :meth:`add_to` makes their element sets."""
 
     def __init__(self):
         self._bars: list[tuple] = []

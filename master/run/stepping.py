@@ -22,7 +22,7 @@ from pantocosim.master import stability
 from pantocosim.master.interrupt import interrupted_at, stop_on_interrupt
 from pantocosim.master.pacing import StepClock
 from pantocosim.master.results.recorder import Recorder
-from pantocosim.master.run.finish import RunResult, column_names
+from pantocosim.master.run.outcome import RunResult, column_names
 from pantocosim.master.run.setup import Prepared
 
 
@@ -45,7 +45,7 @@ def monolithic_stepper(prep: Prepared, settings: HHTSettings) -> CoupledStepper:
 
 
 class RowWriter:
-    """One row of the time series (:func:`~.finish.column_names`) per step: the
+    """One row of the time series (:func:`~.outcome.column_names`) per step: the
     stepper's contacts and support uplifts, into the recorder and the stability monitor."""
 
     def __init__(self, prep: Prepared, stepper, rec: Recorder, monitor):
