@@ -270,14 +270,6 @@ void cat_outputs(void *model)
 
 /* ------------------------------------------------------------------ variables */
 
-static int fixed_real(const char *name, double exported, double value, char *err)
-{
-    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
-    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
-    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
-             "it again with pantocosim export-native to change it)", name, value, name, exported);
-    return PCS_ERROR;
-}
 
 static int fixed_int(const char *name, int exported, int value, char *err)
 {
@@ -338,11 +330,11 @@ int cat_set_real(void *model, unsigned vr, double value, int initialised, char *
         return PCS_ERROR;
     }
     switch (vr) {
-    case CAT_VR_SPEED_KMH: return fixed_real("speed_kmh", m->speed * 3.6, value, err);
-    case CAT_VR_HHT_ALPHA: return fixed_real("hht_alpha", m->alpha, value, err);
-    case CAT_VR_CONTACT_STIFFNESS: return fixed_real("contact_stiffness", m->k_h, value, err);
-    case CAT_VR_CONTACT_DAMPING: return fixed_real("contact_damping", m->c_h, value, err);
-    case CAT_VR_MODAL_CUTOFF_HZ: return fixed_real("modal_cutoff_hz", m->cutoff, value, err);
+    case CAT_VR_SPEED_KMH: return pcs_fixed_real("speed_kmh", m->speed * 3.6, value, err);
+    case CAT_VR_HHT_ALPHA: return pcs_fixed_real("hht_alpha", m->alpha, value, err);
+    case CAT_VR_CONTACT_STIFFNESS: return pcs_fixed_real("contact_stiffness", m->k_h, value, err);
+    case CAT_VR_CONTACT_DAMPING: return pcs_fixed_real("contact_damping", m->c_h, value, err);
+    case CAT_VR_MODAL_CUTOFF_HZ: return pcs_fixed_real("modal_cutoff_hz", m->cutoff, value, err);
     case CAT_VR_NEWTON_RTOL:
         if (!(value > 0.0 && value <= 1e-2)) {
             snprintf(err, PCS_MSG, "newton_rtol = %.17g: must lie in (0, 0.01]", value);
@@ -355,12 +347,12 @@ int cat_set_real(void *model, unsigned vr, double value, int initialised, char *
     if ((k = per_pantograph(m, vr, CAT_VR_POSITION)) >= 0) {
         char name[32];
         snprintf(name, sizeof name, "position_%d", k + 1);
-        return fixed_real(name, m->x0[k], value, err);
+        return pcs_fixed_real(name, m->x0[k], value, err);
     }
     if ((k = per_pantograph(m, vr, CAT_VR_STATIC_FORCE)) >= 0) {
         char name[32];
         snprintf(name, sizeof name, "static_force_%d", k + 1);
-        return fixed_real(name, m->F0[k], value, err);
+        return pcs_fixed_real(name, m->F0[k], value, err);
     }
     snprintf(err, PCS_MSG, "value reference %u is not a Real input or parameter", vr);
     return PCS_ERROR;

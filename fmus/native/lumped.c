@@ -228,14 +228,6 @@ static void lumped_outputs(void *model)
 
 /* ------------------------------------------------------------------ variables */
 
-static int fixed_real(const char *name, double exported, double value, char *err)
-{
-    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
-    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
-    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
-             "it again with pantocosim export-native to change it)", name, value, name, exported);
-    return PCS_ERROR;
-}
 
 static int lumped_get_real(void *model, unsigned vr, double *value, char *err)
 {
@@ -274,18 +266,18 @@ static int lumped_set_real(void *model, unsigned vr, double value, int initialis
         return PCS_ERROR;
     }
     switch (vr) {
-    case PAN_VR_STATIC_FORCE: return fixed_real("static_force", m->static_force, value, err);
-    case PAN_VR_AERO_C1: return fixed_real("aero_c1", m->aero_c1, value, err);
-    case PAN_VR_AERO_C2: return fixed_real("aero_c2", m->aero_c2, value, err);
-    case PAN_VR_SPEED_KMH: return fixed_real("speed_kmh", m->speed_kmh, value, err);
-    case PAN_VR_FRICTION_FORCE: return fixed_real("friction_force", m->friction, value, err);
+    case PAN_VR_STATIC_FORCE: return pcs_fixed_real("static_force", m->static_force, value, err);
+    case PAN_VR_AERO_C1: return pcs_fixed_real("aero_c1", m->aero_c1, value, err);
+    case PAN_VR_AERO_C2: return pcs_fixed_real("aero_c2", m->aero_c2, value, err);
+    case PAN_VR_SPEED_KMH: return pcs_fixed_real("speed_kmh", m->speed_kmh, value, err);
+    case PAN_VR_FRICTION_FORCE: return pcs_fixed_real("friction_force", m->friction, value, err);
     case PAN_VR_FRICTION_SMOOTHING:
-        return fixed_real("friction_smoothing", m->smoothing, value, err);
-    case PAN_VR_HHT_ALPHA: return fixed_real("hht_alpha", m->alpha, value, err);
-    case PAN_VR_INITIAL_HEIGHT: return fixed_real("initial_height", m->height0, value, err);
+        return pcs_fixed_real("friction_smoothing", m->smoothing, value, err);
+    case PAN_VR_HHT_ALPHA: return pcs_fixed_real("hht_alpha", m->alpha, value, err);
+    case PAN_VR_INITIAL_HEIGHT: return pcs_fixed_real("initial_height", m->height0, value, err);
     case PAN_VR_INITIAL_CONTACT_FORCE:
         if (value < 0.0) return PCS_OK;    /* < 0: the mean uplift, the export's force */
-        return fixed_real("initial_contact_force", m->F0, value, err);
+        return pcs_fixed_real("initial_contact_force", m->F0, value, err);
     default: break;
     }
     snprintf(err, PCS_MSG, "value reference %u is not a Real input or parameter", vr);

@@ -352,15 +352,6 @@ static int fixed_index(unsigned vr)
     return -1;
 }
 
-/* a parameter fixed at export: its own value is accepted, another refused */
-static int fixed_value(const char *name, double exported, double value, char *err)
-{
-    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
-    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
-    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
-             "it again with pantocosim export-native to change it)", name, value, name, exported);
-    return PCS_ERROR;
-}
 
 static int get_real(void *model, unsigned vr, double *value, char *err)
 {
@@ -400,7 +391,7 @@ static int set_real(void *model, unsigned vr, double value, int initialised, cha
     if (vr == NLP_VR_INITIAL_CONTACT_FORCE && value < 0.0 &&
         m->sc[NLP_SCALAR_INITIAL_CONTACT_FORCE] < 0.0)
         return PCS_OK;             /* < 0: the mean uplift, as exported */
-    return fixed_value(FIXED[i].name, m->sc[FIXED[i].index], value, err);
+    return pcs_fixed_real(FIXED[i].name, m->sc[FIXED[i].index], value, err);
 }
 
 static int get_integer(void *model, unsigned vr, int *value, char *err)

@@ -35,3 +35,12 @@ int pcs_within(const char *name, double value, double lo, double hi, const char 
              name, value, unit, lo, hi, unit);
     return -1;
 }
+
+int pcs_fixed_real(const char *name, double exported, double value, char *err)
+{
+    double tol = 1e-12 * (fabs(exported) > 1.0 ? fabs(exported) : 1.0);
+    if (isfinite(value) && fabs(value - exported) <= tol) return PCS_OK;
+    snprintf(err, PCS_MSG, "%s = %.17g: this native FMU was exported with %s = %.17g (export "
+             "it again with pantocosim export-native to change it)", name, value, name, exported);
+    return PCS_ERROR;
+}

@@ -27,6 +27,10 @@
    reason in err (PCS_MSG bytes): H not finite and > 0, not a whole number of h, too many */
 long pcs_substeps(double H, double h, char *err);
 /* 0 when |value| <= limit (finite), else -1 with "name = value: ..." in err */
+/* a parameter fixed at export: its own value (to 1e-12 relative) is PCS_OK, another
+   PCS_ERROR with the message */
+int pcs_fixed_real(const char *name, double exported, double value, char *err);
+
 int pcs_within(const char *name, double value, double lo, double hi, const char *unit,
                char *err);
 
