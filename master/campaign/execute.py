@@ -15,6 +15,7 @@ import os
 import shutil
 import sys
 import time
+import warnings
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -200,7 +201,11 @@ def make_client(scheduler: str | None, workers: int | None, n_cases: int, echo):
     cluster = None
     try:
         with children_deaf_to_ctrl_c(), dask.config.set(
-                {"distributed.worker.profile.enabled": profile}):
+                {"distributed.worker.profile.enabled": profile}), warnings.catch_warnings():
+            # a dashboard port in use (another cluster) moves the dashboard to a free port;
+            # the sweep's "dashboard:" line says where, so Dask's own warning is not printed
+            warnings.filterwarnings("ignore", message=r"Port \d+ is already in use",
+                                    category=UserWarning)
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address="127.0.0.1:8787")
         return Client(cluster), cluster
