@@ -119,9 +119,13 @@ def host_exe(tmp_path):
 
 
 # ----------------------------------------------- the binaries this machine runs, bit for bit
-#: the coupled runs: scenario -> its pantograph's FMU
-PAIRS = {"en50318-300": "en50318-2mass", "dsa380-ave-300": "dsa380-rigid"}
+#: the coupled runs: case -> (scenario, its pantograph's model and FMU)
+PAIRS = {"en50318-300": ("en50318-300", "en50318-2mass"),
+         "dsa380-ave-300": ("dsa380-ave-300", "dsa380-rigid"),
+         "dsa380-flexible": ("dsa380-ave-300", "dsa380-flexible")}
 STEPS, DT = 300, 0.001
+#: (platform, case) runs that agree with linux64 to 1e-11, not bit for bit (docs/tutorials/hil.md)
+LIBM_BOUND = {("win64", "dsa380-flexible"), ("win32", "dsa380-flexible")}
 AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")
 HOST_FLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 LIB_FLAGS = [*HOST_FLAGS, "-shared"]
@@ -131,8 +135,8 @@ SSE = ["-msse2", "-mfpmath=sse"]          # a 32-bit x86 build: doubles in SSE r
 @pytest.fixture(scope="module")
 def coupled_fmus(tmp_path_factory):
     """The FMI 2.0 native catenary and pantograph FMUs of en50318-300 (2-mass pantograph)
-    and dsa380-ave-300 (rigid DSA-380) on six spans, with their shipped linux64 and win64
-    binaries, unpacked: {scenario: (catenary folder, pantograph folder)}."""
+    and dsa380-ave-300 (rigid, and flexible, DSA-380) on six spans, with their shipped linux64
+    and win64 binaries, unpacked: {case: (catenary folder, pantograph folder)}."""
     from pantocosim.master.native.models import export_scenario
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
@@ -141,8 +145,10 @@ def coupled_fmus(tmp_path_factory):
     required("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64")
     out = tmp_path_factory.mktemp("coupled")
     pairs = {}
-    for scenario, pantograph in PAIRS.items():
-        prep = prepare(dataclasses.replace(load_scenario(scenario), catenary_model="linear",
+    for scenario, (name, pantograph) in PAIRS.items():
+        sc = load_scenario(name)
+        pans = [dataclasses.replace(p, model=pantograph) for p in sc.pantographs]
+        prep = prepare(dataclasses.replace(sc, pantographs=pans, catenary_model="linear",
                                            spans=6, window_supports=(1, 3)))
         written, kept = export_scenario(prep, out / scenario, fmi=2, win64=True)
         assert [p.stem for p in written] == ["catenary", pantograph] and kept == []
@@ -263,8 +269,15 @@ def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_row
                            wrapper=wrapper)
     assert linux.shape == got.shape == (STEPS, 4)
     assert np.all(linux[:, 1] > 0.0) and linux[:, 1].mean() > 50.0    # in contact throughout
-    assert got.tobytes() == linux.tobytes(), (
-        f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+    if (name, scenario) in LIBM_BOUND:
+        # the flexible DSA-380 calls libm functions whose last bit differs between glibc and
+        # the Windows C runtime: the force agrees to 1e-11 of its mean, not bit for bit
+        scale = np.abs(linux).max(axis=0) + 1.0
+        assert np.all(np.abs(got - linux) <= 1e-11 * scale), (
+            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+    else:
+        assert got.tobytes() == linux.tobytes(), (
+            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
     assert counts["allocations in doStep"] == 0
 
 
