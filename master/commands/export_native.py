@@ -37,7 +37,7 @@ def add_parser(sub):
 def run(args) -> int:
     from pantocosim.core.params import check_number
     from pantocosim.master.native.build import c_compiler
-    from pantocosim.master.native.models import export_scenario
+    from pantocosim.master.native.models import CATENARY_EXPORTS, export_scenario
     from pantocosim.master.output_folder import OutputFolder
     from pantocosim.master.commands.run import named_as_options
     from pantocosim.master.run import prepare
@@ -64,7 +64,7 @@ def run(args) -> int:
         folder.discard()
     for path in written:
         print(f"wrote {out / path.name}")
-    if own_model not in ("linear", "modal"):
+    if own_model not in CATENARY_EXPORTS:
         print(f"catenary: the scenario's {own_model} model has no native form (its matrices "
               f"change with the wire's shape); wrote the {args.catenary_model} model "
               "(--catenary-model); the nonlinear one stays a Python FMU")

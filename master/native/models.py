@@ -47,6 +47,9 @@ def declared(table, name: str, vr: int, start=None, fixed: bool = False,
                     meaning)
 
 
+#: the catenary models with a native form: the export of their sections, their sizes' fields
+CATENARY_EXPORTS = {"linear": native_export.linear_catenary,
+                    "modal": native_export.modal_catenary}
 SIZE_FIELDS = {"linear": "LIN_SIZE", "modal": "MOD_SIZE"}
 
 
@@ -95,13 +98,12 @@ def export_catenary(prep, out: Path, model_name: str = "linear", fmi: int = 2,
     """The native catenary FMU of a prepared scenario (:class:`~pantocosim.master.run.Prepared`
     whose catenary is the linear model)."""
     sc = prep.scenario
-    if model_name not in ("linear", "modal"):
+    if model_name not in CATENARY_EXPORTS:
         raise ParameterError("--catenary-model", model_name, "native FMUs are written for the "
                              "linear and the modal catenary (the nonlinear model stays a "
                              "Python FMU)")
     settings = HHTSettings.for_runs(sc.alpha, sc.newton_rtol)
-    export = (native_export.linear_catenary if model_name == "linear"
-              else native_export.modal_catenary)
+    export = CATENARY_EXPORTS[model_name]
     sections = export(prep.catenary, settings, sc.dt, prep.static_forces, prep.contact,
                       sc.catenary, int(sc.spans or 0), settings.rtol, cutoff=sc.modal_cutoff_hz)
 
