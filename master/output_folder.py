@@ -13,7 +13,8 @@ file, or a place that cannot be created or written, is an error naming ``--out``
 A staging folder holds a lock (``flock`` on its ``.pantocosim.owner``) while its command
 runs; the system releases it however the command ends, so a staging folder left by a killed
 command (``kill -9``, SIGTERM) is unlocked, and the next command writing the same ``--out``
-removes it. A staging folder kept after a failed move (the error names it) has no lock file
+removes it. The folder and its lock are made with SIGINT and SIGTERM held back, so a Ctrl-C
+cannot fall between the two and leave a folder without a lock. A staging folder kept after a failed move (the error names it) has no lock file
 and stays.
 """
 
@@ -22,7 +23,9 @@ from __future__ import annotations
 import fcntl
 import os
 import shutil
+import signal
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -75,8 +78,10 @@ class OutputFolder:
         try:
             parent.mkdir(parents=True, exist_ok=True)
             remove_abandoned(parent, prefix)
-            self.path = Path(tempfile.mkdtemp(prefix=prefix, suffix=".partial", dir=parent))
-            self._owner = own(self.path)
+            with signals_held():
+                self.path = Path(tempfile.mkdtemp(prefix=prefix, suffix=".partial",
+                                                  dir=parent))
+                self._owner = own(self.path)
         except (FileExistsError, NotADirectoryError):
             raise OutputError(field, out, "cannot create the folder: a folder above it is a "
                               "file") from None
@@ -119,6 +124,29 @@ class OutputFolder:
             (self.path / OWNER).unlink(missing_ok=True)
             self._owner.close()
             self._owner = None
+
+
+#: the signals held back while a staging folder and its lock are made
+HELD_SIGNALS = frozenset({signal.SIGINT, signal.SIGTERM})
+
+
+@contextmanager
+def signals_held():
+    """SIGINT and SIGTERM arriving inside the block are delivered when it ends, to the
+    handlers in place before it (main thread only: elsewhere Python runs no handler)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending = []
+    previous = {s: signal.signal(s, lambda signum, frame: pending.append(signum))
+                for s in HELD_SIGNALS}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_DFL if handler is None else handler)
+        for s in pending:
+            signal.raise_signal(s)
 
 
 def own(path: Path):

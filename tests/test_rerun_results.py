@@ -3,6 +3,7 @@ complete run writes ``OUT-stopped`` and says so; a staging folder left by a kill
 removed by the next command writing the same ``--out``, one in use or kept on purpose is not."""
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -76,3 +77,33 @@ def test_a_staging_folder_of_a_killed_command_is_removed_by_the_next(tmp_path, s
     assert kept.path.is_dir()                  # kept on purpose, named in its error
     live.discard()
     assert not live.path.exists()
+
+
+def test_a_ctrl_c_while_the_staging_folder_is_made_leaves_it_locked(tmp_path, monkeypatch):
+    """A SIGINT between the staging folder and its lock is delivered after both exist, so
+    the folder is never without its lock; the next command removes it once the lock is
+    free."""
+    import gc
+
+    import pantocosim.master.output_folder as output_folder
+
+    real_own = output_folder.own
+    made = []
+
+    def interrupted_own(path):
+        made.append(path)
+        os.kill(os.getpid(), signal.SIGINT)   # held back until the lock is taken
+        return real_own(path)
+
+    monkeypatch.setattr(output_folder, "own", interrupted_own)
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt) as stopped:
+        OutputFolder(out)
+    (staging,) = made
+    assert (staging / OWNER).is_file()
+    del stopped
+    gc.collect()                               # the interrupted command's lock goes
+    monkeypatch.setattr(output_folder, "own", real_own)
+    OutputFolder(out).discard()
+    assert not staging.exists()
+    assert not list(tmp_path.glob("*.partial"))
