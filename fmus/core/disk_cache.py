@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import scipy.sparse as sp
 
 from .errors import ParameterError
 from .stamp import process_stamp
@@ -50,7 +51,8 @@ def _feed(h, part) -> None:
     if isinstance(part, np.ndarray):
         h.update(f"array {part.dtype.str} {part.shape}".encode())
         h.update(np.ascontiguousarray(part).tobytes())
-    elif hasattr(part, "indptr") and hasattr(part, "data"):          # a scipy sparse matrix
+    elif sp.issparse(part):
+        part = part.tocsr()
         h.update(f"sparse {part.shape}".encode())
         for a in (part.indptr, part.indices, part.data):
             _feed(h, np.asarray(a))

@@ -49,6 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from .component import Component
 
 
 @dataclass(frozen=True)
@@ -240,7 +241,7 @@ def _sparse_forms(L) -> tuple:
     return ai, aj, av, cnt.astype(np.int64)
 
 
-class DirectorBeam:
+class DirectorBeam(Component):
     """A chain of two-node beam elements between consecutive ``nodes`` of a system."""
 
     def __init__(self, nodes, section: Section, name: str = "beam"):

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .component import Component
 from .constraint_set import ConstraintSet
 
 
@@ -36,7 +37,7 @@ def _squared(law):
     return drive
 
 
-class Distance:
+class Distance(Component):
     """|p_B - p_A| = L between ``point_a`` of node A's body and ``point_b`` of node B's body
     (``node_b`` None: ``point_b`` is a fixed point). ``length``: None (the reference
     distance), a number, or a function t -> (L, L', L'') (an actuator)."""

@@ -39,10 +39,10 @@ from scipy.spatial.transform import Rotation
 
 from pantocosim.core.hht import FactorReuse, HHTIntegrator, HHTSettings
 
-from .beam3d import Section, straight_beam
 from ..core.errors import ConvergenceError, ParameterError
 from ..core.hht import DEFAULT_ALPHA
 from ..core.params import Table, check_number, load_toml
+from .beam3d import Section, straight_beam
 from .ground_contact import GroundContact
 from .joints import Revolute, Universal
 from .loads import Gravity, NodalMoment, triangular_pulse

@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .component import Component
 from .pattern import scatter_add
 
 
-class GroundContact:
+class GroundContact(Component):
     def __init__(self, node: int, normal=(0.0, 1.0, 0.0), offset: float = 0.0,
                  stiffness: float = 1.0e6, damping: float = 0.0):
         n = np.asarray(normal, dtype=float)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .component import Component
 from .constraint_set import ConstraintSet
 
 
@@ -34,7 +35,7 @@ def _perpendicular_pair(a):
     return p, np.cross(a, p)
 
 
-class Joint:
+class Joint(Component):
     """A set of coincidence and perpendicularity equations between node A and node B (or
     the ground when B is None)."""
 

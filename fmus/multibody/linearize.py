@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 
 def linearize(system, q_eq, t: float = 0.0):
@@ -23,7 +24,7 @@ def linearize(system, q_eq, t: float = 0.0):
     nq = system.n_q
     zero = np.zeros(system.n_dofs)
     ev = system.evaluate(t, q_eq, zero, zero, tangent=True)
-    S = ev.stiffness.toarray() if hasattr(ev.stiffness, "toarray") else ev.stiffness
+    S = ev.stiffness.toarray() if sp.issparse(ev.stiffness) else ev.stiffness
     K = S[:nq, :nq]
     G = S[nq:, :nq] / system.constraint_scale
     Z = sla.null_space(G)

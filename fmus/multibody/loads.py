@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .component import Component
 from .pattern import scatter_add
 
 
@@ -25,7 +26,7 @@ def _as_function(value):
     return lambda t: const
 
 
-class Gravity:
+class Gravity(Component):
     """Weight of every mass of the system, f = M u_g with u_g = g at the position coordinates
     (exact consistent load since the shape functions sum to one); potential -f . x."""
 
@@ -52,7 +53,7 @@ class Gravity:
         return {"gravity": -float(self.scale * self._load() @ q)}
 
 
-class NodalForce:
+class NodalForce(Component):
     """A force F(t) (vector or function of t) on a node's position; potential -F.x when
     constant."""
 
@@ -71,7 +72,7 @@ class NodalForce:
         return {"external": float(self.scale * self.force(t) @ v[self.dofs])}
 
 
-class NodalMoment:
+class NodalMoment(Component):
     """A moment m(t) (spatial components, vector or function of t) on a node's triad."""
 
     def __init__(self, node: int, moment, name: str = "moment"):

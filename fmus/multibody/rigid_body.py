@@ -16,9 +16,10 @@ of mass. Several bodies on one node add up (e.g. a bar and a particle fixed to i
 from __future__ import annotations
 
 import numpy as np
+from .component import Component
 
 
-class RigidBody:
+class RigidBody(Component):
     """``mass`` with its centre ``center`` and central inertia tensor ``inertia`` (spatial
     components in the reference configuration; default: the node's position and zero, a
     particle), carried by ``node``."""

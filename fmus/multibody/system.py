@@ -18,18 +18,7 @@ the constraint rows read (1 + alpha) g_{n+1} - alpha g_n = 0: index-3 HHT, the c
 hold at every step to the Newton tolerance (drift reported by :meth:`System.constraint_drift`).
 Constraints may depend on time (actuators: g(q, t), ``constraint_set.py``).
 
-The component protocol (each member optional):
-
-| member | called | does |
-|---|---|---|
-| ``bind(system)`` | at assembly | keeps its coordinates, precomputes |
-| ``add_mass(M)`` | at assembly | adds its constant mass blocks (:class:`Triplets`) |
-| ``constraints(system)`` | at assembly | its :class:`ConstraintSet` list |
-| ``tangent_dofs()`` | at assembly | (k, m) coordinate groups its tangent couples |
-| ``locate(pattern)`` | at assembly | keeps the positions of its blocks on the pattern |
-| ``add_forces(t, q, v, f, K, C)`` | every evaluation | adds forces to f, tangents to K, C |
-| ``state_key(q)`` | every evaluation | a hashable state the tangent depends on (contact) |
-| ``energy(t, q, v)`` | reports | named potentials |
+The components follow the protocol of :class:`~.component.Component`.
 
 K and C are :class:`PatternMatrix`: small components ``add`` blocks, element sets scatter
 into ``K.data`` at the positions they located.
@@ -104,17 +93,14 @@ class System(SecondOrderModel):
         n_rows = sets[0].size
         self._rows_of = {}
         for comp in self.components:
-            if hasattr(comp, "bind"):
-                comp.bind(self)
+            comp.bind(self)
         for comp in self.components:
-            if hasattr(comp, "add_mass"):
-                comp.add_mass(M)
-            if hasattr(comp, "constraints"):
-                own = comp.constraints(self)
-                size = sum(c.size for c in own)
-                self._rows_of[id(comp)] = slice(n_rows, n_rows + size)
-                n_rows += size
-                sets.extend(own)
+            comp.add_mass(M)
+            own = comp.constraints(self)
+            size = sum(c.size for c in own)
+            self._rows_of[id(comp)] = slice(n_rows, n_rows + size)
+            n_rows += size
+            sets.extend(own)
         self.M = M.tocsr()
         self.constraints = ConstraintSet.concatenate(sets)
         self.n_c = self.constraints.size
@@ -131,21 +117,19 @@ class System(SecondOrderModel):
         Mc = self.M.tocoo()
         rows, cols = [Mc.row], [Mc.col]
         for comp in self.components:
-            if hasattr(comp, "tangent_dofs"):
-                d = np.asarray(comp.tangent_dofs())
+            d = comp.tangent_dofs()
+            if d is not None:
+                d = np.asarray(d)
                 rows.append(np.broadcast_to(d[:, :, None], d.shape + d.shape[-1:]))
                 cols.append(np.broadcast_to(d[:, None, :], d.shape + d.shape[-1:]))
         r, c = self.constraints.couplings(self.n_q)
         self.pattern = Pattern(self.n_dofs, rows + r, cols + c)
         for comp in self.components:
-            if hasattr(comp, "locate"):
-                comp.locate(self.pattern)
+            comp.locate(self.pattern)
         self.constraints.locate(self.pattern, self.n_q)
         self._mass_data = np.zeros(self.pattern.nnz)
         scatter_add(self._mass_data, self.pattern.positions(Mc.row, Mc.col), Mc.data)
         self._mass_full = self.pattern.matrix(self._mass_data)
-        self._force_components = [c for c in self.components if hasattr(c, "add_forces")]
-        self._keyed = [c for c in self.components if hasattr(c, "state_key")]
 
     def reference(self) -> np.ndarray:
         """q of the reference configuration (multipliers 0)."""
@@ -170,7 +154,7 @@ class System(SecondOrderModel):
         f = np.zeros(nq)
         K = PatternMatrix(self.pattern) if tangent else None
         C = PatternMatrix(self.pattern) if tangent else None
-        for comp in self._force_components:
+        for comp in self.components:
             comp.add_forces(t, q[:nq], v[:nq], f, K, C)
         return f, K, C
 
@@ -180,7 +164,7 @@ class System(SecondOrderModel):
         g = self.constraints.add_forces(t, q, q[nq:], s, f, K.data if tangent else None)
         f_rest = np.concatenate([f, s * g])
         f_inertia = np.concatenate([self.M @ a[:nq], np.zeros(nc)])
-        key = tuple(c.state_key(q[:nq]) for c in self._keyed)
+        key = tuple(c.state_key(q[:nq]) for c in self.components)
         ev = Evaluation(f_inertia=f_inertia, f_rest=f_rest, structure_key=key)
         if tangent:
             ev.mass, ev.damping, ev.stiffness = self._mass_full, C.tocsr(), K.tocsr()
@@ -231,9 +215,8 @@ class System(SecondOrderModel):
         out = {"kinetic": self.kinetic_energy(v)}
         nq = self.n_q
         for comp in self.components:
-            if hasattr(comp, "energy"):
-                for key, val in comp.energy(t, q[:nq], v[:nq]).items():
-                    out[key] = out.get(key, 0.0) + val
+            for key, val in comp.energy(t, q[:nq], v[:nq]).items():
+                out[key] = out.get(key, 0.0) + val
         return out
 
     def constraint_drift(self, q, t: float = 0.0) -> float:

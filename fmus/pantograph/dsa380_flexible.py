@@ -33,7 +33,7 @@ f_rest = dU/dq + dV_springs/dq - Q_gravity + damper + friction - M_act dphi1/dq
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -861,8 +861,9 @@ def load_dsa380_flexible(path: str | Path | None = None,
     FlexibleParameters fields (e.g. ``E=210e12`` or ``mesh=(...)``)."""
     path = PRESET_FILE if path is None else Path(path)
     params, root = read_flexible(path)
+    known = {f.name for f in fields(FlexibleParameters)}
     for k, v in changes.items():
-        if not hasattr(params, k):
+        if k not in known:
             raise ParameterError(k, v, "unknown flexible-model parameter", str(path))
         setattr(params, k, v)
     if options is None:
