@@ -242,6 +242,29 @@ def test_coupled_loop_runs_without_python(exported, host, tmp_path):
     assert counts["allocations in doStep"] == 0
 
 
+def test_the_host_names_what_it_cannot_load(exported, host, tmp_path):
+    """The FMI version comes from modelDescription.xml, the library from the host's platform
+    folder: an FMU without either is refused naming the file (exit 3), never run."""
+    cases = {}
+    md = (exported["catenary"] / "modelDescription.xml").read_text()
+    old = shutil.copytree(exported["catenary"], tmp_path / "fmi1")
+    (old / "modelDescription.xml").write_text(md.replace('fmiVersion="2.0"',
+                                                         'fmiVersion="1.0"', 1))
+    cases[old] = "fmiVersion 1.0 (2.0 or 3.0 accepted)"
+    bare = shutil.copytree(exported["catenary"], tmp_path / "no-binaries")
+    shutil.rmtree(bare / "binaries" / "linux64")
+    cases[bare] = f"cannot load {bare}/binaries/linux64/pantocosim_catenary_native.so"
+    nameless = shutil.copytree(exported["catenary"], tmp_path / "no-variable")
+    (nameless / "modelDescription.xml").write_text(md.replace('name="n_supports"',
+                                                              'name="supports"', 1))
+    cases[nameless] = "modelDescription.xml: no variable n_supports"
+    for folder, message in cases.items():
+        proc = subprocess.run([str(host), "forced", str(folder), "5", str(DT)],
+                              capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 3 and message in proc.stderr, (message, proc.stderr)
+        assert not [line for line in proc.stdout.splitlines() if line[:1].isdigit()]
+
+
 # ---------------------------------------------------------------------- FMI behaviour
 OK, DISCARD, ERROR = 0, 2, 3
 
