@@ -40,7 +40,7 @@ from pantocosim.core.errors import PantocosimError, ParameterError
 from pantocosim.core.hht import DEFAULT_ALPHA, HHTSettings
 from pantocosim.master.cosim import fmu_paths, fmu_subsystems
 from pantocosim.master.fmu.build import default_out, ensure_fmus
-from pantocosim.master.native.build import CFLAGS, SOURCE_DIR, c_compiler
+from pantocosim.master.native.host import build_host
 from pantocosim.master.native.models import export_scenario
 from pantocosim.master.run import prepare
 from pantocosim.master.scenario import load_scenario
@@ -214,16 +214,6 @@ def python_fmu_loop(prep, steps: int, h: float) -> dict:
     return {key: _percentiles(value) for key, value in times.items()}
 
 
-def compile_host(tmp: Path) -> Path:
-    """The C host (fmus/native/realtime_host.c) compiled into ``tmp``."""
-    cc = c_compiler()
-    host = tmp / "realtime_host"
-    if not host.exists():
-        subprocess.run([cc, *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(host),
-                        str(SOURCE_DIR / "realtime_host.c"), "-ldl", "-lm"], check=True)
-    return host
-
-
 def native_coupled(host: Path, prep, folder: Path, steps: int) -> str:
     """The scenario's native FMUs (export-native into ``folder``, unpacked) stepped by the
     host's explicit loop (coupled-forces); its output."""
@@ -240,11 +230,11 @@ def native_coupled(host: Path, prep, folder: Path, steps: int) -> str:
 
 def native_loop(tmp: Path, printer=print) -> dict:
     """The native FMUs (``pantocosim export-native``) of en50318-300 stepped 2 s at 1 ms from
-    a C loop (fmus/native/realtime_host.c, the master applies the penalty law): p50 / p99 /
+    a C loop (the C host of fmus/native/host, the master applies the penalty law): p50 / p99 /
     max of the catenary's doStep for each catenary model with the native 2-mass pantograph,
     beside the Python catenary FMU in the same loop (fmpy) and the floor solve."""
     scenario, seconds, models = NATIVE_LOOP
-    host = compile_host(tmp)
+    host = build_host(tmp)
     out = {"floor_solve_ms": 1e3 * floor_per_step("en50318", 10)}
     for model in models:
         sc = dataclasses.replace(load_scenario(scenario), catenary_model=model)
@@ -279,7 +269,7 @@ def native_dsa380(tmp: Path, printer=print) -> dict:
     :func:`native_loop` on dsa380-ave-300 (the native linear catenary beside them), and the
     Python DSA-380 FMUs' in the same loop in fmpy (with the Python catenary FMU)."""
     scenario, seconds, models = NATIVE_DSA380
-    host = compile_host(tmp)
+    host = build_host(tmp)
     out = {}
     for model in models:
         sc = load_scenario(scenario)

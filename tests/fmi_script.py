@@ -1,4 +1,4 @@
-"""FMI call scripts for the C hosts (tests/c_hosts/fmi2_host.c, fmi3_host.c) and their
+"""FMI call scripts for the C host's script mode (fmus/native/host/host_script.c) and their
 fmpy twin.
 
 :class:`Script` writes the script; ``python fmi_script.py < script`` runs it through fmpy's

@@ -1,5 +1,5 @@
 """The embedding library (fmus/fmi/embedding/) on its own: compiled with every warning
-and GCC's static analyser, and run in the C hosts of tests/c_hosts and in a threaded Python
+and GCC's static analyser, and run in the C host of fmus/native/host and in a threaded Python
 host over a small slave (tests/c_hosts/slow_slave.py) instead of a built FMU: the runtime
 probe reads any answer without overflow and within a time bound, names the interpreter it
 tried and what it lacked; no Python error outlives a call; an instance or FMU state freed on
@@ -25,7 +25,6 @@ from pantocosim.master.fmu.embedding import compile_export_library, compiler
 
 ROOT = Path(__file__).resolve().parents[1]
 SLAVE = ROOT / "tests" / "c_hosts" / "slow_slave.py"
-FMI3_HOST = ROOT / "tests" / "c_hosts" / "fmi3_host.c"
 OK, WARNING, ERROR = 0, 1, 3
 
 
@@ -38,17 +37,12 @@ def libraries(tmp_path_factory):
     return {v: compile_export_library(work, v) for v in (2, 3)}
 
 
-@pytest.fixture(scope="session")
-def host3(tmp_path_factory, libraries):
-    exe = tmp_path_factory.mktemp("host3") / "fmi3_host"
-    subprocess.run([compiler(), "-std=c11", "-O1", "-o", str(exe), str(FMI3_HOST), "-ldl"],
-                   check=True)
-    return exe
-
-
 def slow_fmu(folder: Path, library: Path, fmi: int = 2, runtime: str = sys.executable) -> Path:
     """An extracted FMU folder of the slow slave with the embedding library of ``fmi``."""
     export = EXPORTS[fmi]
+    folder.mkdir(parents=True, exist_ok=True)     # the host reads the FMI version here
+    (folder / "modelDescription.xml").write_text(
+        f'<fmiModelDescription fmiVersion="{fmi}.0" modelName="slow"/>\n')
     (folder / "binaries" / export.platform).mkdir(parents=True)
     shutil.copy(library, folder / "binaries" / export.platform / "slow.so")
     res = folder / "resources"
@@ -63,7 +57,7 @@ def slow_fmu(folder: Path, library: Path, fmi: int = 2, runtime: str = sys.execu
 def run(host, folder: Path, calls: list[str], tmp: Path, timeout=120, **env):
     script = "\n".join([f"load A {folder} slow token", *calls]) + "\n"
     start = time.monotonic()
-    proc = subprocess.run([str(host)], input=script, capture_output=True, text=True,
+    proc = subprocess.run([str(host), "script"], input=script, capture_output=True, text=True,
                           cwd=tmp, timeout=timeout, env=clean_env(tmp, **env))
     return proc, time.monotonic() - start
 
@@ -252,16 +246,16 @@ def test_a_state_or_instance_freed_on_another_thread_waits_for_the_call(librarie
     assert out["step_after_free"] == ERROR
 
 
-def test_an_fmi3_fmu_without_its_resources_names_them(host3, libraries, tmp_path):
+def test_an_fmi3_fmu_without_its_resources_names_them(host, libraries, tmp_path):
     fmu = slow_fmu(tmp_path / "fmu", libraries[3], fmi=3)
     shutil.rmtree(fmu / "resources")
-    proc, _ = run(host3, fmu, ["instantiate A a"], tmp_path)
+    proc, _ = run(host, fmu, ["instantiate A a"], tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert results(proc.stdout)[2][0] == ERROR
     assert f"the FMU's resources folder {fmu}/resources is missing" in proc.stdout
     assert "pantocosim_fmi3_bridge.py" in proc.stdout
     (fmu / "resources").mkdir()
-    proc, _ = run(host3, fmu, ["instantiate A a"], tmp_path)
+    proc, _ = run(host, fmu, ["instantiate A a"], tmp_path)
     assert f"{fmu}/resources has no readable pantocosim_fmi3_bridge.py" in proc.stdout
 
 

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmi_script import Script, results
-from tooling import c_compiler
 from test_native_host import (CATENARY_RUN, DISCARD, ERROR, OK, PANTOGRAPH_RUN,
                               assert_clean_exit, host, run_host, run_twin, stepping_script)
 
@@ -28,7 +27,6 @@ from pantocosim.master.run import prepare, run_monolithic
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "tests" / "c_hosts" / "fmi3_host.c"
 SHORT = Path(__file__).with_name("data") / "short-en50318.toml"
 NAMES = ["dsa380-rigid", "dsa380-flexible", "dsa380-lumped3", "en50318-2mass", "catenary"]
 #: FMI 3.0 type of each FMI 2.0 type of the ports
@@ -39,26 +37,6 @@ TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": 
 def fmus3(built):
     """The generic FMI 3.0 FMUs by name."""
     return {p.stem: p for p in (built / "fmi3").glob("*.fmu")}
-
-
-@pytest.fixture(scope="session")
-def host3(tmp_path_factory):
-    """The FMI 3.0 C host, compiled with the system's C compiler."""
-    cc = c_compiler()
-    exe = tmp_path_factory.mktemp("host3") / "fmi3_host"
-    subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe), str(HOST_SOURCE), "-ldl"],
-                   check=True)
-    return exe
-
-
-def run_host3(host, script: Script, tmp: Path) -> subprocess.CompletedProcess:
-    """The C host in what a C host started from a desktop has: no Python variables, no
-    venv on PATH, another working folder."""
-    work = tmp / "elsewhere"
-    work.mkdir(exist_ok=True)
-    env = {"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": str(tmp), "LANG": "C.UTF-8"}
-    return subprocess.run([str(host)], input=script.text(), capture_output=True, text=True,
-                          cwd=work, env=env, timeout=600)
 
 
 def variables(fmu: Path) -> dict:
@@ -267,10 +245,10 @@ def test_ssp_command_pairs_an_fmi3_pantograph_with_the_fmi3_catenary(fmus3, tmp_
 
 # ----------------------------------------------------------------------- the C host
 @pytest.mark.parametrize("name", NAMES)
-def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host3, fmus3, tmp_path, name):
+def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host, fmus3, tmp_path, name):
     case = CATENARY_RUN if name == "catenary" else PANTOGRAPH_RUN
     script = stepping_script(tmp_path, fmus3[name], case)
-    native, twin = run_host3(host3, script, tmp_path), run_twin(script)
+    native, twin = run_host(host, script, tmp_path), run_twin(script)
     assert_clean_exit(native)
     assert twin.returncode == 0, twin.stderr[-3000:]
     a, b = results(native.stdout), results(twin.stdout)
@@ -283,14 +261,14 @@ def test_every_fmi3_fmu_runs_in_the_c_host_as_in_fmpy(host3, fmus3, tmp_path, na
 
 
 @pytest.mark.parametrize("name", ["en50318-2mass", "catenary"])
-def test_the_c_hosts_give_the_same_numbers_with_fmi3_and_fmi2(host3, host, fmus3, fmus,
-                                                              tmp_path, name):
+def test_the_c_host_gives_the_same_numbers_with_fmi3_and_fmi2(host, fmus3, fmus, tmp_path,
+                                                             name):
     case = CATENARY_RUN if name == "catenary" else PANTOGRAPH_RUN
     (tmp_path / "3").mkdir()
     (tmp_path / "2").mkdir()
     s3 = stepping_script(tmp_path / "3", fmus3[name], case)
     s2 = stepping_script(tmp_path / "2", fmus[name], case)
-    p3, p2 = run_host3(host3, s3, tmp_path / "3"), run_host(host, s2, tmp_path / "2")
+    p3, p2 = run_host(host, s3, tmp_path / "3"), run_host(host, s2, tmp_path / "2")
     assert_clean_exit(p3)
     assert_clean_exit(p2)
     a, b = results(p3.stdout), results(p2.stdout)
@@ -299,7 +277,7 @@ def test_the_c_hosts_give_the_same_numbers_with_fmi3_and_fmi2(host3, host, fmus3
         assert a[line] == b[line]                     # 17 digits: bit for bit
 
 
-def test_refused_calls_return_fmi3_statuses_and_the_instance_stays_usable(host3, fmus3,
+def test_refused_calls_return_fmi3_statuses_and_the_instance_stays_usable(host, fmus3,
                                                                            tmp_path):
     s = Script(tmp_path)
     s.load("A", fmus3["en50318-2mass"])
@@ -331,7 +309,7 @@ def test_refused_calls_return_fmi3_statuses_and_the_instance_stays_usable(host3,
     lines["foreign_in_memory"] = s.call("setstate", "A", 1, "B")
     s.call("free", "A")
     s.call("free", "B")
-    proc = run_host3(host3, s, tmp_path)
+    proc = run_host(host, s, tmp_path)
     assert_clean_exit(proc)
     r = results(proc.stdout)
     expected = {"first_step": OK, "unknown_vr": ERROR, "fixed_late": ERROR,
@@ -356,7 +334,7 @@ def test_refused_calls_return_fmi3_statuses_and_the_instance_stays_usable(host3,
         assert text in proc.stdout, text
 
 
-def test_event_mode_follows_the_fmi3_state_machine(host3, fmus3, tmp_path):
+def test_event_mode_follows_the_fmi3_state_machine(host, fmus3, tmp_path):
     s = Script(tmp_path)
     s.load("A", fmus3["en50318-2mass"])
     s.load("B", fmus3["en50318-2mass"])
@@ -381,7 +359,7 @@ def test_event_mode_follows_the_fmi3_state_machine(host3, fmus3, tmp_path):
     lines["b_update"] = s.call("update", "B")
     lines["b_step_mode"] = s.call("stepmode", "B")
     lines["b_step"] = s.call("step", "B", 0.0, 1e-3)
-    proc = run_host3(host3, s, tmp_path)
+    proc = run_host(host, s, tmp_path)
     assert_clean_exit(proc)
     r = results(proc.stdout)
     expected = {"step_in_event_mode": ERROR, "update": OK, "step_mode": OK, "step": OK,
@@ -395,7 +373,7 @@ def test_event_mode_follows_the_fmi3_state_machine(host3, fmus3, tmp_path):
         in proc.stdout
 
 
-def test_a_failed_initialisation_returns_fmi3error_and_asks_to_terminate(host3, fmus3,
+def test_a_failed_initialisation_returns_fmi3error_and_asks_to_terminate(host, fmus3,
                                                                         tmp_path):
     s = Script(tmp_path)
     s.load("A", fmus3["catenary"])
@@ -403,7 +381,7 @@ def test_a_failed_initialisation_returns_fmi3error_and_asks_to_terminate(host3, 
     exit_line = len(s.lines)
     step = s.call("step", "A", 0.0, 1e-3)
     terminate = s.call("terminated", "A")
-    proc = run_host3(host3, s, tmp_path)
+    proc = run_host(host, s, tmp_path)
     assert_clean_exit(proc)
     r = results(proc.stdout)
     assert r[exit_line][0] == ERROR and r[step][0] == DISCARD
@@ -412,7 +390,7 @@ def test_a_failed_initialisation_returns_fmi3error_and_asks_to_terminate(host3, 
 
 
 @pytest.mark.parametrize("name", ["dsa380-rigid", "catenary"])
-def test_state_rollback_is_bit_for_bit(host3, fmus3, tmp_path, name):
+def test_state_rollback_is_bit_for_bit(host, fmus3, tmp_path, name):
     """Step, save, step on, restore, step again: the same values to the last bit; the
     serialized state continues in a fresh instance to the same values."""
     params, port, outputs = CATENARY_RUN if name == "catenary" else PANTOGRAPH_RUN
@@ -439,7 +417,7 @@ def test_state_rollback_is_bit_for_bit(host3, fmus3, tmp_path, name):
     s.call("deserialize", "B", 0, "A")
     moved = s.call("setstate", "B", 0)
     fresh = steps("B", 5, 5)
-    proc = run_host3(host3, s, tmp_path)
+    proc = run_host(host, s, tmp_path)
     assert_clean_exit(proc)
     r = results(proc.stdout)
     assert r[restored][0] == OK and r[moved][0] == OK

@@ -343,8 +343,12 @@ C_STANDARD = {"assert.h", "complex.h", "ctype.h", "errno.h", "fenv.h", "float.h"
               "stdlib.h", "string.h", "tgmath.h", "time.h", "wchar.h", "wctype.h"}
 #: the native FMUs' C sources (fmus/native) and the embedding library's (fmus/fmi/embedding)
 NATIVE, EMBEDDING = ROOT / "fmus" / "native", ROOT / "fmus" / "fmi" / "embedding"
-#: C files of fmus/native that are no part of an FMU: -> why they may include more
-NATIVE_HOSTS = {"realtime_host.c": "the C host that loads the FMUs (dlopen, POSIX clocks)"}
+#: the C host that loads the FMUs (fmus/native/host), no part of an FMU: the platform headers
+#: each of its files may include besides the C standard's, its own and the FMI function types
+HOST = NATIVE / "host"
+HOST_PLATFORM_HEADERS = {"host_loader.c": {"dlfcn.h", "windows.h"},   # loading a library
+                         "host_loops.c": {"windows.h"}}                # the clock
+HOST_FMI_HEADERS = {"../fmi2/fmi2FunctionTypes.h", "../fmi3/fmi3FunctionTypes.h"}
 
 
 def includes(path: pathlib.Path) -> list[str]:
@@ -362,9 +366,23 @@ def test_native_fmu_sources_include_their_own_fmi_and_standard_headers_only():
     files = [p for p in c_files(NATIVE) if p.parent == NATIVE]
     assert {"pcs_model.h", "pcs_data.c", "fmi2_front.c"} <= {p.name for p in files}
     assert {"fmi2Functions.h", "fmi3Functions.h"} <= fmi
-    wrong = [f"{p.relative_to(ROOT)}: {h}" for p in files if p.name not in NATIVE_HOSTS
+    wrong = [f"{p.relative_to(ROOT)}: {h}" for p in files
              for h in includes(p) if h not in own | fmi | C_STANDARD]
     assert not wrong, "includes outside own, FMI and C standard headers:\n" + "\n".join(wrong)
+
+
+def test_the_c_host_includes_the_fmi_types_and_its_platform_headers_only():
+    """The host's files: the C standard's headers, the host's own, the FMI function types and
+    the platform headers of HOST_PLATFORM_HEADERS; no FMU source includes a host file."""
+    files = c_files(HOST)
+    own = {p.name for p in files if p.suffix == ".h"}
+    assert {"host.h", "host_main.c", "host_fmi2.c", "host_fmi3.c"} <= {p.name for p in files}
+    wrong = [f"{p.relative_to(ROOT)}: {h}" for p in files for h in includes(p)
+             if h not in C_STANDARD | own | HOST_FMI_HEADERS
+             | HOST_PLATFORM_HEADERS.get(p.name, set())]
+    wrong += [f"{p.relative_to(ROOT)}: {h}" for p in c_files(NATIVE) if p.parent != HOST
+              for h in includes(p) if pathlib.PurePath(h).name in own]
+    assert not wrong, "host includes outside its table:\n" + "\n".join(wrong)
 
 
 def test_the_two_c_layers_never_include_each_other():
@@ -375,7 +393,8 @@ def test_the_two_c_layers_never_include_each_other():
         theirs = {p.name for p in c_files(other)} - {p.name for p in c_files(here)}
         for p in layers[here]:
             wrong += [f"{p.relative_to(ROOT)}: {h}" for h in includes(p)
-                      if pathlib.PurePath(h).name in theirs or ".." in h]
+                      if pathlib.PurePath(h).name in theirs
+                      or (".." in h and not (p.parent == HOST and h in HOST_FMI_HEADERS))]
     assert not wrong, "includes across the native FMUs and the embedding library:\n" + \
         "\n".join(wrong)
 

@@ -1,4 +1,4 @@
-"""The native C FMUs of ``pantocosim export-native``: a C host (tests/c_hosts/realtime_host.c,
+"""The native C FMUs of ``pantocosim export-native``: the C host (fmus/native/host,
 compiled here) runs them with no Python on PATH from another folder and gets the Python
 models' numbers; the win64 binaries under wine give the Linux numbers; the FMU's own
 sources/ build the same library; doStep allocates nothing; bad data and bad inputs get the
@@ -16,7 +16,6 @@ import pytest
 from tooling import required
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "fmus" / "native" / "realtime_host.c"
 CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 STEPS, DT = 600, 0.001
 
@@ -52,9 +51,11 @@ def exported(prepared, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
-    exe = tmp_path_factory.mktemp("host") / "realtime_host"
-    subprocess.run([required("gcc", "gcc"), *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o",
-                    str(exe), str(HOST_SOURCE), "-ldl", "-lm"], check=True)
+    from pantocosim.master.native.host import HOST_NAME, host_sources
+
+    exe = tmp_path_factory.mktemp("host") / HOST_NAME
+    subprocess.run([required("gcc", "gcc"), *CFLAGS, "-o", str(exe),
+                    *map(str, host_sources()), "-ldl", "-lm"], check=True)
     return exe
 
 
@@ -73,7 +74,7 @@ def run_host(exe, args, tmp_path, wrapper=()):
     assert proc.returncode == 0, proc.stderr[-3000:]
     rows = [line.split() for line in proc.stdout.splitlines() if line[:1].isdigit()]
     counts = {line.split(":")[0]: int(line.split(":")[1]) for line in proc.stdout.splitlines()
-              if line.startswith("allocations")}
+              if line.startswith("allocations") and line.split(":")[1].strip().isdigit()}
     return np.array(rows, dtype=float), counts
 
 
@@ -213,8 +214,10 @@ def test_the_fmu_builds_from_its_own_sources(exported, host, tmp_path):
 def test_win64_binaries_under_wine_give_the_linux_numbers(exported, host, tmp_path):
     mingw = required("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64")
     wine = shutil.which("wine64") or required("wine", "wine64")
-    exe = tmp_path / "realtime_host.exe"
-    subprocess.run([mingw, *CFLAGS, "-o", str(exe), str(HOST_SOURCE)], check=True)
+    from pantocosim.master.native.host import HOST_NAME, host_sources
+
+    exe = tmp_path / (HOST_NAME + ".exe")
+    subprocess.run([mingw, *CFLAGS, "-o", str(exe), *map(str, host_sources())], check=True)
     n = 200
     for name, mode in (("catenary", "forced"), ("en50318-2mass", "pantograph")):
         folder = exported[name]
@@ -237,6 +240,29 @@ def test_coupled_loop_runs_without_python(exported, host, tmp_path):
     assert abs(F.mean() / mean_uplift - 1.0) < 0.2       # the pantograph presses on the wire
     assert np.all(np.abs(got[:, 2] - got[:, 3]) < 0.05)  # and follows it
     assert counts["allocations in doStep"] == 0
+
+
+def test_the_host_names_what_it_cannot_load(exported, host, tmp_path):
+    """The FMI version comes from modelDescription.xml, the library from the host's platform
+    folder: an FMU without either is refused naming the file (exit 3), never run."""
+    cases = {}
+    md = (exported["catenary"] / "modelDescription.xml").read_text()
+    old = shutil.copytree(exported["catenary"], tmp_path / "fmi1")
+    (old / "modelDescription.xml").write_text(md.replace('fmiVersion="2.0"',
+                                                         'fmiVersion="1.0"', 1))
+    cases[old] = "fmiVersion 1.0 (2.0 or 3.0 accepted)"
+    bare = shutil.copytree(exported["catenary"], tmp_path / "no-binaries")
+    shutil.rmtree(bare / "binaries" / "linux64")
+    cases[bare] = f"cannot load {bare}/binaries/linux64/pantocosim_catenary_native.so"
+    nameless = shutil.copytree(exported["catenary"], tmp_path / "no-variable")
+    (nameless / "modelDescription.xml").write_text(md.replace('name="n_supports"',
+                                                              'name="supports"', 1))
+    cases[nameless] = "modelDescription.xml: no variable n_supports"
+    for folder, message in cases.items():
+        proc = subprocess.run([str(host), "forced", str(folder), "5", str(DT)],
+                              capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 3 and message in proc.stderr, (message, proc.stderr)
+        assert not [line for line in proc.stdout.splitlines() if line[:1].isdigit()]
 
 
 # ---------------------------------------------------------------------- FMI behaviour

@@ -1,6 +1,6 @@
-"""The Python FMUs in a C host (their embedding library, no Python host): a C program (tests/c_hosts/fmi2_host.c, compiled here with the
-system's C compiler) dlopens each FMU's linux64 binary and runs the FMI 2.0 call sequence in
-a clean environment (no LD_PRELOAD, no PYTHONPATH, no virtual environment on PATH, another
+"""The Python FMUs in a C host (their embedding library, no Python host): the C host of
+fmus/native/host (compiled here with the system's C compiler) dlopens each FMU's linux64
+binary and runs the FMI 2.0 call sequence in a clean environment (no LD_PRELOAD, no PYTHONPATH, no virtual environment on PATH, another
 working folder). Its outputs equal fmpy's; every refused call returns fmi2Error (fmi2Discard
 from doStep) with a categorised message; the process never aborts."""
 
@@ -14,7 +14,6 @@ from fmi_script import Script, results
 from tooling import c_compiler
 
 ROOT = Path(__file__).resolve().parents[1]
-HOST_SOURCE = ROOT / "tests" / "c_hosts" / "fmi2_host.c"
 TWIN = ROOT / "tests" / "fmi_script.py"
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
 
@@ -28,11 +27,12 @@ CATENARY_RUN = ({"catenary_definition": "en50318", "spans": 4, "speed_kmh": 250.
 
 @pytest.fixture(scope="session")
 def host(tmp_path_factory):
-    """The C host, compiled with the system's C compiler."""
-    cc = c_compiler()
-    exe = tmp_path_factory.mktemp("host") / "fmi2_host"
-    subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe), str(HOST_SOURCE), "-ldl"],
-                   check=True)
+    """The C host (FMI 2.0 and 3.0), compiled with the system's C compiler."""
+    from pantocosim.master.native.host import HOST_NAME, host_sources
+
+    exe = tmp_path_factory.mktemp("host") / HOST_NAME
+    subprocess.run([c_compiler(), "-std=c99", "-O1", "-o", str(exe),
+                    *map(str, host_sources()), "-ldl", "-lm"], check=True)
     return exe
 
 
@@ -46,8 +46,8 @@ def clean_env(home: Path, **extra) -> dict:
 def run_host(host, script: Script, tmp: Path, **env) -> subprocess.CompletedProcess:
     work = tmp / "elsewhere"
     work.mkdir(exist_ok=True)
-    return subprocess.run([str(host)], input=script.text(), capture_output=True, text=True,
-                          cwd=work, env=clean_env(tmp, **env), timeout=600)
+    return subprocess.run([str(host), "script"], input=script.text(), capture_output=True,
+                          text=True, cwd=work, env=clean_env(tmp, **env), timeout=600)
 
 
 def run_twin(script: Script) -> subprocess.CompletedProcess:
@@ -165,7 +165,7 @@ def test_no_python_found_is_logged_and_instantiate_returns_null(host, fmus, tmp_
     runtime = tmp_path / "A" / "resources" / "pantocosim_runtime.txt"
     runtime.write_text("executable=/nonexistent/bin/python\n")
     line = s.call("instantiate", "A", "lost")
-    proc = subprocess.run([str(host)], input=s.text(), capture_output=True, text=True,
+    proc = subprocess.run([str(host), "script"], input=s.text(), capture_output=True, text=True,
                           cwd=tmp_path, timeout=120,
                           env={"PATH": str(tmp_path / "empty"), "HOME": str(tmp_path),
                                "PANTOCOSIM_PYTHON": "/nonexistent/python3"})

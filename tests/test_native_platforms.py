@@ -3,9 +3,11 @@ the clang of the ``ziglang`` wheel (-std=c99 -pedantic -Werror, the FMI 3.0 fron
 binary has its platform's format and exports the FMI functions; a clang build for a CPU
 with fused multiply-add, without -ffp-contract=off, holds no fused multiply-add (the sources
 forbid them) and gives the gcc linux64 binaries' coupled run bit for bit. Every binary this
-machine can run runs a coupled loop (the linear catenary with the 2-mass pantograph and with
-the rigid DSA-380) in a C host of its own platform and gives the linux64 numbers bit for bit:
-aarch64-linux under qemu-user, win64 (the shipped binaries) and win32 under wine. The macOS
+machine can run, FMI 2.0 and FMI 3.0, runs a coupled loop (the linear catenary with the
+2-mass pantograph and with the rigid and flexible DSA-380) in the C host (fmus/native/host)
+built for its own platform, which loads its platform's binaries folder, and gives the linux64
+FMI 2.0 numbers bit for bit: aarch64-linux under qemu-user, win64 (the shipped binaries) and
+win32 under wine. The macOS
 binaries (untested on Apple hardware) are checked through their Mach-O load commands: CPU,
 libSystem alone, exports, minimum macOS, and the arm64 ad-hoc signature's page hashes."""
 
@@ -109,12 +111,14 @@ def objdump_fma(lib) -> int:
 
 
 def host_exe(tmp_path):
-    from test_native_fmus import CFLAGS, HOST_SOURCE
+    from test_native_fmus import CFLAGS
 
-    exe = tmp_path / "realtime_host"
+    from pantocosim.master.native.host import HOST_NAME, host_sources
+
+    exe = tmp_path / HOST_NAME
     if not exe.exists():
-        subprocess.run([required("gcc", "gcc"), *CFLAGS, "-D_POSIX_C_SOURCE=200809L", "-o",
-                        str(exe), str(HOST_SOURCE), "-ldl", "-lm"], check=True)
+        subprocess.run([required("gcc", "gcc"), *CFLAGS, "-o", str(exe),
+                        *map(str, host_sources()), "-ldl", "-lm"], check=True)
     return exe
 
 
@@ -134,9 +138,10 @@ SSE = ["-msse2", "-mfpmath=sse"]          # a 32-bit x86 build: doubles in SSE r
 
 @pytest.fixture(scope="module")
 def coupled_fmus(tmp_path_factory):
-    """The FMI 2.0 native catenary and pantograph FMUs of en50318-300 (2-mass pantograph)
-    and dsa380-ave-300 (rigid, and flexible, DSA-380) on six spans, with their shipped linux64
-    and win64 binaries, unpacked: {case: (catenary folder, pantograph folder)}."""
+    """The FMI 2.0 and 3.0 native catenary and pantograph FMUs of en50318-300 (2-mass
+    pantograph) and dsa380-ave-300 (rigid, and flexible, DSA-380) on six spans, with their
+    shipped Linux and Windows x86-64 binaries, unpacked: {(case, FMI version): (catenary
+    folder, pantograph folder)}."""
     from pantocosim.master.native.models import export_scenario
     from pantocosim.master.run import prepare
     from pantocosim.master.scenario import load_scenario
@@ -150,21 +155,24 @@ def coupled_fmus(tmp_path_factory):
         pans = [dataclasses.replace(p, model=pantograph) for p in sc.pantographs]
         prep = prepare(dataclasses.replace(sc, pantographs=pans, catenary_model="linear",
                                            spans=6, window_supports=(1, 3)))
-        written, kept = export_scenario(prep, out / scenario, fmi=2, win64=True)
-        assert [p.stem for p in written] == ["catenary", pantograph] and kept == []
-        for fmu in written:
-            with zipfile.ZipFile(fmu) as z:
-                z.extractall(out / scenario / fmu.stem)
-        pairs[scenario] = (out / scenario / "catenary", out / scenario / pantograph)
+        for fmi in (2, 3):
+            folder = out / f"{scenario}-fmi{fmi}"
+            written, kept = export_scenario(prep, folder, fmi=fmi, win64=True)
+            assert [p.stem for p in written] == ["catenary", pantograph] and kept == []
+            for fmu in written:
+                with zipfile.ZipFile(fmu) as z:
+                    z.extractall(folder / fmu.stem)
+            pairs[scenario, fmi] = (folder / "catenary", folder / pantograph)
     return pairs
 
 
 @pytest.fixture(scope="module")
 def linux_rows(coupled_fmus, tmp_path_factory):
-    """The linux64 coupled run of each pair: {scenario: rows t F z_pantograph z_wire}."""
+    """The linux64 FMI 2.0 coupled run of each pair: {scenario: rows t F z_pantograph
+    z_wire}."""
     tmp = tmp_path_factory.mktemp("linux64")
     return {scenario: run_host(host_exe(tmp), ["coupled", *folders, STEPS, DT], tmp)[0]
-            for scenario, folders in coupled_fmus.items()}
+            for (scenario, fmi), folders in coupled_fmus.items() if fmi == 2}
 
 
 def zig_build(target):
@@ -172,8 +180,7 @@ def zig_build(target):
         pytest.importorskip("ziglang")
         cmd = [sys.executable, "-m", "ziglang", "cc", "-target", target]
         if host:
-            cmd += [*HOST_FLAGS, "-D_POSIX_C_SOURCE=200809L", "-o", str(out), str(sources),
-                    "-ldl", "-lm"]
+            cmd += [*HOST_FLAGS, "-o", str(out), *map(str, sources), "-ldl", "-lm"]
         else:
             cmd += [*LIB_FLAGS, "-fPIC", "-fvisibility=hidden", f"-I{sources}",
                     *map(str, sorted(sources.glob("*.c"))), "-o", str(out), "-lm"]
@@ -185,7 +192,7 @@ def mingw_build(compiler, package, extra=()):
     def build(sources, out, host=False):
         cc = required(compiler, package)
         if host:
-            cmd = [cc, *HOST_FLAGS, *extra, "-o", str(out), str(sources)]
+            cmd = [cc, *HOST_FLAGS, *extra, "-o", str(out), *map(str, sources)]
         else:
             cmd = [cc, *LIB_FLAGS, *extra, f"-I{sources}", *map(str, sorted(sources.glob("*.c"))),
                    "-o", str(out), "-static-libgcc"]
@@ -209,17 +216,16 @@ def windows_path(path) -> str:
     return "Z:" + str(path).replace("/", "\\")
 
 
-#: platform: (builder, runner, the folder the C host loads from, library suffix, a path as
-#: the host sees it, rebuilt from sources/: False for the binaries export-native ships).
-#: The C host loads binaries/linux64/*.so on Linux and binaries/win64/*.dll on Windows, so
-#: the aarch64 and win32 libraries are built into those folders of a copy of the FMU.
+#: platform: (builder, runner, zig target (TARGETS: its FMI 2.0 and 3.0 binaries folders),
+#: library suffix, a path as the host sees it, rebuilt from sources/: False for the binaries
+#: export-native ships). The host built for a platform loads that platform's folder.
 PLATFORMS = {
-    "aarch64-linux": (zig_build("aarch64-linux-gnu"), qemu_aarch64, "linux64", ".so", str,
-                      True),
-    "win64": (mingw_build("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64"), wine, "win64",
-              ".dll", windows_path, False),
-    "win32": (mingw_build("i686-w64-mingw32-gcc", "gcc-mingw-w64-i686", SSE), wine, "win64",
-              ".dll", windows_path, True),
+    "aarch64-linux": (zig_build("aarch64-linux-gnu"), qemu_aarch64, "aarch64-linux-gnu",
+                      ".so", str, True),
+    "win64": (mingw_build("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64"), wine,
+              "x86_64-windows-gnu", ".dll", windows_path, False),
+    "win32": (mingw_build("i686-w64-mingw32-gcc", "gcc-mingw-w64-i686", SSE), wine,
+              "x86-windows-gnu", ".dll", windows_path, True),
 }
 MISSING_32BIT_WINE = ("32-bit wine", "dpkg --add-architecture i386 && apt-get update && "
                       "apt-get install -y wine32")
@@ -227,16 +233,17 @@ MISSING_32BIT_WINE = ("32-bit wine", "dpkg --add-architecture i386 && apt-get up
 
 @pytest.fixture(scope="module", params=sorted(PLATFORMS))
 def platform(request, coupled_fmus, tmp_path_factory):
-    """A platform's C host and the pairs' libraries, built once: (name, host, runner,
-    {scenario: (catenary folder, pantograph folder) as the host sees them})."""
-    from test_native_fmus import HOST_SOURCE
+    """A platform's C host and the pairs' libraries in its own binaries folders, built once:
+    (name, host, runner, {(case, FMI version): (catenary folder, pantograph folder) as the
+    host sees them})."""
+    from pantocosim.master.native.host import HOST_NAME, host_sources
 
     name = request.param
-    build, runner, folder, suffix, seen, rebuilt = PLATFORMS[name]
+    build, runner, target, suffix, seen, rebuilt = PLATFORMS[name]
     wrapper = runner()
     out = tmp_path_factory.mktemp(name)
-    host = out / ("realtime_host" + (".exe" if suffix == ".dll" else ""))
-    build(HOST_SOURCE, host, host=True)
+    host = out / (HOST_NAME + (".exe" if suffix == ".dll" else ""))
+    build(host_sources(), host, host=True)
     probe = subprocess.run([*wrapper, str(host)], capture_output=True, text=True, timeout=300,
                            env={"PATH": "/usr/bin:/bin", "HOME": str(out), "WINEDEBUG": "-all",
                                 "WINEPREFIX": str(tmp_path_factory.getbasetemp() /
@@ -245,40 +252,63 @@ def platform(request, coupled_fmus, tmp_path_factory):
         missing(*MISSING_32BIT_WINE) if name == "win32" else pytest.fail(
             f"the {name} host does not start: {probe.stderr[-2000:]}")
     pairs = {}
-    for scenario, folders in coupled_fmus.items():
+    for (scenario, fmi), folders in coupled_fmus.items():
+        folder = TARGETS[target][fmi - 2]
         copies = []
         for fmu in folders:
-            copy = shutil.copytree(fmu, out / scenario / fmu.name)
-            identifier = next((copy / "binaries" / "linux64").glob("*.so")).stem
-            if rebuilt:
+            copy = shutil.copytree(fmu, out / f"{scenario}-fmi{fmi}" / fmu.name)
+            identifier = next((copy / "binaries" / TARGETS["x86_64-linux-gnu"][fmi - 2])
+                              .glob("*.so")).stem
+            if rebuilt:     # this platform's library alone, in its own folder
                 shutil.rmtree(copy / "binaries")
                 (copy / "binaries" / folder).mkdir(parents=True)
                 build(copy / "sources", copy / "binaries" / folder / (identifier + suffix))
             assert (copy / "binaries" / folder / (identifier + suffix)).exists()
             copies.append(seen(copy))
-        pairs[scenario] = tuple(copies)
+        pairs[scenario, fmi] = tuple(copies)
     return name, host, wrapper, pairs
 
 
-@pytest.mark.parametrize("scenario", sorted(PAIRS))
-def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_rows, scenario,
-                                                             tmp_path):
-    name, host, wrapper, pairs = platform
-    linux = linux_rows[scenario]
-    got, counts = run_host(host, ["coupled", *pairs[scenario], STEPS, DT], tmp_path,
-                           wrapper=wrapper)
+def assert_linux64_numbers(linux, got, label, bound):
+    """The rows of a coupled run equal the linux64 FMI 2.0 rows bit for bit (``bound``: to
+    1e-11 of each column's largest value)."""
     assert linux.shape == got.shape == (STEPS, 4)
     assert np.all(linux[:, 1] > 0.0) and linux[:, 1].mean() > 50.0    # in contact throughout
-    if (name, scenario) in LIBM_BOUND:
+    if bound:
         # the flexible DSA-380 calls libm functions whose last bit differs between glibc and
         # the Windows C runtime: the force agrees to 1e-11 of its mean, not bit for bit
         scale = np.abs(linux).max(axis=0) + 1.0
         assert np.all(np.abs(got - linux) <= 1e-11 * scale), (
-            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+            f"{label}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
     else:
         assert got.tobytes() == linux.tobytes(), (
-            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+            f"{label}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+
+
+@pytest.mark.parametrize("scenario", sorted(PAIRS))
+def test_fmi3_coupled_run_gives_the_fmi2_bits_on_linux64(coupled_fmus, linux_rows, scenario,
+                                                         tmp_path):
+    got, counts = run_host(host_exe(tmp_path), ["coupled", *coupled_fmus[scenario, 3], STEPS,
+                                                DT], tmp_path)
+    assert_linux64_numbers(linux_rows[scenario], got, f"x86_64-linux FMI 3.0, {scenario}",
+                           False)
     assert counts["allocations in doStep"] == 0
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("scenario", sorted(PAIRS))
+def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_rows, scenario,
+                                                             fmi, tmp_path):
+    name, host, wrapper, pairs = platform
+    proc_rows, counts = run_host(host, ["coupled", *pairs[scenario, fmi], STEPS, DT], tmp_path,
+                                 wrapper=wrapper)
+    assert_linux64_numbers(linux_rows[scenario], proc_rows, f"{name} FMI {fmi}.0, {scenario}",
+                           (name, scenario) in LIBM_BOUND)
+    if name.startswith("win") and fmi == 3:
+        # FMI 3.0 has no memory callbacks and the host interposes malloc on Linux only
+        assert "allocations in doStep" not in counts
+    else:
+        assert counts["allocations in doStep"] == 0
 
 
 # ------------------------------------------------------- macOS: the Mach-O load commands

@@ -6,15 +6,14 @@ third-party master (libcosim), and a pantograph FMU in a native C host.
 Works in DIR (default ``tutorial-fmi``): builds the FMUs into DIR/dist/fmus (or links the
 folder --fmus, FMUs built before by ``pantocosim build-fmus``), runs a short scenario with each
 coupling, writes the SSP file of a swapped pantograph and runs it in libcosim, and runs a
-pantograph FMU in the C host ``tests/c_hosts/fmi2_host.c``; writes ``summary.json``.
+pantograph FMU in the C host of the package (``fmus/native/host``, its script mode); writes
+``summary.json``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -23,8 +22,7 @@ from pathlib import Path
 
 from tutorial_cli import FILES, pantocosim  # (beside this script)
 
-
-ROOT = Path(__file__).resolve().parents[2]
+from pantocosim.master.native.host import build_host
 
 SHORT = (FILES / "short.toml").read_text()
 
@@ -49,13 +47,10 @@ def recipe(master: str, *args: str, cwd: Path) -> dict:
 
 
 def native_host(fmu: Path, work: Path) -> list[float]:
-    """Run ``fmu`` in the C host of tests/native (dlopen of its linux64 binary, in an
-    environment without Python variables): static start under 120 N, then 100 steps of 1 ms
-    under 130 N; the contact heights it reads after each step."""
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    exe = work / "fmi2_host"
-    subprocess.run([cc, "-std=c11", "-O1", "-o", str(exe),
-                    str(ROOT / "tests" / "c_hosts" / "fmi2_host.c"), "-ldl"], check=True)
+    """Run ``fmu`` in the package's C host (dlopen of its linux64 binary, in an environment
+    without Python variables): static start under 120 N, then 100 steps of 1 ms under 130 N;
+    the contact heights it reads after each step."""
+    exe = build_host(work)
     unpacked = work / fmu.stem
     with zipfile.ZipFile(fmu) as z:
         z.extractall(unpacked)
@@ -70,8 +65,8 @@ def native_host(fmu: Path, work: Path) -> list[float]:
         calls += [f"set P r {vr['contact_force']} 130.0", f"step P {k * 1e-3!r} 0.001",
                   f"get P r {vr['contact_height']}"]
     calls += ["terminate P", "free P"]
-    proc = subprocess.run([str(exe)], input="\n".join(calls) + "\n", capture_output=True,
-                          text=True, cwd=work, env={"PATH": "/usr/bin:/bin", "HOME": str(work)})
+    proc = subprocess.run([str(exe), "script"], input="\n".join(calls) + "\n",
+                          capture_output=True, text=True, cwd=work, env={"PATH": "/usr/bin:/bin", "HOME": str(work)})
     # --8<-- [end:native]
     if proc.returncode != 0:
         sys.exit(f"native host failed:\n{proc.stdout[-2000:]}{proc.stderr[-2000:]}")

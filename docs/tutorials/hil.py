@@ -3,9 +3,8 @@
     python docs/tutorials/hil.py [--out DIR] [--steps N]
 
 Exports en50318-300's linear catenary and its 2-mass pantograph as native C FMUs
-(``pantocosim export-native``), unpacks them, compiles the C host
-``fmus/native/realtime_host.c`` with the system's C compiler and runs the coupled loop at
-1 kHz, first as fast as it goes, then paced to the wall clock; writes ``summary.json``.
+(``pantocosim export-native``), unpacks them, compiles the package's C host
+(``fmus/native/host``) with the system's C compiler and runs the coupled loop at 1 kHz, first as fast as it goes, then paced to the wall clock; writes ``summary.json``.
 """
 
 from __future__ import annotations
@@ -68,13 +67,13 @@ def main(argv=None) -> dict:
     # --8<-- [start:host]
     import pantocosim as package
 
-    source = Path(package.__file__).resolve().parent / "native" / "realtime_host.c"
+    sources = sorted((Path(package.__file__).resolve().parent / "native" / "host").glob("*.c"))
     cc = os.environ.get("CC") or shutil.which("gcc") or shutil.which("cc")
-    subprocess.run([cc, "-std=c99", "-O2", str(source), "-o", str(out / "realtime_host"),
+    subprocess.run([cc, "-std=c99", "-O2", *map(str, sources), "-o", str(out / "pantocosim_host"),
                     "-ldl", "-lm"], check=True)
     # --8<-- [end:host]
-    runs = {"unpaced": host_run(out / "realtime_host", out, args.steps, False),
-            "paced": host_run(out / "realtime_host", out, args.steps, True)}
+    runs = {"unpaced": host_run(out / "pantocosim_host", out, args.steps, False),
+            "paced": host_run(out / "pantocosim_host", out, args.steps, True)}
     (out / "summary.json").write_text(json.dumps(runs, indent=2))
     for label, r in runs.items():
         c = r["catenary"]
