@@ -1,7 +1,7 @@
 /*
  * The FMI 2.0 front of the host: HostApi's calls as FMI 2.0 calls of the FMU's library
  * (the function types of ../fmi2), resolved once at load; a call the library does not
- * export stops the host naming it (exit 3). Resources: a file:// URI of the FMU's folder.
+ * export stops the host naming it (exit 2). Resources: a file:// URI of the FMU's folder.
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -28,7 +28,7 @@ static Fmi2Calls *need(HostFmu *f, int present, const char *name)
 {
     if (!present) {
         fprintf(stderr, "%s: no symbol fmi2%s\n", f->dir, name);
-        exit(3);
+        exit(2);
     }
     return (Fmi2Calls *)f->calls;
 }
@@ -183,7 +183,7 @@ static const HostApi FMI2 = {
 void host_fmi2_bind(HostFmu *f)
 {
     Fmi2Calls *calls = (Fmi2Calls *)calloc(1, sizeof *calls);
-    if (!calls) exit(3);
+    if (!calls) exit(2);
 #define BIND(name) calls->name = (fmi2##name##TYPE *)host_symbol(f, "fmi2" #name);
     FMI2_CALLS(BIND)
 #undef BIND

@@ -1,7 +1,7 @@
 /*
  * The FMI 3.0 front of the host: HostApi's calls as FMI 3.0 co-simulation calls of the
  * FMU's library (the function types of ../fmi3), resolved once at load; a call the library
- * does not export stops the host naming it (exit 3). FMI 2.0's words map as: setup keeps
+ * does not export stops the host naming it (exit 2). FMI 2.0's words map as: setup keeps
  * the start time for fmi3EnterInitializationMode; Real, Integer are Float64, Int32;
  * terminated and last time are those fmi3DoStep returned. Resources: the folder's native
  * path with a trailing separator.
@@ -30,7 +30,7 @@ static Fmi3Calls *need(HostFmu *f, int present, const char *name)
 {
     if (!present) {
         fprintf(stderr, "%s: no symbol fmi3%s\n", f->dir, name);
-        exit(3);
+        exit(2);
     }
     return (Fmi3Calls *)f->calls;
 }
@@ -220,7 +220,7 @@ static const HostApi FMI3 = {
 void host_fmi3_bind(HostFmu *f)
 {
     Fmi3Calls *calls = (Fmi3Calls *)calloc(1, sizeof *calls);
-    if (!calls) exit(3);
+    if (!calls) exit(2);
 #define BIND(name) calls->name = (fmi3##name##TYPE *)host_symbol(f, "fmi3" #name);
     FMI3_CALLS(BIND)
 #undef BIND

@@ -93,7 +93,7 @@ static void resolve(HostFmu *f, const char *given)
     if (!realpath(given, f->dir)) {
 #endif
         fprintf(stderr, "no folder %s\n", given);
-        exit(3);
+        exit(2);
     }
 }
 
@@ -124,13 +124,13 @@ static void describe(HostFmu *f, const char *identifier, const char *token)
                            sizeof version)) {
         fprintf(stderr, "%s/modelDescription.xml: no fmiVersion (2.0 or 3.0 accepted)\n",
                 f->dir);
-        exit(3);
+        exit(2);
     }
     f->version = version[0] == '2' ? 2 : version[0] == '3' ? 3 : 0;
     if (!f->version) {
         fprintf(stderr, "%s/modelDescription.xml: fmiVersion %s (2.0 or 3.0 accepted)\n",
                 f->dir, version);
-        exit(3);
+        exit(2);
     }
     if (identifier) snprintf(f->identifier, sizeof f->identifier, "%s", identifier);
     else host_attribute(f->description, "CoSimulation", "modelIdentifier", f->identifier,
@@ -155,7 +155,7 @@ void host_load(HostFmu *f, const char *dir, const char *identifier, const char *
 #endif
     if (!f->library) {
         fprintf(stderr, "cannot load %s\n", path);
-        exit(3);
+        exit(2);
     }
     if (f->version == 2) host_fmi2_bind(f);
     else host_fmi3_bind(f);

@@ -119,7 +119,7 @@ static double *times(int steps)
     double *t = (double *)calloc((size_t)(steps > 0 ? steps : 1), sizeof(double));
     if (!t) {
         fprintf(stderr, "no memory for %d step times\n", steps);
-        exit(3);
+        exit(2);
     }
     return t;
 }

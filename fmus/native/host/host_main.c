@@ -34,7 +34,7 @@
  *       one FMI call a line from standard input (the language: host_script.c)
  *
  * Every loop prints "allocations in doStep: N" (host_memory.c says what counts them).
- * Exit codes: 0 done, 2 bad arguments, 3 an FMU that cannot be loaded, 4 an instance that
+ * Exit codes: 0 done, 2 bad input (arguments, an FMU that cannot be loaded), 4 an instance that
  * cannot be made, 5 a call that fails in a loop.
  */
 #include <stdio.h>

@@ -57,5 +57,5 @@ unsigned host_value_reference(const HostFmu *f, const char *name)
             return (unsigned)strtoul(number, NULL, 10);
     }
     fprintf(stderr, "%s/modelDescription.xml: no variable %s\n", f->dir, name);
-    exit(3);
+    exit(2);
 }

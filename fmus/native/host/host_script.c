@@ -39,7 +39,7 @@ static HostFmu *find(const char *alias)
     for (i = 0; alias && i < n_fmus; i++)
         if (strcmp(fmus[i].alias, alias) == 0) return &fmus[i];
     fprintf(stderr, "unknown FMU alias %s\n", alias ? alias : "(none)");
-    exit(3);
+    exit(2);
 }
 
 static void append(const char *format, const void *value, char kind)
@@ -57,7 +57,7 @@ static int kind_of(const char *word, int line)
     if (!k || !word[0]) {
         fprintf(stderr, "line %d: type %s (r, i, b or s accepted)\n", line,
                 word ? word : "(none)");
-        exit(3);
+        exit(2);
     }
     return (int)(k - "ribs");
 }
@@ -179,7 +179,7 @@ static void offered(const HostFmu *f, int present, const char *cmd, int line)
 {
     if (!present) {
         fprintf(stderr, "line %d: %s is no FMI %d.0 call\n", line, cmd, f->version);
-        exit(3);
+        exit(2);
     }
 }
 
@@ -237,7 +237,7 @@ static int run(int line, char **a, int n)
     else if (!strcmp(cmd, "unsupported")) s = f->api->unsupported(f);
     else {
         fprintf(stderr, "line %d: unknown call %s with %d words\n", line, cmd, n);
-        exit(3);
+        exit(2);
     }
     printf("= %d %s %d%s\n", line, cmd, s, extra);
     return s;
