@@ -29,10 +29,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numba import njit
 
-from ..core.affine_kernels import sym_product
 from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
+from .compiled_forces import CompiledForces, _inertia_and_rest
 from .contact_point import ContactLocator, ContactPoint
 from .definition import CatenaryDefinition, load_catenary
 from .mesh import CatenaryMesh, build_mesh
@@ -109,6 +109,9 @@ class CatenaryModel(SecondOrderModel):
         self._cp_cache: tuple | None = None
         self._loads: tuple | None = None
         self._support_free = None
+        #: the residual in one compiled call (None: a structure evaluated part by part)
+        self._compiled = CompiledForces.of(S)
+        self._no_loads = np.zeros(0)
 
     # ------------------------------------------------------------------ geometry
     def positions(self, t: float) -> np.ndarray:
@@ -266,13 +269,17 @@ class CatenaryModel(SecondOrderModel):
 
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         S = self.structure
-        f, K, slack_now = S.internal(S.full(q), tangent)
+        loads = self._no_loads if inputs is None else self._step_loads(t, inputs)
+        if self._compiled is not None:
+            Ma, f_rest, K, slack_now = self._compiled.evaluate(
+                q, v, a, tangent, self._M_band, self._C_band, self._slack_committed,
+                self._dropper_free, self._dropper_C, self.weight, loads)
+        else:
+            f, K, slack_now = S.internal(S.full(q), tangent)
+            Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v,
+                                           self._slack_committed, self._dropper_free,
+                                           self._dropper_C, f, S.free, self.weight, loads)
         slack_now = slack_now[self.mesh.dropper_bars]
-        Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v, self._slack_committed,
-                                       self._dropper_free, self._dropper_C, f, S.free,
-                                       self.weight)
-        if inputs is not None:
-            f_rest -= self._step_loads(t, inputs)
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
                         structure_key=(slack_now.tobytes(), self._slack_committed.tobytes()))
         if tangent:
@@ -326,36 +333,6 @@ def _wire_point(dofs, w, dw, q, v):
         vz += w[i] * v[j]
         slope += dw[i] * q[j]
     return z, vz, slope
-
-
-@njit(cache=True)
-def _inertia_and_rest(M, a, C, v, slack, d_free, d_C, f_full, free, weight):
-    """(M a, C v + f_full[free] - weight) of (3.25)-(3.26): M and C are symmetric sparse
-    bands (:class:`SparseBand` parts, C with every dropper taut); the Rayleigh share of the
-    ``slack`` droppers (their 6 x 6 blocks ``d_C`` on the free DOFs ``d_free``, -1: fixed)
-    is taken out of C v."""
-    n = free.shape[0]
-    Ma = np.empty(n)
-    rest = np.empty(n)
-    below = np.empty(n)
-    sym_product(M, a, Ma, below)
-    sym_product(C, v, rest, below)
-    for d in range(slack.shape[0]):
-        if not slack[d]:
-            continue
-        for i in range(6):
-            r = d_free[d, i]
-            if r < 0:
-                continue
-            s = 0.0
-            for j in range(6):
-                c = d_free[d, j]
-                if c >= 0:
-                    s += d_C[d, 6 * i + j] * v[c]
-            rest[r] -= s
-    for i in range(n):
-        rest[i] = (rest[i] + f_full[free[i]]) - weight[i]
-    return Ma, rest
 
 
 @njit(cache=True)
