@@ -74,6 +74,31 @@ class CompiledForces:
                            slack, d_free, d_C, weight, loads, GAUSS_XI, GAUSS_W)
         return Ma, rest, (K if want_K else None), self.bars.slack
 
+    def compressed(self, q, bars) -> np.ndarray:
+        """Whether each of ``bars`` is shorter than unstretched at q (axial force N < 0 of
+        the bilateral law, ``BarSet.axial_forces``)."""
+        S = self.structure
+        return _compressed(S.x_full, S.free, q, self.x, self.bar_arrays, bars)
+
+
+@njit(cache=True)
+def _compressed(x_base, free, q, x, bar, bars):
+    """N < 0 of ``bars`` at q, with N as ``BarSet.axial_forces``."""
+    dofs, dX, l0, EA = bar[0], bar[1], bar[2], bar[3]
+    for i in range(x.shape[0]):
+        x[i] = x_base[i]
+    for i in range(free.shape[0]):
+        x[free[i]] = q[i]
+    out = np.empty(bars.shape[0], dtype=np.bool_)
+    for i in range(bars.shape[0]):
+        b = bars[i]
+        d0 = (x[dofs[b, 3]] - x[dofs[b, 0]]) + dX[b, 0]
+        d1 = (x[dofs[b, 4]] - x[dofs[b, 1]]) + dX[b, 1]
+        d2 = (x[dofs[b, 5]] - x[dofs[b, 2]]) + dX[b, 2]
+        ln = np.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
+        out[i] = EA[b] * (ln - l0[b]) / l0[b] < 0.0
+    return out
+
 
 def _cable_arrays(cab: CableSet | None) -> tuple:
     if cab is None or not len(cab):

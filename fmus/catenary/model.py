@@ -307,6 +307,9 @@ class CatenaryModel(SecondOrderModel):
         return lu.solve
 
     def commit(self, t, q, v, a, inputs) -> None:
+        if self._compiled is not None:
+            self._slack_committed = self._compiled.compressed(q, self.mesh.dropper_bars)
+            return
         S = self.structure
         N = S.bars.axial_forces(S.full(q), tension_only=False)[self.mesh.dropper_bars]
         self._slack_committed = N < 0.0
