@@ -45,6 +45,9 @@ from .structure import scatter_add
 #: sparser ones entry by entry): the fastest on the EN 50318 and AVE lines
 BAND_FILL = 0.3
 
+#: damping matrices kept for the last slack sets of the droppers (each one nnz floats)
+KEPT_DAMPINGS = 4
+
 
 class CatenaryModel(SecondOrderModel):
     """Finite-element catenary with moving point loads.
@@ -96,8 +99,7 @@ class CatenaryModel(SecondOrderModel):
         self._dropper_pos = S.bars.pos_blocks[db]
         self._slack_committed = np.zeros(len(db), dtype=bool)
         # damping matrix for the committed slack set (see _damping)
-        self._C = S.csr(self._C_base.copy())
-        self._C_key = self._slack_committed.tobytes()
+        self._C = {self._slack_committed.tobytes(): S.csr(self._C_base.copy())}
         # for the residual: M on its own (sparser) pattern
         self._M_own = S.mass.copy()
         self._M_own.eliminate_zeros()
@@ -233,15 +235,22 @@ class CatenaryModel(SecondOrderModel):
 
     # ------------------------------------------------------------------ dynamics
     def _damping(self, slack) -> sp.csr_matrix:
-        """C on the shared pattern without the Rayleigh share of the ``slack`` droppers
-        (rebuilt only when the set changes)."""
+        """C on the shared pattern without the Rayleigh share of the ``slack`` droppers,
+        the last :data:`KEPT_DAMPINGS` sets' kept (a dropper slackening and tightening
+        again over a few steps comes back to a set seen)."""
         key = slack.tobytes()
-        if key != self._C_key:
-            C = self._C_base.copy()
+        kept = self._C
+        C = kept.pop(key, None)
+        if C is None:
+            data = self._C_base.copy()
             if slack.any():
-                scatter_add(C, self._dropper_pos[slack].ravel(), -self._dropper_C[slack].ravel())
-            self._C, self._C_key = self.structure.csr(C), key
-        return self._C
+                scatter_add(data, self._dropper_pos[slack].ravel(),
+                            -self._dropper_C[slack].ravel())
+            C = self.structure.csr(data)
+            if len(kept) >= KEPT_DAMPINGS:
+                kept.pop(next(iter(kept)))
+        kept[key] = C          # most recently used last
+        return C
 
     def input_vector(self, t: float, inputs) -> np.ndarray:
         """sum_k N_k^T F_k on the free DOFs (upward contact forces)."""

@@ -122,9 +122,18 @@ class SecondOrderModel:
 
 
 def _dense_lu(S: np.ndarray):
-    lu_piv = sla.lu_factor(S, check_finite=False)
+    """``solve(rhs)`` by LU (LAPACK getrf/getrs, as ``scipy.linalg.lu_factor``/``lu_solve``);
+    a float vector or matrix of the right height goes to getrs directly (the same LAPACK call
+    without ``lu_solve``'s checks, which cost ten times the solve of a small body)."""
+    lu, piv = sla.lu_factor(S, check_finite=False)
+    getrs, = sla.get_lapack_funcs(("getrs",), (lu,))
 
     def solve(rhs):
-        return sla.lu_solve(lu_piv, rhs, check_finite=False)
+        b = np.asarray(rhs)
+        if b.dtype == lu.dtype and b.ndim in (1, 2) and b.shape[0] == lu.shape[0] and b.size:
+            x, info = getrs(lu, piv, b)
+            if info == 0:
+                return x
+        return sla.lu_solve((lu, piv), rhs, check_finite=False)
 
     return solve
