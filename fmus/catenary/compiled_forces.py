@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from ..core.affine_kernels import sym_product
+from ..core.newmark_residual import iterate_kinematics, weighted_residual
 from .ancf_cable import GAUSS_W, GAUSS_XI, CableSet, cable_forces
 from .bar import BarSet, bar_forces
 from .ground_spring import GroundSprings
@@ -73,6 +74,18 @@ class CompiledForces:
                            self.cables, self.bar_arrays, self.springs, M_band, C_band, a, v,
                            slack, d_free, d_C, weight, loads, GAUSS_XI, GAUSS_W)
         return Ma, rest, (K if want_K else None), self.bars.slack
+
+    def iterate(self, q, q_p, v_p, c_a, c_v, c_f, hist, want_K: bool, M_band, C_band, slack,
+                d_free, d_C, weight, loads):
+        """(a, v, M a, f_rest, R, max |R|, size of the forces, K data or None, slack flags)
+        at the iterate q of :func:`~pantocosim.core.newmark_residual.iterate_kinematics`
+        with R of :func:`~pantocosim.core.newmark_residual.weighted_residual`."""
+        S = self.structure
+        K = np.zeros(S.nnz) if want_K else self.K_empty
+        out = _iterate(self.kinds, S.x_full, S.free, q, q_p, v_p, c_a, c_v, c_f, hist, self.x,
+                       self.f, want_K, K, self.cables, self.bar_arrays, self.springs, M_band,
+                       C_band, slack, d_free, d_C, weight, loads, GAUSS_XI, GAUSS_W)
+        return out + ((K if want_K else None), self.bars.slack)
 
     def compressed(self, q, bars) -> np.ndarray:
         """Whether each of ``bars`` is shorter than unstretched at q (axial force N < 0 of
@@ -192,6 +205,17 @@ def _forces(kinds, x_base, free, q, x, f, want_K, K, cab, bar, spr, M, C, a, v, 
         elif kind == 3:
             _springs_into(x, spr, want_K, f, K)
     return _inertia_and_rest(M, a, C, v, slack, d_free, d_C, f, free, weight, loads)
+
+
+@njit(cache=True)
+def _iterate(kinds, x_base, free, q, q_p, v_p, c_a, c_v, c_f, hist, x, f, want_K, K, cab, bar,
+             spr, M, C, slack, d_free, d_C, weight, loads, gx, gw):
+    """:func:`_forces` at a Newton iterate, between the integrator's kernels."""
+    a, v = iterate_kinematics(q, q_p, v_p, c_a, c_v)
+    Ma, rest = _forces(kinds, x_base, free, q, x, f, want_K, K, cab, bar, spr, M, C, a, v,
+                       slack, d_free, d_C, weight, loads, gx, gw)
+    R, r_max, scale = weighted_residual(Ma, rest, hist, c_f)
+    return a, v, Ma, rest, R, r_max, scale
 
 
 @njit(cache=True)

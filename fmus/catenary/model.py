@@ -32,6 +32,7 @@ from numba import njit
 from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
+from ..core.newmark_residual import iterate_kinematics, weighted_residual
 from .compiled_forces import CompiledForces, _inertia_and_rest
 from .contact_point import ContactLocator, ContactPoint
 from .definition import CatenaryDefinition, load_catenary
@@ -278,7 +279,7 @@ class CatenaryModel(SecondOrderModel):
 
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         S = self.structure
-        loads = self._no_loads if inputs is None else self._step_loads(t, inputs)
+        loads = self._loads_at(t, inputs)
         if self._compiled is not None:
             Ma, f_rest, K, slack_now = self._compiled.evaluate(
                 q, v, a, tangent, self._M_band, self._C_band, self._slack_committed,
@@ -288,13 +289,36 @@ class CatenaryModel(SecondOrderModel):
             Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v,
                                            self._slack_committed, self._dropper_free,
                                            self._dropper_C, f, S.free, self.weight, loads)
-        slack_now = slack_now[self.mesh.dropper_bars]
+        return self._evaluation(Ma, f_rest, K, slack_now)
+
+    #: :meth:`iterate` in one compiled call (:class:`CompiledForces`)
+    fused_iterate = True
+
+    def iterate(self, t, q, q_p, v_p, c_a, c_v, c_f, hist, inputs, tangent):
+        if self._compiled is None:
+            a, v = iterate_kinematics(q, q_p, v_p, c_a, c_v)
+            ev = self.evaluate(t, q, v, a, inputs, tangent)
+            return (ev, a, v) + weighted_residual(ev.f_inertia, ev.f_rest, hist, c_f)
+        a, v, Ma, f_rest, R, r_max, scale, K, slack_now = self._compiled.iterate(
+            q, q_p, v_p, c_a, c_v, c_f, hist, tangent, self._M_band, self._C_band,
+            self._slack_committed, self._dropper_free, self._dropper_C, self.weight,
+            self._loads_at(t, inputs))
+        return self._evaluation(Ma, f_rest, K, slack_now), a, v, R, r_max, scale
+
+    def _loads_at(self, t, inputs) -> np.ndarray:
+        """The step loads (:meth:`_step_loads`), empty without inputs."""
+        return self._no_loads if inputs is None else self._step_loads(t, inputs)
+
+    def _evaluation(self, Ma, f_rest, K, slack_bars) -> Evaluation:
+        """The :class:`Evaluation` of M a, f_rest and (None: no tangent) the stiffness data,
+        keyed on the droppers' slack sets now and committed."""
+        slack_now = slack_bars[self.mesh.dropper_bars]
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
                         structure_key=(slack_now.tobytes(), self._slack_committed.tobytes()))
-        if tangent:
+        if K is not None:
             ev.mass = self.M
             ev.damping = self._damping(self._slack_committed)
-            ev.stiffness = S.csr(K)
+            ev.stiffness = self.structure.csr(K)
         return ev
 
     def effective_matrix(self, ev, c_a, c_v, c_f):

@@ -74,6 +74,9 @@ class SecondOrderModel:
     #: how the model is stepped (:mod:`.stepper_contract`): Newton-Raphson HHT on :meth:`evaluate`
     #: unless a model with a closed-form step names it
     stepping: str = NEWTON
+    #: the model offers :meth:`iterate` (a Newton iterate's kinematics, forces and weighted
+    #: residual in one call); False: the integrator evaluates between its own kernels
+    fused_iterate: bool = False
 
     def linear_form(self) -> LinearForm | None:
         """The model's :class:`LinearForm` if it is linear with constant matrices (with its
@@ -84,6 +87,15 @@ class SecondOrderModel:
     def evaluate(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                  inputs: np.ndarray | None, tangent: bool = True) -> Evaluation:
         raise NotImplementedError
+
+    def iterate(self, t: float, q: np.ndarray, q_p: np.ndarray, v_p: np.ndarray, c_a: float,
+                c_v: float, c_f: float, hist: np.ndarray, inputs: np.ndarray | None,
+                tangent: bool):
+        """With ``fused_iterate``: (evaluation, a, v, R, max |R|, size of the forces) at the
+        iterate q, with a = c_a (q - q_p), v = v_p + c_v (q - q_p) and R = f_inertia +
+        c_f f_rest - hist, bit for bit what :meth:`evaluate` between the kernels of
+        :mod:`.newmark_residual` gives."""
+        raise NotImplementedError(f"{type(self).__name__} declares no fused iterate")
 
     # --- hooks with generic default implementations -------------------------------------
 
