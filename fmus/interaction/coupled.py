@@ -189,6 +189,8 @@ class CoupledSystem(SecondOrderModel):
             if memo[0] is not lin:
                 memo[0], memo[1] = lin, contact_update(t, lin)
             AU, rows, small = memo[1]
+            if len(rows) == 1:      # one contact: the 1 x 1 solve is a division (as LAPACK's)
+                return x - AU[:, 0] * (v_dot(rows[0], x) / small[0, 0])
             vx = np.array([v_dot(row, x) for row in rows])
             return x - AU @ np.linalg.solve(small, vx)
 
