@@ -38,13 +38,10 @@ class CompiledForces:
         S = structure
         self.structure = S
         self.kinds = np.array([KINDS[type(el)] for el in S.parts.values()], dtype=np.int64)
-        empty_i = np.zeros((0, 1), dtype=np.int64)
-        cab, bar, spr = parts.get(0), parts.get(1), parts.get(3)
-        self.cables = _cable_arrays(cab) if cab is not None else _cable_arrays(None)
-        self.bars = bar
-        self.bar_arrays = _bar_arrays(bar)
-        self.springs = (_spring_arrays(spr) if spr is not None
-                        else (empty_i[:, 0], np.zeros(0), np.zeros(0), empty_i[:, 0]))
+        self.cables = _cable_arrays(parts.get(0))
+        self.bars = parts[1]
+        self.bar_arrays = _bar_arrays(self.bars)
+        self.springs = _spring_arrays(parts.get(3))
         self.x = S.x_full.copy()
         self.f = np.zeros(S.n_full)
         self.K_empty = np.zeros(0)
@@ -128,7 +125,9 @@ def _bar_arrays(bar: BarSet) -> tuple:
             bar._f, bar._K, bar.slack, bar.pos)
 
 
-def _spring_arrays(spr: GroundSprings) -> tuple:
+def _spring_arrays(spr: GroundSprings | None) -> tuple:
+    if spr is None:
+        return (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
     return (np.ascontiguousarray(spr.dofs[:, 0]), spr.k, spr.anchor, spr.pos)
 
 
