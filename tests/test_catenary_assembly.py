@@ -73,3 +73,50 @@ def test_worked_example_of_the_architecture_page(monkeypatch):
                        atol=1e-9)
     with pytest.raises(ParameterError, match="elastic_bracket"):
         parse_definition(_small(messenger_support={"type": "bracket"}), "bad.toml")
+
+
+def _random_state(m, rng, size=3e-3):
+    n = m.n_dofs
+    return (m.q_static + size * rng.standard_normal(n), rng.standard_normal(n),
+            rng.standard_normal(n))
+
+
+def test_compiled_residual_is_the_part_by_part_one_bit_for_bit():
+    """CompiledForces (one call) against Structure.internal + the model's products, with
+    slack droppers committed and taut ones slackening, with and without loads and tangent."""
+    from pantocosim.core.newmark_residual import iterate_kinematics, weighted_residual
+    m = CatenaryModel(parse_definition(_small(), "small.toml"), x0=(20.0,), speed=80.0)
+    parts = CatenaryModel(parse_definition(_small(), "small.toml"), x0=(20.0,), speed=80.0)
+    parts._compiled = None
+    assert m._compiled is not None
+    rng = np.random.default_rng(7)
+    seen = np.zeros(3, dtype=bool)      # slack now, slack committed, the two sets apart
+    for trial in range(4):
+        q, v, a = _random_state(m, rng, 10 ** -(trial + 1))
+        m.commit(0.0, q, v, a, None)
+        parts.commit(0.0, q, v, a, None)
+        assert np.array_equal(m._slack_committed, parts._slack_committed)
+        q2 = q + 1e-3 * rng.standard_normal(q.size)
+        for tangent in (False, True):
+            for inputs in (None, np.array([130.0])):
+                e1 = m.evaluate(0.01, q2, v, a, inputs, tangent)
+                e0 = parts.evaluate(0.01, q2, v, a, inputs, tangent)
+                assert np.array_equal(e1.f_inertia, e0.f_inertia)
+                assert np.array_equal(e1.f_rest, e0.f_rest)
+                assert e1.structure_key == e0.structure_key
+                if tangent:
+                    assert np.array_equal(e1.stiffness.data, e0.stiffness.data)
+                    assert np.array_equal(e1.damping.data, e0.damping.data)
+        slack_now = np.frombuffer(e1.structure_key[0], dtype=bool)
+        committed = np.frombuffer(e1.structure_key[1], dtype=bool)
+        seen |= [slack_now.any(), committed.any(), (slack_now != committed).any()]
+    assert seen.all()
+    # the fused iterate: kinematics, evaluation and HHT residual in one call
+    q_p, v_p, hist = q, v, rng.standard_normal(q.size)
+    ev, a1, v1, R, r_max, scale = m.iterate(0.01, q2, q_p, v_p, 4e6, 2e3, 0.95, hist,
+                                            np.array([130.0]), False)
+    a0, v0 = iterate_kinematics(q2, q_p, v_p, 4e6, 2e3)
+    e0 = parts.evaluate(0.01, q2, v0, a0, np.array([130.0]), False)
+    R0, r0, s0 = weighted_residual(e0.f_inertia, e0.f_rest, hist, 0.95)
+    assert np.array_equal(a1, a0) and np.array_equal(v1, v0) and np.array_equal(R, R0)
+    assert (r_max, scale) == (r0, s0) and r_max > 0.0

@@ -40,6 +40,8 @@ class LinearCatenary(CatenaryModel):
     #: its HHT steps are taken in closed form on :meth:`affine_form`
     #: (:class:`~pantocosim.core.affine_hht.AffineHHT`)
     stepping = "affine"
+    #: its own :meth:`evaluate` (the reference model's fused iterate does not apply)
+    fused_iterate = False
 
     def __init__(self, catenary, x0=(0.0,), speed: float = 0.0, **kwargs):
         super().__init__(catenary, x0, speed, **kwargs)

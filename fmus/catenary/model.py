@@ -29,10 +29,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numba import njit
 
-from ..core.affine_kernels import sym_product
 from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
+from ..core.newmark_residual import iterate_kinematics, weighted_residual
+from .compiled_forces import CompiledForces, _inertia_and_rest
 from .contact_point import ContactLocator, ContactPoint
 from .definition import CatenaryDefinition, load_catenary
 from .mesh import CatenaryMesh, build_mesh
@@ -44,6 +45,9 @@ from .structure import scatter_add
 #: the fill above which a band diagonal of M or C is multiplied whole in the residual (the
 #: sparser ones entry by entry): the fastest on the EN 50318 and AVE lines
 BAND_FILL = 0.3
+
+#: damping matrices kept for the last slack sets of the droppers (each one nnz floats)
+KEPT_DAMPINGS = 4
 
 
 class CatenaryModel(SecondOrderModel):
@@ -96,8 +100,7 @@ class CatenaryModel(SecondOrderModel):
         self._dropper_pos = S.bars.pos_blocks[db]
         self._slack_committed = np.zeros(len(db), dtype=bool)
         # damping matrix for the committed slack set (see _damping)
-        self._C = S.csr(self._C_base.copy())
-        self._C_key = self._slack_committed.tobytes()
+        self._C = {self._slack_committed.tobytes(): S.csr(self._C_base.copy())}
         # for the residual: M on its own (sparser) pattern
         self._M_own = S.mass.copy()
         self._M_own.eliminate_zeros()
@@ -109,6 +112,9 @@ class CatenaryModel(SecondOrderModel):
         self._cp_cache: tuple | None = None
         self._loads: tuple | None = None
         self._support_free = None
+        #: the residual in one compiled call (None: a structure evaluated part by part)
+        self._compiled = CompiledForces.of(S)
+        self._no_loads = np.zeros(0)
 
     # ------------------------------------------------------------------ geometry
     def positions(self, t: float) -> np.ndarray:
@@ -230,15 +236,22 @@ class CatenaryModel(SecondOrderModel):
 
     # ------------------------------------------------------------------ dynamics
     def _damping(self, slack) -> sp.csr_matrix:
-        """C on the shared pattern without the Rayleigh share of the ``slack`` droppers
-        (rebuilt only when the set changes)."""
+        """C on the shared pattern without the Rayleigh share of the ``slack`` droppers,
+        the last :data:`KEPT_DAMPINGS` sets' kept (a dropper slackening and tightening
+        again over a few steps comes back to a set seen)."""
         key = slack.tobytes()
-        if key != self._C_key:
-            C = self._C_base.copy()
+        kept = self._C
+        C = kept.pop(key, None)
+        if C is None:
+            data = self._C_base.copy()
             if slack.any():
-                scatter_add(C, self._dropper_pos[slack].ravel(), -self._dropper_C[slack].ravel())
-            self._C, self._C_key = self.structure.csr(C), key
-        return self._C
+                scatter_add(data, self._dropper_pos[slack].ravel(),
+                            -self._dropper_C[slack].ravel())
+            C = self.structure.csr(data)
+            if len(kept) >= KEPT_DAMPINGS:
+                kept.pop(next(iter(kept)))
+        kept[key] = C          # most recently used last
+        return C
 
     def input_vector(self, t: float, inputs) -> np.ndarray:
         """sum_k N_k^T F_k on the free DOFs (upward contact forces)."""
@@ -266,19 +279,46 @@ class CatenaryModel(SecondOrderModel):
 
     def evaluate(self, t, q, v, a, inputs, tangent=True) -> Evaluation:
         S = self.structure
-        f, K, slack_now = S.internal(S.full(q), tangent)
-        slack_now = slack_now[self.mesh.dropper_bars]
-        Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v, self._slack_committed,
-                                       self._dropper_free, self._dropper_C, f, S.free,
-                                       self.weight)
-        if inputs is not None:
-            f_rest -= self._step_loads(t, inputs)
+        loads = self._loads_at(t, inputs)
+        if self._compiled is not None:
+            Ma, f_rest, K, slack_now = self._compiled.evaluate(
+                q, v, a, tangent, self._M_band, self._C_band, self._slack_committed,
+                self._dropper_free, self._dropper_C, self.weight, loads)
+        else:
+            f, K, slack_now = S.internal(S.full(q), tangent)
+            Ma, f_rest = _inertia_and_rest(self._M_band, a, self._C_band, v,
+                                           self._slack_committed, self._dropper_free,
+                                           self._dropper_C, f, S.free, self.weight, loads)
+        return self._evaluation(Ma, f_rest, K, slack_now)
+
+    #: :meth:`iterate` in one compiled call (:class:`CompiledForces`)
+    fused_iterate = True
+
+    def iterate(self, t, q, q_p, v_p, c_a, c_v, c_f, hist, inputs, tangent):
+        if self._compiled is None:
+            a, v = iterate_kinematics(q, q_p, v_p, c_a, c_v)
+            ev = self.evaluate(t, q, v, a, inputs, tangent)
+            return (ev, a, v) + weighted_residual(ev.f_inertia, ev.f_rest, hist, c_f)
+        a, v, Ma, f_rest, R, r_max, scale, K, slack_now = self._compiled.iterate(
+            q, q_p, v_p, c_a, c_v, c_f, hist, tangent, self._M_band, self._C_band,
+            self._slack_committed, self._dropper_free, self._dropper_C, self.weight,
+            self._loads_at(t, inputs))
+        return self._evaluation(Ma, f_rest, K, slack_now), a, v, R, r_max, scale
+
+    def _loads_at(self, t, inputs) -> np.ndarray:
+        """The step loads (:meth:`_step_loads`), empty without inputs."""
+        return self._no_loads if inputs is None else self._step_loads(t, inputs)
+
+    def _evaluation(self, Ma, f_rest, K, slack_bars) -> Evaluation:
+        """The :class:`Evaluation` of M a, f_rest and (None: no tangent) the stiffness data,
+        keyed on the droppers' slack sets now and committed."""
+        slack_now = slack_bars[self.mesh.dropper_bars]
         ev = Evaluation(f_inertia=Ma, f_rest=f_rest,
                         structure_key=(slack_now.tobytes(), self._slack_committed.tobytes()))
-        if tangent:
+        if K is not None:
             ev.mass = self.M
             ev.damping = self._damping(self._slack_committed)
-            ev.stiffness = S.csr(K)
+            ev.stiffness = self.structure.csr(K)
         return ev
 
     def effective_matrix(self, ev, c_a, c_v, c_f):
@@ -300,6 +340,9 @@ class CatenaryModel(SecondOrderModel):
         return lu.solve
 
     def commit(self, t, q, v, a, inputs) -> None:
+        if self._compiled is not None:
+            self._slack_committed = self._compiled.compressed(q, self.mesh.dropper_bars)
+            return
         S = self.structure
         N = S.bars.axial_forces(S.full(q), tension_only=False)[self.mesh.dropper_bars]
         self._slack_committed = N < 0.0
@@ -326,36 +369,6 @@ def _wire_point(dofs, w, dw, q, v):
         vz += w[i] * v[j]
         slope += dw[i] * q[j]
     return z, vz, slope
-
-
-@njit(cache=True)
-def _inertia_and_rest(M, a, C, v, slack, d_free, d_C, f_full, free, weight):
-    """(M a, C v + f_full[free] - weight) of (3.25)-(3.26): M and C are symmetric sparse
-    bands (:class:`SparseBand` parts, C with every dropper taut); the Rayleigh share of the
-    ``slack`` droppers (their 6 x 6 blocks ``d_C`` on the free DOFs ``d_free``, -1: fixed)
-    is taken out of C v."""
-    n = free.shape[0]
-    Ma = np.empty(n)
-    rest = np.empty(n)
-    below = np.empty(n)
-    sym_product(M, a, Ma, below)
-    sym_product(C, v, rest, below)
-    for d in range(slack.shape[0]):
-        if not slack[d]:
-            continue
-        for i in range(6):
-            r = d_free[d, i]
-            if r < 0:
-                continue
-            s = 0.0
-            for j in range(6):
-                c = d_free[d, j]
-                if c >= 0:
-                    s += d_C[d, 6 * i + j] * v[c]
-            rest[r] -= s
-    for i in range(n):
-        rest[i] = (rest[i] + f_full[free[i]]) - weight[i]
-    return Ma, rest
 
 
 @njit(cache=True)

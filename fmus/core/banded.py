@@ -152,6 +152,25 @@ def _factor_rows(LT, R):
             R[j, k] = LT[j - k, k] if j >= k else 0.0
 
 
+@njit(cache=True)
+def _factor_layouts(cb, rows):
+    """The factor's columns as rows LT (:class:`BandedCholesky`) from LAPACK's lower band
+    storage ``cb``, and (``rows``) its rows R (:func:`_factor_rows`), in one pass over cb."""
+    w, n = cb.shape
+    LT = np.empty((n, w))
+    R = np.empty((n if rows else 0, w))
+    for j in range(n):
+        d = 1.0 / cb[0, j]
+        LT[j, 0] = d
+        for k in range(1, w):
+            LT[j, k] = cb[k, j]
+        if rows:
+            R[j, 0] = d
+            for k in range(1, w):
+                R[j, k] = cb[k, j - k] if j >= k else 0.0
+    return LT, R
+
+
 @dataclass
 class SparseBand:
     """A symmetric band matrix (lower band storage) for products: the diagonals below the
@@ -200,7 +219,8 @@ class BandedCholesky:
     #: unit-vector solves kept (each n floats)
     cache_size = 48
 
-    def __init__(self, LT: np.ndarray, cb: np.ndarray | None = None):
+    def __init__(self, LT: np.ndarray, cb: np.ndarray | None = None,
+                 R: np.ndarray | None = None):
         self.n = LT.shape[0]
         self._cb = cb
         #: the factor's columns as rows, LT[j, 0] = 1 / L[j, j], LT[j, k] = L[j + k, j]
@@ -210,8 +230,10 @@ class BandedCholesky:
         self._window = band_window.solver(self.LT.shape[1])
         self.R = None
         if self._window is not None:
-            self.R = np.empty_like(LT)
-            _factor_rows(LT, self.R)
+            self.R = R
+            if R is None:
+                self.R = np.empty_like(LT)
+                _factor_rows(LT, self.R)
         #: unit-vector solves A^-1 e_j kept as rows of _store (j -> row, least recently
         #: used first) with the range of their nonzero entries
         self._slots: OrderedDict[int, int] = OrderedDict()
@@ -226,9 +248,9 @@ class BandedCholesky:
         cb, info = dpbtrf(ab, lower=1, overwrite_ab=1)
         if info != 0:
             return None
-        LT = np.array(cb.T, order="C")
-        LT[:, 0] = 1.0 / LT[:, 0]
-        return cls(LT, cb)
+        rows = band_window.solver(cb.shape[0]) is not None
+        LT, R = _factor_layouts(cb, rows)
+        return cls(LT, cb, R if rows else None)
 
     @property
     def cb(self) -> np.ndarray:

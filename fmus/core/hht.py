@@ -29,6 +29,7 @@ from .errors import ConvergenceError, ParameterError
 from .factor_reuse import FactorPolicy, FactorReuse, Factorization
 from .hht_defaults import ALPHA_MAX, ALPHA_MIN, DEFAULT_ALPHA, RUN_RTOL, RUN_RTOL_MAX  # noqa: F401
 from .model import SecondOrderModel
+from .newmark_residual import iterate_kinematics, weighted_residual
 from .state_label import new_label
 from .stepper_contract import StepReport
 
@@ -120,44 +121,6 @@ def _predict(q, v, a, a_guess, f_rest, h, alpha, beta, gamma):
         q0[i] = q_p[i] + cg * a_guess[i]
         hist[i] = alpha * f_rest[i]
     return q_p, v_p, q0, hist
-
-
-@njit(cache=True)
-def _iterate_kinematics(q, q_p, v_p, c_a, c_v):
-    """a = c_a (q - q_p), v = v_p + c_v (q - q_p): (3.18) at a Newton iterate."""
-    n = q.shape[0]
-    a = np.empty(n)
-    v = np.empty(n)
-    for i in range(n):
-        d = q[i] - q_p[i]
-        a[i] = c_a * d
-        v[i] = v_p[i] + c_v * d
-    return a, v
-
-
-@njit(cache=True)
-def _hht_residual(f_inertia, f_rest, hist, c_f):
-    """R = f_inertia + c_f f_rest - hist, (3.16), with max |R| and the size of the forces
-    in it (max of the three terms' max norms)."""
-    n = f_inertia.shape[0]
-    R = np.empty(n)
-    r_max = 0.0
-    scale = 0.0
-    total = 0.0     # carries any NaN or infinity (branch-free loop: it vectorizes)
-    for i in range(n):
-        fi = f_inertia[i]
-        fr = c_f * f_rest[i]
-        h = hist[i]
-        r = fi + fr - h
-        R[i] = r
-        total += r
-        ar = abs(r)
-        r_max = ar if ar > r_max else r_max
-        m = max(abs(fi), abs(fr), abs(h))
-        scale = m if m > scale else scale
-    if not np.isfinite(total):
-        return R, np.nan, np.nan
-    return R, r_max, scale
 
 
 @njit(cache=True)
@@ -340,6 +303,8 @@ class HHTIntegrator:
         self.total_factorizations = 0
         self._linear: ClosedFormStep | None = None
         self._linear_info = StepReport(iterations=1)
+        #: the model evaluates an iterate's residual itself (:meth:`~.model.SecondOrderModel.iterate`)
+        self._fused = bool(type(model).fused_iterate)
         self._bind_linear()
 
     def _bind_linear(self) -> None:
@@ -439,10 +404,8 @@ class HHTIntegrator:
         test = _Convergence(s.rtol, s.etol)
         refactorizations = 0
         for k in range(s.max_iterations + 1):
-            a, v = _iterate_kinematics(q, q_p, v_p, c_a, c_v)
-            ev, need_tangent = self._evaluate(t1, q, v, a, inputs, factor, k)
-            R, res_norm, scale = _hht_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
-                                               hist, c_f)
+            ev, need_tangent, a, v, R, res_norm, scale = self._iterate(
+                t1, q, predicted, (c_a, c_v, c_f), inputs, factor, k)
             if not np.isfinite(res_norm):
                 raise ConvergenceError(
                     f"HHT: non-finite residual at t = {t1:.6g} s (step {self.n_steps + 1})",
@@ -463,15 +426,32 @@ class HHTIntegrator:
                 residual=res_norm)
         return _StepEnd(t1, q, v, a, ev, k, res_norm, refactorizations, factor)
 
-    def _evaluate(self, t1, q, v, a, inputs, factor, k: int):
-        """The model at iterate k, with the tangent when the policy factorizes: always
-        without a kept factorization, and when the structure key moved away from it."""
+    def _iterate(self, t1, q, predicted, coefficients, inputs, factor, k: int):
+        """(evaluation, whether it has the tangent, a, v, R, max |R|, size of the forces) at
+        iterate k. The tangent is evaluated when the policy factorizes: always without a kept
+        factorization, and when the structure key moved away from it. A model with a fused
+        iterate (``fused_iterate``) gives it all in one call, else it is evaluated between
+        the kernels of :mod:`.newmark_residual`."""
         need_tangent = self._policy.needs_tangent(k, factor)
-        ev = self.model.evaluate(t1, q, v, a, inputs, tangent=need_tangent)
-        if not need_tangent and ev.structure_key != factor.structure_key:
+        out = self._evaluate(t1, q, predicted, coefficients, inputs, need_tangent)
+        if not need_tangent and out[0].structure_key != factor.structure_key:
             need_tangent = True
-            ev = self.model.evaluate(t1, q, v, a, inputs, tangent=True)
-        return ev, need_tangent
+            out = self._evaluate(t1, q, predicted, coefficients, inputs, True)
+        return (out[0], need_tangent) + out[1:]
+
+    def _evaluate(self, t1, q, predicted, coefficients, inputs, tangent: bool):
+        """(evaluation, a, v, R, max |R|, size of the forces) at the iterate q."""
+        q_p, v_p, _, hist = predicted
+        c_a, c_v, c_f = coefficients
+        model = self.model
+        if self._fused:
+            return model.iterate(t1, q, q_p, v_p, c_a, c_v, c_f, hist, inputs, tangent)
+        a, v = iterate_kinematics(q, q_p, v_p, c_a, c_v)
+        ev = model.evaluate(t1, q, v, a, inputs, tangent=tangent)
+        n = q.shape[0]
+        R, r_max, scale = weighted_residual(_vector(ev.f_inertia, n), _vector(ev.f_rest, n),
+                                            hist, c_f)
+        return ev, a, v, R, r_max, scale
 
     def _commit(self, end: "_StepEnd", inputs) -> StepReport:
         """Take the converged step: the new state, the counters, the kept factorization."""

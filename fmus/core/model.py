@@ -74,6 +74,9 @@ class SecondOrderModel:
     #: how the model is stepped (:mod:`.stepper_contract`): Newton-Raphson HHT on :meth:`evaluate`
     #: unless a model with a closed-form step names it
     stepping: str = NEWTON
+    #: the model offers :meth:`iterate` (a Newton iterate's kinematics, forces and weighted
+    #: residual in one call); False: the integrator evaluates between its own kernels
+    fused_iterate: bool = False
 
     def linear_form(self) -> LinearForm | None:
         """The model's :class:`LinearForm` if it is linear with constant matrices (with its
@@ -84,6 +87,15 @@ class SecondOrderModel:
     def evaluate(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                  inputs: np.ndarray | None, tangent: bool = True) -> Evaluation:
         raise NotImplementedError
+
+    def iterate(self, t: float, q: np.ndarray, q_p: np.ndarray, v_p: np.ndarray, c_a: float,
+                c_v: float, c_f: float, hist: np.ndarray, inputs: np.ndarray | None,
+                tangent: bool):
+        """With ``fused_iterate``: (evaluation, a, v, R, max |R|, size of the forces) at the
+        iterate q, with a = c_a (q - q_p), v = v_p + c_v (q - q_p) and R = f_inertia +
+        c_f f_rest - hist, bit for bit what :meth:`evaluate` between the kernels of
+        :mod:`.newmark_residual` gives."""
+        raise NotImplementedError(f"{type(self).__name__} declares no fused iterate")
 
     # --- hooks with generic default implementations -------------------------------------
 
@@ -122,9 +134,18 @@ class SecondOrderModel:
 
 
 def _dense_lu(S: np.ndarray):
-    lu_piv = sla.lu_factor(S, check_finite=False)
+    """``solve(rhs)`` by LU (LAPACK getrf/getrs, as ``scipy.linalg.lu_factor``/``lu_solve``);
+    a float vector or matrix of the right height goes to getrs directly (the same LAPACK call
+    without ``lu_solve``'s checks, which cost ten times the solve of a small body)."""
+    lu, piv = sla.lu_factor(S, check_finite=False)
+    getrs, = sla.get_lapack_funcs(("getrs",), (lu,))
 
     def solve(rhs):
-        return sla.lu_solve(lu_piv, rhs, check_finite=False)
+        b = np.asarray(rhs)
+        if b.dtype == lu.dtype and b.ndim in (1, 2) and b.shape[0] == lu.shape[0] and b.size:
+            x, info = getrs(lu, piv, b)
+            if info == 0:
+                return x
+        return sla.lu_solve((lu, piv), rhs, check_finite=False)
 
     return solve

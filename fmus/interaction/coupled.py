@@ -186,9 +186,12 @@ class CoupledSystem(SecondOrderModel):
             t, lin = contact_lin
             if not lin:
                 return x
-            if memo[0] is not lin:
-                memo[0], memo[1] = lin, contact_update(t, lin)
+            key = _linearisation_key(t, lin)
+            if memo[0] != key:
+                memo[0], memo[1] = key, contact_update(t, lin)
             AU, rows, small = memo[1]
+            if len(rows) == 1:      # one contact: the 1 x 1 solve is a division (as LAPACK's)
+                return x - AU[:, 0] * (v_dot(rows[0], x) / small[0, 0])
             vx = np.array([v_dot(row, x) for row in rows])
             return x - AU @ np.linalg.solve(small, vx)
 
@@ -297,6 +300,13 @@ class RigidWire(SecondOrderModel):
         empty_i, empty_f = np.zeros(0, dtype=int), np.zeros(0)
         return [SimpleNamespace(dofs=empty_i, weights=empty_f, offset=float(z),
                                 dweights_dx=empty_f, doffset_dx=0.0) for z in heights]
+
+
+def _linearisation_key(t, lin) -> tuple:
+    """What the contact linearisation ``lin`` of an evaluation at t depends on: the contact
+    points (fixed by t), each contact's body gradient and its dF/dgap, dF/dvrel. The Newton
+    iterations of a step in steady contact meet the same one again."""
+    return (t, tuple((k, dF, cF, g.tobytes()) for k, cp, g, dF, cF, wq_c in lin))
 
 
 def _sparse_solve(solve, n, dofs, values):
