@@ -321,6 +321,10 @@ class CatenaryModel(SecondOrderModel):
             ev.stiffness = self.structure.csr(K)
         return ev
 
+    def static_force_scale(self, f_rest) -> float:
+        """The largest internal force of the line at a static state: |f_rest + weight|."""
+        return float(np.max(np.abs(f_rest + self.weight)))
+
     def effective_matrix(self, ev, c_a, c_v, c_f):
         """c_a M + c_f (c_v C + K) on the shared pattern (adds data arrays only)."""
         return self.structure.csr(_newton_data(ev.mass.data, ev.damping.data,

@@ -85,7 +85,8 @@ class SparseVectors:
 
 
 class ColumnCache:
-    """A^-1 b_j of a kept factorization ``solve``, computed on first use and kept as the
+    """A^-1 b_j of a kept banded factorization ``solve``
+    (:class:`~pantocosim.core.banded.BandedCholesky`), computed on first use and kept as the
     rows of :attr:`Z` (the memory of every column is reserved at once; the system gives
     it page by page as columns are solved)."""
 
@@ -101,16 +102,11 @@ class ColumnCache:
         missing = rows[~self._known[rows]]
         if missing.size == 0:
             return
-        local = getattr(self.solve, "solve_local", None)
-        if local is not None:                 # each vector is short: a local solve
-            for j in missing.tolist():
-                idx = self.vectors.idx[j]
-                idx = idx[idx >= 0]
-                self.Z[j] = local(int(idx.min()), int(idx.max()), self.vectors.dense(j))
-        else:
-            B = np.column_stack([self.vectors.dense(j) for j in missing.tolist()])
-            X = np.asarray(self.solve(B)).reshape(self.vectors.n, missing.size)
-            self.Z[missing] = X.T
+        for j in missing.tolist():            # each vector is short: a local solve
+            idx = self.vectors.idx[j]
+            idx = idx[idx >= 0]
+            self.Z[j] = self.solve.solve_local(int(idx.min()), int(idx.max()),
+                                               self.vectors.dense(j))
         self._known[missing] = True
 
     def prefill(self, rows=None) -> None:
@@ -147,20 +143,8 @@ class LowRankSolve:
 
     def solve_into(self, rhs: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out`` = solve of ``rhs`` without an n-length temporary (``out`` may be ``rhs``)."""
-        if hasattr(self.base, "solve_into"):
-            self.base.solve_into(rhs, out)
-        else:
-            out[:] = self.base(rhs)
+        self.base.solve_into(rhs, out)
         return self._correct(out)
 
     def solve_sparse(self, dofs, values, out=None) -> np.ndarray:
-        if hasattr(self.base, "solve_sparse"):
-            x = self.base.solve_sparse(dofs, values, out=out)
-        else:
-            b = np.zeros(self.vectors.n)
-            np.add.at(b, dofs, values)
-            x = np.asarray(self.base(b), dtype=float)
-            if out is not None:
-                out[:] = x
-                x = out
-        return self._correct(x)
+        return self._correct(self.base.solve_sparse(dofs, values, out=out))

@@ -121,6 +121,11 @@ class SecondOrderModel:
         linearisation) adds it here, so nothing is left behind between calls."""
         return solve(rhs)
 
+    def static_force_scale(self, f_rest: np.ndarray) -> float:
+        """The size of the forces a static residual ``f_rest`` (at v = a = 0) is measured
+        against; by default 1 N (an absolute tolerance)."""
+        return 1.0
+
     def commit(self, t: float, q: np.ndarray, v: np.ndarray, a: np.ndarray,
                inputs: np.ndarray | None) -> None:
         """Called once a step is accepted (e.g. to update history-dependent sets)."""

@@ -26,6 +26,7 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from ..core.banded import BandedCholesky
 from ..core.errors import ConvergenceError
 from ..core.model import Evaluation, SecondOrderModel
 from .contact_registry import ContactLaw
@@ -61,7 +62,7 @@ class CoupledSystem(SecondOrderModel):
         V dz_w/dx, as in :meth:`~pantocosim.catenary.model.CatenaryModel.wire_velocity`."""
         qc, qps = self.split(q)
         vc, vps = self.split(v)
-        speed = float(getattr(self.catenary, "speed", 0.0))
+        speed = float(self.catenary.speed)
         out = []
         for k, (pant, cp) in enumerate(zip(self.pantographs, self.catenary.contact_points(t))):
             z_w = float(cp.weights @ qc[cp.dofs]) + float(cp.offset)
@@ -88,7 +89,7 @@ class CoupledSystem(SecondOrderModel):
                 for k, p in enumerate(self.pantographs)]
         f_in = np.concatenate([ev_c.f_inertia] + [e.f_inertia for e in ev_p])
         f_rest = np.concatenate([ev_c.f_rest] + [e.f_rest for e in ev_p])
-        speed = float(getattr(self.catenary, "speed", 0.0))
+        speed = float(self.catenary.speed)
         lin = []
         states = self.contact_state(t, q, v)
         for k, (F, z_p, z_w, v_p, v_w, cp, g, dF, cF) in enumerate(states):
@@ -231,8 +232,7 @@ class CoupledSystem(SecondOrderModel):
         for it in range(max_iter):
             ev = self.evaluate(t, q, zero, zero, None, tangent=True)
             R = ev.f_rest
-            scale = max(float(np.max(np.abs(ev.parts[0].f_rest + self.catenary.weight)))
-                        if hasattr(self.catenary, "weight") else 1.0, 1.0)
+            scale = max(self.catenary.static_force_scale(ev.parts[0].f_rest), 1.0)
             limit = tol * scale
             if float(np.max(np.abs(R))) <= limit:
                 return q
@@ -278,6 +278,8 @@ class RigidWire(SecondOrderModel):
     contact-point location."""
 
     n_dofs = 0
+    #: the wire does not move along the track
+    speed = 0.0
 
     def __init__(self, n_pantographs: int, height: float | None = None, catenary=None,
                  q=None):
@@ -310,9 +312,9 @@ def _linearisation_key(t, lin) -> tuple:
 
 
 def _sparse_solve(solve, n, dofs, values):
-    """solve(b) for b with ``values`` at ``dofs``: from the solver's cached unit-vector
-    solves when it offers them (:class:`~pantocosim.core.banded.BandedCholesky`)."""
-    if hasattr(solve, "solve_sparse"):
+    """solve(b) for b with ``values`` at ``dofs``: from the cached unit-vector solves of a
+    :class:`~pantocosim.core.banded.BandedCholesky`, by a whole solve otherwise."""
+    if isinstance(solve, BandedCholesky):
         return solve.solve_sparse(dofs, values)
     b = np.zeros(n)
     np.add.at(b, dofs, values)
