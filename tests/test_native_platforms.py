@@ -4,7 +4,7 @@ binary has its platform's format and exports the FMI functions; a clang build fo
 with fused multiply-add, without -ffp-contract=off, holds no fused multiply-add (the sources
 forbid them) and gives the gcc linux64 binaries' coupled run bit for bit. Every binary this
 machine can run runs a coupled loop (the linear catenary with the 2-mass pantograph and with
-the rigid DSA-380) in a C host of its own platform and gives the linux64 numbers bit for bit:
+the rigid and the flexible DSA-380) in a C host of its own platform and gives the linux64 numbers bit for bit:
 aarch64-linux under qemu-user, win64 (the shipped binaries) and win32 under wine. The macOS
 binaries (untested on Apple hardware) are checked through their Mach-O load commands: CPU,
 libSystem alone, exports, minimum macOS, and the arm64 ad-hoc signature's page hashes."""
@@ -124,8 +124,6 @@ PAIRS = {"en50318-300": ("en50318-300", "en50318-2mass"),
          "dsa380-ave-300": ("dsa380-ave-300", "dsa380-rigid"),
          "dsa380-flexible": ("dsa380-ave-300", "dsa380-flexible")}
 STEPS, DT = 300, 0.001
-#: (platform, case) runs that agree with linux64 to 1e-11, not bit for bit (docs/tutorials/hil.md)
-LIBM_BOUND = {("win64", "dsa380-flexible"), ("win32", "dsa380-flexible")}
 AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")
 HOST_FLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 LIB_FLAGS = [*HOST_FLAGS, "-shared"]
@@ -269,15 +267,8 @@ def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_row
                            wrapper=wrapper)
     assert linux.shape == got.shape == (STEPS, 4)
     assert np.all(linux[:, 1] > 0.0) and linux[:, 1].mean() > 50.0    # in contact throughout
-    if (name, scenario) in LIBM_BOUND:
-        # the flexible DSA-380 calls libm functions whose last bit differs between glibc and
-        # the Windows C runtime: the force agrees to 1e-11 of its mean, not bit for bit
-        scale = np.abs(linux).max(axis=0) + 1.0
-        assert np.all(np.abs(got - linux) <= 1e-11 * scale), (
-            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
-    else:
-        assert got.tobytes() == linux.tobytes(), (
-            f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+    assert got.tobytes() == linux.tobytes(), (
+        f"{name}, {scenario}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
     assert counts["allocations in doStep"] == 0
 
 
