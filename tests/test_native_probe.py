@@ -1,9 +1,11 @@
 """The native FMUs under AddressSanitizer and UndefinedBehaviorSanitizer: the shipped sources
 of ``fmus/native/`` (both FMI fronts, every model) linked with the C program
-``tests/c_hosts/native_probe.c``. The FMI 2.0 and 3.0 call sequences get the standard's
-statuses (every phase, unknown value references, NULL arrays, NaN, infinite and huge inputs
-and steps, terminate then step, reset and reuse, a failed reset, two instances with their own
-allocators, truncated, damaged and foreign FMU states); and some 300 damaged and crafted data
+``tests/c_hosts/native_probe.c``. The FMI 2.0 and 3.0 call sequences, on every model of the
+table (linear and modal catenary, lumped pantograph, rigid and flexible DSA-380) with its own
+value references and inputs, get the standard's statuses (every phase, unknown value
+references, NULL arrays, NaN, infinite and huge inputs and steps, terminate then step, reset
+and reuse, a failed reset, two instances with their own allocators, truncated, damaged and
+foreign FMU states); and some 300 damaged and crafted data
 files (fixed seed) are each refused with a logged reason naming the file, or run; no
 sanitizer report, no leak, no block freed through another instance's allocator."""
 
@@ -33,7 +35,7 @@ SANITIZER_REPORTS = ("AddressSanitizer", "LeakSanitizer", "runtime error:")
 
 @pytest.fixture(scope="module")
 def probe(tmp_path_factory):
-    """native_probe linked with every native source, both fronts and all three models."""
+    """native_probe linked with every native source, both fronts and every model."""
     from pantocosim.master.native.build import (CFLAGS, SOURCE_DIR, NativeModel,
                                                 model_table)
 
@@ -93,13 +95,29 @@ def run(exe, args, timeout=600):
     return proc
 
 
+#: probe name of each model of the table: the fixture's folder
+WALKED = {"linear": "linear", "modal": "modal", "lumped": "pantograph",
+          "dsa380-rigid": "dsa380-rigid", "dsa380-flexible": "dsa380-flexible"}
+
+
 def test_call_sequences_get_the_standards_statuses(probe, folders, tmp_path):
+    """Both walks over every model of the table, each with its own value references and
+    inputs; at least as many checks per model and FMI version as the walks hold."""
     percent = tmp_path / "folder%41"                 # a native path, not a URI
     shutil.copytree(folders["linear"], percent)
-    proc = run(probe, ["conformance", folders["linear"], folders["pantograph"], percent])
+    proc = run(probe, ["conformance", percent,
+                       *(f"{name}={folders[key]}" for name, key in WALKED.items())])
     failed = [line for line in proc.stdout.splitlines() if line.startswith("FAIL")]
     assert failed == [] and proc.returncode == 0, "\n".join(failed) + proc.stderr[-2000:]
-    assert proc.stdout.count("\nok ") >= 430
+    counts = {}
+    for line in proc.stdout.splitlines():
+        if line.startswith("ok "):
+            model, check = line[3:].split(": ", 1)
+            version = check.split(" ", 1)[0]
+            counts[model, version] = counts.get((model, version), 0) + 1
+    for model in WALKED:           # 64 and 363 checks each when written
+        assert counts[model, "fmi2"] >= 64 and counts[model, "fmi3"] >= 363, (model, counts)
+    assert counts["any", "fmi2"] >= 10
 
 
 # ---------------------------------------------------------------------- crafted data files
