@@ -25,6 +25,10 @@
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
 
+/* the token the probe's binary was built with (model_table.c, written by the test as
+   pantocosim export-native writes it) */
+extern const char pcs_instantiation_token[];
+
 #define DT 0.001
 #define FMI3_INT32 10000u
 #define FMI3_BOOLEAN 20000u
@@ -139,10 +143,16 @@ static const char *to_uri(const char *dir)
     return uri;
 }
 
+static fmi2Component instantiate2_as(const char *dir, const fmi2CallbackFunctions *cb,
+                                     const char *guid)
+{
+    return fmi2Instantiate("probe", fmi2CoSimulation, guid, to_uri(dir), cb, fmi2False,
+                           fmi2False);
+}
+
 static fmi2Component instantiate2(const char *dir, const fmi2CallbackFunctions *cb)
 {
-    return fmi2Instantiate("probe", fmi2CoSimulation, "", to_uri(dir), cb, fmi2False,
-                           fmi2False);
+    return instantiate2_as(dir, cb, pcs_instantiation_token);
 }
 
 static int start2(fmi2Component c)
@@ -384,12 +394,17 @@ static void two_instances2(const Model *m, const Model *other)
 
 /* ------------------------------------------------------------------ FMI 3.0 */
 
-static fmi3Instance instantiate3(const char *dir, fmi3Boolean event_mode)
+static fmi3Instance instantiate3_as(const char *dir, fmi3Boolean event_mode, const char *token)
 {
     char path[1100];
     snprintf(path, sizeof path, "%s/resources/", dir);
-    return fmi3InstantiateCoSimulation("probe", "", path, fmi3False, fmi3False, event_mode,
+    return fmi3InstantiateCoSimulation("probe", token, path, fmi3False, fmi3False, event_mode,
                                        fmi3False, NULL, 0, NULL, logger3, NULL);
+}
+
+static fmi3Instance instantiate3(const char *dir, fmi3Boolean event_mode)
+{
+    return instantiate3_as(dir, event_mode, pcs_instantiation_token);
 }
 
 static int start3(fmi3Instance c)
@@ -629,8 +644,9 @@ static void null_instance3(const Model *m)
     }
     fmi3FreeInstance(NULL);
     check_true(instantiate3(dir, fmi3True) == NULL, "fmi3 event mode refused: NULL");
-    check_true(fmi3InstantiateCoSimulation("probe", "", NULL, fmi3False, fmi3False, fmi3False,
-                                           fmi3False, NULL, 0, NULL, logger3, NULL) == NULL,
+    check_true(fmi3InstantiateCoSimulation("probe", pcs_instantiation_token, NULL, fmi3False,
+                                           fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+                                           logger3, NULL) == NULL,
                "fmi3 Instantiate without a resource path: NULL");
     check_true(instantiate3("/nowhere", fmi3False) == NULL, "fmi3 Instantiate of a missing "
                "folder: NULL");
@@ -896,6 +912,38 @@ static void failed_reset3(const Model *m)
     fmi3FreeInstance(c);
 }
 
+/* another GUID / instantiationToken than the binary's (one digit changed, empty, NULL):
+   NULL, with one message naming both */
+static void tokens(const Model *m)
+{
+    char wrong[128];
+    const char *given[] = {wrong, "", NULL};
+    char what[160];
+    size_t k;
+    snprintf(wrong, sizeof wrong, "%s", pcs_instantiation_token);
+    wrong[1] = wrong[1] == '0' ? '1' : '0';
+    for (k = 0; k < 3; k++) {
+        const char *label = k == 0 ? "another" : k == 1 ? "an empty" : "a NULL";
+        last_log[0] = '\0';
+        snprintf(what, sizeof what, "fmi2 Instantiate with %s GUID: NULL", label);
+        check_true(instantiate2_as(m->dir, &CB_A, given[k]) == NULL, what);
+        snprintf(what, sizeof what, "fmi2 Instantiate with %s GUID: the message names both",
+                 label);
+        check_true(strstr(last_log, pcs_instantiation_token) != NULL
+                   && strstr(last_log, given[k] ? given[k] : "NULL") != NULL, what);
+        last_log[0] = '\0';
+        snprintf(what, sizeof what, "fmi3 InstantiateCoSimulation with %s instantiationToken: "
+                 "NULL", label);
+        check_true(instantiate3_as(m->dir, fmi3False, given[k]) == NULL, what);
+        snprintf(what, sizeof what, "fmi3 InstantiateCoSimulation with %s instantiationToken: "
+                 "the message names both", label);
+        check_true(strstr(last_log, pcs_instantiation_token) != NULL
+                   && strstr(last_log, given[k] ? given[k] : "NULL") != NULL, what);
+    }
+    check_true(pools[0].live == 0 && pools[0].foreign == 0, "fmi2 a refused token leaves no "
+               "block behind");
+}
+
 /* a pantograph's start_mode, the only value it takes (read through FMI 2.0, whose Get is
    allowed when instantiated); the values it refuses around it */
 static int read_int_param(Model *m)
@@ -922,6 +970,7 @@ static void walk(Model *m, const Model *other)
         check_true(0, "the Integer parameter read when instantiated");
         return;
     }
+    tokens(m);
     before_initialisation2(m);
     steps2(m);
     failed_reset2(m);
