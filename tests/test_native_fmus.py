@@ -346,6 +346,37 @@ def test_bad_inputs_get_the_python_fmus_statuses(exported):
     assert status_of(pan.doStep, 0.0, DT) == DISCARD           # only a rollback recovers
 
 
+def other_token(token: str) -> str:
+    """token with its first hex digit changed: another export's, as far as the FMU knows."""
+    return token[0] + ("1" if token[1] == "0" else "0") + token[2:]
+
+
+def test_another_guid_is_refused_with_one_message_and_the_right_one_simulates(exported,
+                                                                              capfd):
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.fmi2 import FMU2Slave
+
+    folder = exported["en50318-2mass"]
+    md = read_model_description(str(folder / "modelDescription.xml"))
+    for guid in (other_token(md.guid), ""):
+        fmu = FMU2Slave(guid=guid, unzipDirectory=str(folder),
+                        modelIdentifier="pantocosim_pantograph_native", instanceName="wrong")
+        capfd.readouterr()
+        with pytest.raises(Exception, match="[Ii]nstantiate"):
+            fmu.instantiate(loggingOn=True)
+        log = capfd.readouterr().out
+        assert log.count("instantiation token") == 1 and md.guid in log, log
+        assert f'"{guid}"' in log, log
+        fmu.freeLibrary()
+    force = np.array([(0.0, 200.0), (1.0, 200.0)], dtype=[("time", float),
+                                                          ("contact_force", float)])
+    result = simulate_fmu(str(folder), stop_time=20 * DT, step_size=DT, output_interval=DT,
+                          input=force, output=["contact_height"])
+    z = result["contact_height"]
+    assert len(z) == 21 and np.all(np.isfinite(z))
+    assert np.all(np.diff(z) < 0.0)         # 200 N, above its static force, presses it down
+
+
 def test_fmu_states_roll_back_and_serialize(exported):
     fmu, vr = slave(exported["catenary"], "pantocosim_catenary_native")
     F, out = [vr["contact_force_1"]], [vr["wire_height_1"], vr["support_uplift_1"]]
@@ -491,6 +522,10 @@ def test_fmi3_fmus_validate_and_give_the_fmi2_numbers(prepared, exported, tmp_pa
     fmi3 = next(p for p in written if p.stem == "catenary")
     md = read_model_description(str(fmi3))
     vr = {v.name: v.valueReference for v in md.modelVariables}
+    wrong = FMU3Slave(guid=other_token(md.guid), unzipDirectory=extract(str(fmi3)),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="wrong")
+    with pytest.raises(Exception, match="[Ii]nstantiate"):
+        wrong.instantiate()                   # another instantiationToken: refused
     fmu = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(fmi3)),
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c3")
     fmu.instantiate()

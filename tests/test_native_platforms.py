@@ -7,8 +7,7 @@ machine can run, FMI 2.0 and FMI 3.0, runs a coupled loop (the linear catenary w
 2-mass pantograph and with the rigid and flexible DSA-380) in the C host (fmus/native/host)
 built for its own platform, which loads its platform's binaries folder, and gives the linux64
 FMI 2.0 numbers bit for bit: aarch64-linux under qemu-user, win64 (the shipped binaries) and
-win32 under wine. The macOS
-binaries (untested on Apple hardware) are checked through their Mach-O load commands: CPU,
+win32 under wine. The macOS binaries (untested on Apple hardware) are checked through their Mach-O load commands: CPU,
 libSystem alone, exports, minimum macOS, and the arm64 ad-hoc signature's page hashes."""
 
 import dataclasses
@@ -128,8 +127,6 @@ PAIRS = {"en50318-300": ("en50318-300", "en50318-2mass"),
          "dsa380-ave-300": ("dsa380-ave-300", "dsa380-rigid"),
          "dsa380-flexible": ("dsa380-ave-300", "dsa380-flexible")}
 STEPS, DT = 300, 0.001
-#: (platform, case) runs that agree with linux64 to 1e-11, not bit for bit (docs/tutorials/hil.md)
-LIBM_BOUND = {("win64", "dsa380-flexible"), ("win32", "dsa380-flexible")}
 AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")
 HOST_FLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 LIB_FLAGS = [*HOST_FLAGS, "-shared"]
@@ -269,20 +266,12 @@ def platform(request, coupled_fmus, tmp_path_factory):
     return name, host, wrapper, pairs
 
 
-def assert_linux64_numbers(linux, got, label, bound):
-    """The rows of a coupled run equal the linux64 FMI 2.0 rows bit for bit (``bound``: to
-    1e-11 of each column's largest value)."""
+def assert_linux64_numbers(linux, got, label):
+    """The rows of a coupled run equal the linux64 FMI 2.0 rows bit for bit."""
     assert linux.shape == got.shape == (STEPS, 4)
     assert np.all(linux[:, 1] > 0.0) and linux[:, 1].mean() > 50.0    # in contact throughout
-    if bound:
-        # the flexible DSA-380 calls libm functions whose last bit differs between glibc and
-        # the Windows C runtime: the force agrees to 1e-11 of its mean, not bit for bit
-        scale = np.abs(linux).max(axis=0) + 1.0
-        assert np.all(np.abs(got - linux) <= 1e-11 * scale), (
-            f"{label}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
-    else:
-        assert got.tobytes() == linux.tobytes(), (
-            f"{label}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
+    assert got.tobytes() == linux.tobytes(), (
+        f"{label}: max |diff| {np.max(np.abs(got - linux), axis=0)}")
 
 
 @pytest.mark.parametrize("scenario", sorted(PAIRS))
@@ -290,8 +279,7 @@ def test_fmi3_coupled_run_gives_the_fmi2_bits_on_linux64(coupled_fmus, linux_row
                                                          tmp_path):
     got, counts = run_host(host_exe(tmp_path), ["coupled", *coupled_fmus[scenario, 3], STEPS,
                                                 DT], tmp_path)
-    assert_linux64_numbers(linux_rows[scenario], got, f"x86_64-linux FMI 3.0, {scenario}",
-                           False)
+    assert_linux64_numbers(linux_rows[scenario], got, f"x86_64-linux FMI 3.0, {scenario}")
     assert counts["allocations in doStep"] == 0
 
 
@@ -302,8 +290,7 @@ def test_coupled_run_on_each_platform_gives_the_linux64_bits(platform, linux_row
     name, host, wrapper, pairs = platform
     proc_rows, counts = run_host(host, ["coupled", *pairs[scenario, fmi], STEPS, DT], tmp_path,
                                  wrapper=wrapper)
-    assert_linux64_numbers(linux_rows[scenario], proc_rows, f"{name} FMI {fmi}.0, {scenario}",
-                           (name, scenario) in LIBM_BOUND)
+    assert_linux64_numbers(linux_rows[scenario], proc_rows, f"{name} FMI {fmi}.0, {scenario}")
     if name.startswith("win") and fmi == 3:
         # FMI 3.0 has no memory callbacks and the host interposes malloc on Linux only
         assert "allocations in doStep" not in counts

@@ -1,9 +1,11 @@
 """The native FMUs under AddressSanitizer and UndefinedBehaviorSanitizer: the shipped sources
 of ``fmus/native/`` (both FMI fronts, every model) linked with the C program
-``tests/c_hosts/native_probe.c``. The FMI 2.0 and 3.0 call sequences get the standard's
-statuses (every phase, unknown value references, NULL arrays, NaN, infinite and huge inputs
-and steps, terminate then step, reset and reuse, a failed reset, two instances with their own
-allocators, truncated, damaged and foreign FMU states); and some 300 damaged and crafted data
+``tests/c_hosts/native_probe.c``. The FMI 2.0 and 3.0 call sequences, on every model of the
+table (linear and modal catenary, lumped pantograph, rigid and flexible DSA-380) with its own
+value references and inputs, get the standard's statuses (every phase, unknown value
+references, NULL arrays, NaN, infinite and huge inputs and steps, terminate then step, reset
+and reuse, a failed reset, two instances with their own allocators, truncated, damaged and
+foreign FMU states, another, empty or NULL GUID / instantiationToken); and some 300 damaged and crafted data
 files (fixed seed) are each refused with a logged reason naming the file, or run; no
 sanitizer report, no leak, no block freed through another instance's allocator."""
 
@@ -29,11 +31,13 @@ SANITIZE = ["-O1", "-g", "-fno-omit-frame-pointer", "-fsanitize=address,undefine
 ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0",
        "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1", "PATH": "/usr/bin:/bin"}
 SANITIZER_REPORTS = ("AddressSanitizer", "LeakSanitizer", "runtime error:")
+#: the probe binary's instantiation token (its model_table.c)
+TOKEN = "{0123abcd-0000-1111-2222-333344445555}"
 
 
 @pytest.fixture(scope="module")
 def probe(tmp_path_factory):
-    """native_probe linked with every native source, both fronts and all three models."""
+    """native_probe linked with every native source, both fronts and every model."""
     from pantocosim.master.native.build import (CFLAGS, SOURCE_DIR, NativeModel,
                                                 model_table)
 
@@ -42,7 +46,7 @@ def probe(tmp_path_factory):
     table = out / "model_table.c"
     table.write_text(model_table(NativeModel((), (), (
         "pcs_linear_catenary", "pcs_modal_catenary", "pcs_lumped_pantograph",
-        "pcs_dsa380_rigid", "pcs_dsa380_flexible"))))
+        "pcs_dsa380_rigid", "pcs_dsa380_flexible")), TOKEN))
     sources = sorted(SOURCE_DIR.glob("*.c"))
     flags = [f for f in CFLAGS if not f.startswith("-O")]
     exe = out / "native_probe"
@@ -93,13 +97,29 @@ def run(exe, args, timeout=600):
     return proc
 
 
+#: probe name of each model of the table: the fixture's folder
+WALKED = {"linear": "linear", "modal": "modal", "lumped": "pantograph",
+          "dsa380-rigid": "dsa380-rigid", "dsa380-flexible": "dsa380-flexible"}
+
+
 def test_call_sequences_get_the_standards_statuses(probe, folders, tmp_path):
+    """Both walks over every model of the table, each with its own value references and
+    inputs; at least as many checks per model and FMI version as the walks hold."""
     percent = tmp_path / "folder%41"                 # a native path, not a URI
     shutil.copytree(folders["linear"], percent)
-    proc = run(probe, ["conformance", folders["linear"], folders["pantograph"], percent])
+    proc = run(probe, ["conformance", percent,
+                       *(f"{name}={folders[key]}" for name, key in WALKED.items())])
     failed = [line for line in proc.stdout.splitlines() if line.startswith("FAIL")]
     assert failed == [] and proc.returncode == 0, "\n".join(failed) + proc.stderr[-2000:]
-    assert proc.stdout.count("\nok ") >= 430
+    counts = {}
+    for line in proc.stdout.splitlines():
+        if line.startswith("ok "):
+            model, check = line[3:].split(": ", 1)
+            version = check.split(" ", 1)[0]
+            counts[model, version] = counts.get((model, version), 0) + 1
+    for model in WALKED:           # 71 and 369 checks each when written
+        assert counts[model, "fmi2"] >= 71 and counts[model, "fmi3"] >= 369, (model, counts)
+    assert counts["any", "fmi2"] >= 10
 
 
 # ---------------------------------------------------------------------- crafted data files

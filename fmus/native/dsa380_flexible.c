@@ -8,6 +8,7 @@
  */
 #include "dsa380_flexible.h"
 #include "pcs_float.h"
+#include "pcs_math.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -199,11 +200,11 @@ static void element(const Dsa380Flex *m, int k, double *f, double *K)
         rxx0 = p.r0xx + p.dxx;
         rxx1 = p.r0yy + p.dyy;
         s0 = p.r0x * p.r0x + p.r0y * p.r0y;
-        kap0 = (p.r0x * p.r0yy - p.r0y * p.r0xx) * pow(s0, -1.5);
+        kap0 = (p.r0x * p.r0yy - p.r0y * p.r0xx) * pcs_pow_minus_three_halves(s0);
         eps = p.r0x * p.dx + p.r0y * p.dy + 0.5 * (p.dx * p.dx + p.dy * p.dy);
         s = rx0 * rx0 + rx1 * rx1;
         c = rx0 * rxx1 - rx1 * rxx0;
-        s32 = pow(s, -1.5);
+        s32 = pcs_pow_minus_three_halves(s);
         s52 = s32 / s;
         s72 = s52 / s;
         kap = c * s32 - kap0;
@@ -300,7 +301,7 @@ static void spring(const Dsa380Flex *m, int ga, int gb, double *f, double *K)
 static void torsion(const Dsa380Flex *m, double M_act, double *f, double *K)
 {
     int g = m->s1, n = m->n;
-    double a = m->q[g], b = m->q[g + 1], s = a * a + b * b, phi = atan2(b, a);
+    double a = m->q[g], b = m->q[g + 1], s = a * a + b * b, phi = pcs_atan2(b, a);
     double g0 = -b / s, g1 = a / s, mom = m->kr * (phi - m->th0) - M_act;
     double h00, h01;
     f[g] += mom * g0;
@@ -345,7 +346,7 @@ static void friction(const Dsa380Flex *m, const double *v, double *f, double *C)
     double fr = m->friction_force, kt = m->friction_smoothing, vr, f_roz, df;
     if (!(fr > 0.0)) return;
     vr = v[a] - v[b];
-    f_roz = fr * (2.0 / M_PI) * atan(vr / kt);
+    f_roz = fr * (2.0 / M_PI) * pcs_atan(vr / kt);
     df = fr * (2.0 / M_PI) / (kt + vr * vr / kt);
     f[a] += f_roz;
     f[b] -= f_roz;

@@ -11,6 +11,7 @@
  */
 #include "dsa380_rigid.h"
 #include "pcs_float.h"
+#include "pcs_math.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -76,8 +77,7 @@ static Jet jsqrt(Jet a)
 
 static void jsincos(Jet a, Jet *s, Jet *c)
 {
-    s->c[0] = sin(a.c[0]);
-    c->c[0] = cos(a.c[0]);
+    pcs_sincos(a.c[0], &s->c[0], &c->c[0]);
     s->c[1] = a.c[1] * c->c[0];
     c->c[1] = -a.c[1] * s->c[0];
     s->c[2] = (a.c[1] * c->c[1] + 2.0 * a.c[2] * c->c[0]) / 2.0;
@@ -97,7 +97,7 @@ static Jet jatan2(Jet y, Jet x)
 {
     Jet r2 = jadd(jmul(x, x), jmul(y, y));
     Jet w = jdiv(jsub(jmul(x, jderiv(y)), jmul(y, jderiv(x))), r2);
-    Jet r = {{atan2(y.c[0], x.c[0]), w.c[0], w.c[1] / 2.0, w.c[2] / 3.0}};
+    Jet r = {{pcs_atan2(y.c[0], x.c[0]), w.c[0], w.c[1] / 2.0, w.c[2] / 3.0}};
     return r;
 }
 
@@ -323,7 +323,7 @@ static void collector_springs(Dsa380 *m, const double *p5)
 {
     double *fr = m->vec[1], (*Ks)[4] = m->mat[3];
     double half = 0.5 * m->P[DSA_P_L1 + 6], kl = m->P[DSA_P_KL], l0 = m->P[DSA_P_LL0];
-    double c7 = cos(m->q4[3]), s7 = sin(m->q4[3]), x10 = m->q4[1], y10 = m->q4[2];
+    double c7 = pcs_cos(m->q4[3]), s7 = pcs_sin(m->q4[3]), x10 = m->q4[1], y10 = m->q4[2];
     double D[2][4], gl[4], se;
     int k, j, side;
     for (side = 0; side < 2; side++) {
@@ -360,7 +360,7 @@ static void collector_springs(Dsa380 *m, const double *p5)
 static void damper_geometry(const double *P, double theta, double *la, double *d1,
                             double *d2)
 {
-    double c = cos(theta + P[DSA_P_TH1P]), s = sin(theta + P[DSA_P_TH1P]);
+    double c = pcs_cos(theta + P[DSA_P_TH1P]), s = pcs_sin(theta + P[DSA_P_TH1P]);
     double dx = P[DSA_P_X1] + P[DSA_P_L1P] * c - P[DSA_P_X13];
     double dy = P[DSA_P_Y1] + P[DSA_P_L1P] * s - P[DSA_P_Y13];
     double tx = -P[DSA_P_L1P] * s, ty = P[DSA_P_L1P] * c;
@@ -384,7 +384,7 @@ static void damper_and_friction(Dsa380 *m, const double *p5)
     if (m->friction_force > 0.0) {
         double f_r = m->friction_force, k_t = m->friction_smoothing;
         double vr = m->v4[2] - p5[3] * w;
-        double f_roz = f_r * (2.0 / M_PI) * atan(vr / k_t);
+        double f_roz = f_r * (2.0 / M_PI) * pcs_atan(vr / k_t);
         double df = f_r * (2.0 / M_PI) / (k_t + vr * vr / k_t);
         double dvr_dth = -p5[5] * w;
         fr[0] += -f_roz * p5[3];
@@ -407,8 +407,8 @@ static double kernel(Dsa380 *m, double F, double M_act)
     memset(m->vec, 0, sizeof m->vec);
     memset(m->mat, 0, sizeof m->mat);
     if (!(ok > 0.0)) return ok;
-    sg = sin(th7 - m->P[DSA_P_THG_ + 6]);
-    cg = cos(th7 - m->P[DSA_P_THG_ + 6]);
+    sg = pcs_sin(th7 - m->P[DSA_P_THG_ + 6]);
+    cg = pcs_cos(th7 - m->P[DSA_P_THG_ + 6]);
     inertia(m, A, sg, cg);
     motion_terms(m, A, V, sg, cg);
     collector_springs(m, p5);

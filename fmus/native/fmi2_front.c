@@ -53,7 +53,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     PcsMemory mem;
     PcsInstance *c;
     char dir[480];
-    (void)visible; (void)guid; (void)logging;
+    (void)visible; (void)logging;
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
     host = (Host *)functions->allocateMemory(1, sizeof *host);
     if (!host) return NULL;
@@ -70,7 +70,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     mem.alloc = host_alloc;
     mem.release = host_release;
     mem.ctx = host;
-    c = pcs_instance_new(name, dir, &mem, host_log, host);
+    c = pcs_instance_new(name, guid, dir, &mem, host_log, host);
     if (!c) functions->freeMemory(host);
     return c;
 }

@@ -71,7 +71,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token,
     Host *host;
     PcsMemory mem;
     PcsInstance *c;
-    (void)token; (void)visible; (void)logging; (void)early_return; (void)required;
+    (void)visible; (void)logging; (void)early_return; (void)required;
     (void)n_required; (void)update;
     host = (Host *)calloc(1, sizeof *host);
     if (!host) return NULL;
@@ -86,7 +86,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String name, fmi3String token,
     mem.alloc = host_alloc;
     mem.release = host_release;
     mem.ctx = host;
-    c = pcs_instance_new(name, resources, &mem, host_log, host);
+    c = pcs_instance_new(name, token, resources, &mem, host_log, host);
     if (!c) free(host);
     return c;
 }

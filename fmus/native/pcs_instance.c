@@ -101,8 +101,21 @@ static void unload(PcsInstance *c)
     pcs_data_free(&c->data, &c->mem);
 }
 
-PcsInstance *pcs_instance_new(const char *name, const char *resources, const PcsMemory *mem,
-                              PcsLogger log, void *host)
+/* the token the host passed is the one this binary was built with (as the Modelica
+   Reference-FMUs check it) */
+static int own_token(PcsInstance *c, const char *token)
+{
+    if (token && strcmp(token, pcs_instantiation_token) == 0) return 0;
+    snprintf(c->msg, sizeof c->msg, "the instantiation token (FMI 2.0: GUID) %s%.200s%s is not "
+             "this FMU's \"%s\": the host read the modelDescription.xml of another FMU or "
+             "export", token ? "\"" : "", token ? token : "NULL", token ? "\"" : "",
+             pcs_instantiation_token);
+    pcs_report(c, PCS_ERROR, c->msg);
+    return -1;
+}
+
+PcsInstance *pcs_instance_new(const char *name, const char *token, const char *resources,
+                              const PcsMemory *mem, PcsLogger log, void *host)
 {
     PcsInstance *c;
     size_t len;
@@ -113,6 +126,10 @@ PcsInstance *pcs_instance_new(const char *name, const char *resources, const Pcs
     c->log = log;
     c->host = host;
     strncpy(c->name, name ? name : "", sizeof c->name - 1);
+    if (own_token(c, token) != 0) {
+        pcs_free(mem, c);
+        return NULL;
+    }
     len = resources ? strlen(resources) : 0;
     if (!len || len > sizeof c->data_path - 20) {
         pcs_report(c, PCS_ERROR, len ? "the resource folder's path is longer than 490 bytes"

@@ -44,9 +44,10 @@ typedef struct {
 } PcsInstance;
 
 /* the instance of the data file model.pcsdata in the folder resources (a native path);
-   NULL (the reason logged) when it cannot be read */
-PcsInstance *pcs_instance_new(const char *name, const char *resources, const PcsMemory *mem,
-                              PcsLogger log, void *host);
+   NULL (the reason logged) when token is not pcs_instantiation_token (the host read another
+   modelDescription.xml) or the data file cannot be read */
+PcsInstance *pcs_instance_new(const char *name, const char *token, const char *resources,
+                              const PcsMemory *mem, PcsLogger log, void *host);
 void pcs_instance_free(PcsInstance *c);
 int pcs_reset(PcsInstance *c, const char *call);
 /* phase changes: the start time (FMI 2.0 SetupExperiment, FMI 3.0 EnterInitializationMode),

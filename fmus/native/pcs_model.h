@@ -60,5 +60,8 @@ typedef struct {
 
 /* the models of this binary, NULL-terminated (model_table.c) */
 extern const PcsModelType *const pcs_model_table[];
+/* the guid (FMI 2.0) or instantiationToken (FMI 3.0) of the modelDescription.xml this binary
+   was built with (model_table.c): instantiation with another token is refused */
+extern const char pcs_instantiation_token[];
 
 #endif

@@ -199,13 +199,22 @@ COMMON_HEADERS = ("pcs_instance.h", "pcs_memory.h", "pcs_data.h", "pcs_model.h",
 TABLE_SOURCE = "model_table.c"
 
 
-def model_table(model: NativeModel) -> str:
-    """model_table.c: the models the FMU's binary holds, found by their data file's kind."""
+def model_table(model: NativeModel, token: str) -> str:
+    """model_table.c: the models the FMU's binary holds, found by their data file's kind, and
+    the instantiation token of its modelDescription.xml (pcs_model.h)."""
     names = ", ".join(f"&{t}" for t in model.tables)
     return ("/* The models of this FMU (written by pantocosim export-native). */\n"
             '#include "pcs_model.h"\n\n'
             + "".join(f"extern const PcsModelType {t};\n" for t in model.tables)
-            + f"\nconst PcsModelType *const pcs_model_table[] = {{{names}, NULL}};\n")
+            + f"\nconst PcsModelType *const pcs_model_table[] = {{{names}, NULL}};\n"
+            + f'const char pcs_instantiation_token[] = "{token}";\n')
+
+
+def instantiation_token(data: bytes) -> str:
+    """The guid (FMI 2.0) and instantiationToken (FMI 3.0) of a native FMU: its data file's
+    SHA-256 as a GUID, written into modelDescription.xml and compiled into the binary."""
+    h = hashlib.sha256(data).hexdigest()[:32]
+    return "{" + f"{h[:8]}-{h[8:12]}-{h[12:16]}-{h[16:20]}-{h[20:]}" + "}"
 @dataclass(frozen=True)
 class Front:
     """An FMI version's interface files and binary folders."""
@@ -283,12 +292,10 @@ def build_fmu(out: Path, model: NativeModel, identifier: str, name: str, descrip
         src.mkdir()
         for n, p in files.items():
             shutil.copyfile(p, src / n)
-        (src / TABLE_SOURCE).write_text(model_table(model))
         (root / "resources").mkdir()
         data = write_data(root / "resources" / DATA_FILE, kind, sections)
-        guid = "{" + str(hashlib.sha256(data).hexdigest()[:32]) + "}"
-        guid = guid[:9] + "-" + guid[9:13] + "-" + guid[13:17] + "-" + guid[17:21] + "-" \
-            + guid[21:]
+        guid = instantiation_token(data)
+        (src / TABLE_SOURCE).write_text(model_table(model, guid))
         if fmi == 2:
             text = model_description_fmi2(name, identifier, guid, description, variables,
                                           c_files, step)

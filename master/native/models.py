@@ -176,9 +176,9 @@ def pantograph_files(specs) -> list[str]:
 # ---------------------------------------------------------------------- nonlinear pantographs
 NONLINEAR = NativeModel(
     ("nonlinear_pantograph.c", "dsa380_rigid.c", "dsa380_flexible.c", "hht_dense.c",
-     "actuation.c"),
+     "actuation.c", "pcs_math.c"),
     ("nonlinear_pantograph_vars.h", "dsa380_rigid.h", "dsa380_flexible.h", "hht_dense.h",
-     "actuation.h"),
+     "actuation.h", "pcs_math.h"),
     ("pcs_dsa380_rigid", "pcs_dsa380_flexible"))
 #: the body of each nonlinear pantograph model: (data-file kind, its sections)
 NONLINEAR_BODIES = {Dsa380Model: ("dsa380-rigid", native_export.rigid_body),

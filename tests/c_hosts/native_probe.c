@@ -6,9 +6,13 @@
  *       each folder's resources/model.pcsdata through fmi2Instantiate; an accepted file is
  *       initialised and stepped three times; prints "refused <logged reason>" or
  *       "ran <status of the last step>" per folder
- *   native_probe conformance CATENARY_DIR PANTOGRAPH_DIR
- *       the FMI 2.0 and 3.0 call sequences below, "ok <check>" or "FAIL <check>: status
- *       <got>, standard <wanted>" per check; the exit status counts the failures
+ *   native_probe conformance PERCENT_DIR MODEL=DIR...
+ *       the FMI 2.0 and 3.0 call sequences below on each model of the table (MODEL: linear,
+ *       modal, lumped, dsa380-rigid, dsa380-flexible; DIR its unpacked FMU), each with its
+ *       own value references and inputs; "ok <model>: <check>" or "FAIL <model>: <check>:
+ *       status <got>, standard <wanted>" per check (model "any": the calls without an
+ *       instance); PERCENT_DIR is a copy of the linear catenary in a folder named with %41;
+ *       the exit status counts the failures
  *
  * The FMI 2.0 statuses: 0 OK, 2 Discard, 3 Error (the same numbers in FMI 3.0).
  */
@@ -21,24 +25,52 @@
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
 
+/* the token the probe's binary was built with (model_table.c, written by the test as
+   pantocosim export-native writes it) */
+extern const char pcs_instantiation_token[];
+
 #define DT 0.001
-/* the catenary's value references (catenary_vars.h) and the pantograph's (lumped_vars.h) */
-#define CAT_FORCE 120u
-#define CAT_HEIGHT 150u
-#define CAT_MODE 4u
-#define PAN_FORCE 1u
 #define FMI3_INT32 10000u
+#define FMI3_BOOLEAN 20000u
+#define FMI3_STRING 30000u
+
+/* a model of the table and what the walks give it: its value references (catenary_vars.h,
+   lumped_vars.h, nonlinear_pantograph_vars.h) and inputs */
+typedef struct {
+    const char *name;          /* as on the command line */
+    const char *dir;           /* its unpacked FMU */
+    unsigned output;           /* a Float64 output: the wire height, the contact height */
+    unsigned input;            /* the Float64 input: the contact force */
+    double force;              /* a contact force it steps under */
+    unsigned int_param;        /* an Integer parameter, fixed from initialisation on */
+    int int_valid;             /* a value it takes before initialisation */
+    int int_fixed;             /* every other value is refused (else int_bad's) */
+    int int_bad[3];            /* values it refuses */
+    int has_string;            /* a String variable of value reference 1 */
+} Model;
+
+/* the models of the table; a pantograph's start_mode is read when it is instantiated
+   (int_fixed: the exported one is the only value it takes) */
+static Model MODELS[] = {
+    {"linear", NULL, 150u, 120u, 150.0, 4u, 0, 0, {-1, 2, 0x7FFFFFFF}, 1},
+    {"modal", NULL, 150u, 120u, 150.0, 4u, 0, 0, {-1, 2, 0x7FFFFFFF}, 1},
+    {"lumped", NULL, 2u, 1u, 120.0, 1u, 0, 1, {0, 0, 0}, 1},
+    {"dsa380-rigid", NULL, 2u, 1u, 120.0, 1u, 0, 1, {0, 0, 0}, 0},
+    {"dsa380-flexible", NULL, 2u, 1u, 120.0, 1u, 0, 1, {0, 0, 0}, 0},
+};
+#define N_MODELS (sizeof MODELS / sizeof MODELS[0])
 
 static int failures;
 static char last_log[4096];
+static const char *scope = "any";    /* the model the checks are of */
 
 static void check(int got, int want, const char *what)
 {
     if (got == want) {
-        printf("ok %s\n", what);
+        printf("ok %s: %s\n", scope, what);
         return;
     }
-    printf("FAIL %s: status %d, standard %d\n", what, got, want);
+    printf("FAIL %s: %s: status %d, standard %d\n", scope, what, got, want);
     failures++;
 }
 
@@ -111,10 +143,16 @@ static const char *to_uri(const char *dir)
     return uri;
 }
 
+static fmi2Component instantiate2_as(const char *dir, const fmi2CallbackFunctions *cb,
+                                     const char *guid)
+{
+    return fmi2Instantiate("probe", fmi2CoSimulation, guid, to_uri(dir), cb, fmi2False,
+                           fmi2False);
+}
+
 static fmi2Component instantiate2(const char *dir, const fmi2CallbackFunctions *cb)
 {
-    return fmi2Instantiate("probe", fmi2CoSimulation, "", to_uri(dir), cb, fmi2False,
-                           fmi2False);
+    return instantiate2_as(dir, cb, pcs_instantiation_token);
 }
 
 static int start2(fmi2Component c)
@@ -151,7 +189,7 @@ static int probe_data(int n, char **dirs)
 
 static void null_instance2(void)
 {
-    fmi2ValueReference vr = CAT_FORCE;
+    fmi2ValueReference vr = 1;
     fmi2Real x = 0.0;
     fmi2FMUstate st = NULL;
     size_t size = 0;
@@ -171,10 +209,10 @@ static void null_instance2(void)
                "NULL");
 }
 
-static void before_initialisation2(const char *dir)
+static void before_initialisation2(const Model *m)
 {
-    fmi2Component c = instantiate2(dir, &CB_A);
-    fmi2ValueReference vr = CAT_HEIGHT, bad = 99999;
+    fmi2Component c = instantiate2(m->dir, &CB_A);
+    fmi2ValueReference vr = m->output, bad = 99999;
     fmi2Real x = 0.0;
     fmi2FMUstate st = NULL;
     check_true(c != NULL, "fmi2 Instantiate");
@@ -197,12 +235,12 @@ static void before_initialisation2(const char *dir)
     fmi2FreeInstance(c);
 }
 
-static void steps2(const char *dir)
+static void steps2(const Model *m)
 {
-    fmi2Component c = instantiate2(dir, &CB_A);
-    fmi2ValueReference F = CAT_FORCE, z = CAT_HEIGHT;
-    fmi2Real f = 150.0, bad[] = {NAN, INFINITY, -1.0, 1e300}, h[] = {NAN, -DT, 0.0, 1.5 * DT,
-                                                                      1e9, INFINITY};
+    fmi2Component c = instantiate2(m->dir, &CB_A);
+    fmi2ValueReference F = m->input, z = m->output;
+    fmi2Real f = m->force, bad[] = {NAN, INFINITY, -1.0, 1e300},
+             h[] = {NAN, -DT, 0.0, 1.2345 * DT, 1e9, INFINITY};
     fmi2Real z1 = 0.0, z2 = 1.0;
     fmi2FMUstate st = NULL, back = NULL;
     size_t size = 0, i;
@@ -258,11 +296,12 @@ static void steps2(const char *dir)
     fmi2FreeInstance(c);
 }
 
-static void failed_reset2(const char *dir)
+static void failed_reset2(const Model *m)
 {
     char path[1100], moved[1120];
+    const char *dir = m->dir;
     fmi2Component c = instantiate2(dir, &CB_A);
-    fmi2ValueReference vr = CAT_HEIGHT;
+    fmi2ValueReference vr = m->output;
     fmi2Real x;
     fmi2FMUstate st = NULL;
     fmi2Byte blob[64] = {0};
@@ -296,8 +335,8 @@ static unsigned long long fnv1a(const unsigned char *p, size_t n)
     return h;
 }
 
-/* a pantograph's serialised state into the catenary; a catenary state with a NaN time and
-   a checksum that matches it */
+/* the other model's serialised state into this one; a state of this one with a NaN time
+   and a checksum that matches it */
 static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
                             fmi2FMUstate sb)
 {
@@ -324,9 +363,9 @@ static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
     free(bb);
 }
 
-static void two_instances2(const char *cat, const char *pan)
+static void two_instances2(const Model *m, const Model *other)
 {
-    fmi2Component a = instantiate2(cat, &CB_A), b = instantiate2(pan, &CB_B);
+    fmi2Component a = instantiate2(m->dir, &CB_A), b = instantiate2(other->dir, &CB_B);
     fmi2FMUstate sa = NULL, sb = NULL;
     int k;
     if (!a || !b) {
@@ -355,12 +394,17 @@ static void two_instances2(const char *cat, const char *pan)
 
 /* ------------------------------------------------------------------ FMI 3.0 */
 
-static fmi3Instance instantiate3(const char *dir, fmi3Boolean event_mode)
+static fmi3Instance instantiate3_as(const char *dir, fmi3Boolean event_mode, const char *token)
 {
     char path[1100];
     snprintf(path, sizeof path, "%s/resources/", dir);
-    return fmi3InstantiateCoSimulation("probe", "", path, fmi3False, fmi3False, event_mode,
+    return fmi3InstantiateCoSimulation("probe", token, path, fmi3False, fmi3False, event_mode,
                                        fmi3False, NULL, 0, NULL, logger3, NULL);
+}
+
+static fmi3Instance instantiate3(const char *dir, fmi3Boolean event_mode)
+{
+    return instantiate3_as(dir, event_mode, pcs_instantiation_token);
 }
 
 static int start3(fmi3Instance c)
@@ -424,11 +468,12 @@ static const char *const CALL3[] = {
 
 /* the standard's status of each call in each phase (FMI 3.0, the state machine of
    co-simulation; a call not allowed in the current state "must return fmi3Error"): Get in
-   initialisation mode, step mode and terminated; Set of inputs and tunable parameters up to
-   step mode, of a fixed one (contact_mode) before step mode; FMU states in every phase but
-   after an Error that left no model; Reset in every phase. One refusal is the FMU's own: a
-   step-mode state is not set before the model is initialised (Error). */
-static int want3(int call, int phase)
+   initialisation mode, step mode and terminated (a String of a model that has none: Error);
+   Set of inputs and tunable parameters up to step mode, of a fixed one (contact_mode,
+   start_mode) before step mode; FMU states in every phase but after an Error that left no
+   model; Reset in every phase. One refusal is the FMU's own: a step-mode state is not set
+   before the model is initialised (Error). */
+static int want3(const Model *m, int call, int phase)
 {
     const int inst = phase == I3_INSTANTIATED, init = phase == I3_INIT,
               step = phase == I3_STEP, term = phase == I3_TERMINATED,
@@ -437,7 +482,8 @@ static int want3(int call, int phase)
     case C3_ENTER: return inst ? fmi3OK : fmi3Error;
     case C3_EXIT: return init ? fmi3OK : fmi3Error;
     case C3_STEP: case C3_TERMINATE: return step ? fmi3OK : fmi3Error;
-    case C3_GET: case C3_GET_TIME: case C3_GET_INT: case C3_GET_BOOL: case C3_GET_STRING:
+    case C3_GET_STRING: if (!m->has_string) return fmi3Error; /* fall through */
+    case C3_GET: case C3_GET_TIME: case C3_GET_INT: case C3_GET_BOOL:
         return (init || step || term) ? fmi3OK : fmi3Error;
     case C3_SET: return (inst || init || step) ? fmi3OK : fmi3Error;
     case C3_SET_INT: return (inst || init) ? fmi3OK : fmi3Error;
@@ -453,12 +499,13 @@ static int want3(int call, int phase)
 static fmi3Byte *saved_blob;
 static size_t saved_size;
 
-static int call3(fmi3Instance c, int call, fmi3FMUState own)
+static int call3(const Model *m, fmi3Instance c, int call, fmi3FMUState own)
 {
-    fmi3ValueReference z = CAT_HEIGHT, t = 0, F = CAT_FORCE, mode = FMI3_INT32 + CAT_MODE,
-                       np = FMI3_INT32 + 1, extrapolate = 20000u + 1, definition = 30000u + 1;
-    fmi3Float64 x = 0.0, f = 150.0;
-    fmi3Int32 i = 0, zero = 0;
+    fmi3ValueReference z = m->output, t = 0, F = m->input, mode = FMI3_INT32 + m->int_param,
+                       np = FMI3_INT32 + 1, extrapolate = FMI3_BOOLEAN + 1,
+                       definition = FMI3_STRING + 1;
+    fmi3Float64 x = 0.0, f = m->force;
+    fmi3Int32 i = 0, valid = m->int_valid;
     fmi3Boolean b = fmi3False;
     fmi3String str = NULL;
     fmi3FMUState st = NULL;
@@ -476,7 +523,7 @@ static int call3(fmi3Instance c, int call, fmi3FMUState own)
     case C3_GET_BOOL: return fmi3GetBoolean(c, &extrapolate, 1, &b, 1);
     case C3_GET_STRING: return fmi3GetString(c, &definition, 1, &str, 1);
     case C3_SET: return fmi3SetFloat64(c, &F, 1, &f, 1);
-    case C3_SET_INT: return fmi3SetInt32(c, &mode, 1, &zero, 1);
+    case C3_SET_INT: return fmi3SetInt32(c, &mode, 1, &valid, 1);
     case C3_GETSTATE:
         s = fmi3GetFMUState(c, &st);
         if (st) fmi3FreeFMUState(c, &st);
@@ -508,10 +555,11 @@ static int call3(fmi3Instance c, int call, fmi3FMUState own)
 
 /* every call in every phase, each on a fresh instance; then the instance goes on: after an
    Error that keeps the model a Reset brings it back, and it initialises and steps again */
-static void phases3(const char *dir)
+static void phases3(const Model *m)
 {
     int phase, call;
     char what[200];
+    const char *dir = m->dir;
     fmi3Instance c = instantiate3(dir, fmi3False);
     fmi3FMUState st = NULL;
     if (!c) return;
@@ -535,9 +583,9 @@ static void phases3(const char *dir)
             /* a state of this instance in step mode, taken by deserialising (possible in
                every phase with a model) */
             if (phase != I3_FAILED_RESET) fmi3DeserializeFMUState(c, saved_blob, saved_size, &own);
-            s = call3(c, call, own);
+            s = call3(m, c, call, own);
             snprintf(what, sizeof what, "fmi3 %s %s", CALL3[call], PHASE3[phase]);
-            check(s, want3(call, phase), what);
+            check(s, want3(m, call, phase), what);
             snprintf(what, sizeof what, "fmi3 after %s %s: Reset, initialisation and a step",
                      CALL3[call], PHASE3[phase]);
             if (own) fmi3FreeFMUState(c, &own);
@@ -551,9 +599,10 @@ static void phases3(const char *dir)
     saved_blob = NULL;
 }
 
-static void null_instance3(const char *dir)
+static void null_instance3(const Model *m)
 {
-    fmi3ValueReference F = CAT_FORCE;
+    const char *dir = m->dir;
+    fmi3ValueReference F = m->input;
     fmi3Float64 x = 0.0;
     fmi3Int32 i = 0;
     fmi3Boolean b = fmi3False;
@@ -591,12 +640,13 @@ static void null_instance3(const char *dir)
           "fmi3 NULL instance: SetDebugLogging");
     for (call = C3_UNSUPPORTED; call == C3_UNSUPPORTED; call++) {
         snprintf(what, sizeof what, "fmi3 NULL instance: %s", CALL3[call]);
-        check(call3(NULL, call, NULL), fmi3Error, what);
+        check(call3(m, NULL, call, NULL), fmi3Error, what);
     }
     fmi3FreeInstance(NULL);
     check_true(instantiate3(dir, fmi3True) == NULL, "fmi3 event mode refused: NULL");
-    check_true(fmi3InstantiateCoSimulation("probe", "", NULL, fmi3False, fmi3False, fmi3False,
-                                           fmi3False, NULL, 0, NULL, logger3, NULL) == NULL,
+    check_true(fmi3InstantiateCoSimulation("probe", pcs_instantiation_token, NULL, fmi3False,
+                                           fmi3False, fmi3False, fmi3False, NULL, 0, NULL,
+                                           logger3, NULL) == NULL,
                "fmi3 Instantiate without a resource path: NULL");
     check_true(instantiate3("/nowhere", fmi3False) == NULL, "fmi3 Instantiate of a missing "
                "folder: NULL");
@@ -606,17 +656,18 @@ static void null_instance3(const char *dir)
 }
 
 /* value references, array sizes, NULL arrays, values and steps the FMU cannot take */
-static void arguments3(const char *dir)
+static void arguments3(const Model *m)
 {
-    fmi3Instance c = instantiate3(dir, fmi3False);
-    fmi3ValueReference F = CAT_FORCE, z = CAT_HEIGHT, t0 = 0, bad[] = {99999, 9999, 10999,
-                       20999, 30999, 0xFFFFFFFFu}, two[2] = {CAT_HEIGHT, 99999},
-                       mode = FMI3_INT32 + CAT_MODE;
-    fmi3Float64 x = 0.0, xs[2] = {0.0, 0.0}, f = 150.0, z1 = 0.0, z2 = 1.0,
+    fmi3Instance c = instantiate3(m->dir, fmi3False);
+    fmi3ValueReference F = m->input, z = m->output, t0 = 0, bad[] = {99999, 9999, 10999,
+                       20999, 30999, 0xFFFFFFFFu}, two[2] = {m->output, 99999},
+                       mode = FMI3_INT32 + m->int_param;
+    fmi3Float64 x = 0.0, xs[2] = {0.0, 0.0}, f = m->force, z1 = 0.0, z2 = 1.0,
                 forces[] = {NAN, INFINITY, -INFINITY, -1.0, 1e300},
-                h[] = {NAN, -DT, 0.0, 1.5 * DT, 1e9, INFINITY, -INFINITY},
+                h[] = {NAN, -DT, 0.0, 1.2345 * DT, 1e9, INFINITY, -INFINITY},
                 times[] = {NAN, INFINITY, 0.5, -DT};
-    fmi3Int32 i32 = 0, modes[] = {-1, 2, 0x7FFFFFFF};
+    fmi3Int32 i32 = m->int_valid;
+    const int *modes = m->int_bad;
     fmi3FMUState st = NULL;
     size_t k;
     char what[160];
@@ -627,8 +678,8 @@ static void arguments3(const char *dir)
     check(fmi3SetFloat64(c, NULL, 0, NULL, 0), fmi3OK, "fmi3 SetFloat64 of nvr = 0, NULL arrays "
           "when instantiated");
     check(fmi3GetFMUState(c, NULL), fmi3Error, "fmi3 GetFMUState into a NULL pointer");
-    for (k = 0; k < sizeof modes / sizeof modes[0]; k++) {
-        snprintf(what, sizeof what, "fmi3 SetInt32 contact_mode = %d", modes[k]);
+    for (k = 0; k < 3; k++) {
+        snprintf(what, sizeof what, "fmi3 SetInt32 of the Integer parameter = %d", modes[k]);
         check(fmi3SetInt32(c, &mode, 1, &modes[k], 1), fmi3Error, what);
     }
     check(fmi3EnterInitializationMode(c, fmi3False, 0.0, NAN, fmi3False, 0.0), fmi3Error,
@@ -717,9 +768,9 @@ static void arguments3(const char *dir)
 }
 
 /* a step and start time away from 0 */
-static void start_time3(const char *dir)
+static void start_time3(const Model *m)
 {
-    fmi3Instance c = instantiate3(dir, fmi3False);
+    fmi3Instance c = instantiate3(m->dir, fmi3False);
     fmi3ValueReference t0 = 0;
     fmi3Float64 x = 0.0;
     if (!c) return;
@@ -734,9 +785,9 @@ static void start_time3(const char *dir)
 }
 
 /* serialised states: truncated, damaged, empty, garbage, another model's, a NaN time */
-static void serialised3(const char *cat, const char *pan)
+static void serialised3(const Model *m, const Model *other)
 {
-    fmi3Instance a = instantiate3(cat, fmi3False), b = instantiate3(pan, fmi3False);
+    fmi3Instance a = instantiate3(m->dir, fmi3False), b = instantiate3(other->dir, fmi3False);
     fmi3FMUState sa = NULL, sb = NULL, got = NULL;
     fmi3Byte *ba, *bb, junk[64];
     size_t na = 0, nb = 0;
@@ -764,7 +815,7 @@ static void serialised3(const char *cat, const char *pan)
           "NULL");
     check(fmi3SerializeFMUState(a, sa, ba, na), fmi3OK, "fmi3 SerializeFMUState");
     check(fmi3SerializeFMUState(b, sb, bb, nb), fmi3OK, "fmi3 SerializeFMUState of the "
-          "pantograph");
+          "other model");
     check(fmi3SerializeFMUState(a, sb, ba, na), fmi3Error, "fmi3 SerializeFMUState of another "
           "instance's state");
     check(fmi3SetFMUState(a, sb), fmi3Error, "fmi3 SetFMUState of another instance's state");
@@ -789,8 +840,8 @@ static void serialised3(const char *cat, const char *pan)
     check_true(got == NULL, "fmi3 no state from a refused one");
     check(fmi3DeserializeFMUState(a, ba, na, &got), fmi3OK, "fmi3 DeserializeFMUState");
     check(fmi3SetFMUState(a, got), fmi3OK, "fmi3 SetFMUState of a deserialised state");
-    check(fmi3SetFMUState(b, got), fmi3Error, "fmi3 SetFMUState of the catenary's state into "
-          "the pantograph");
+    check(fmi3SetFMUState(b, got), fmi3Error, "fmi3 SetFMUState of this model's state into "
+          "the other");
     fmi3FreeFMUState(a, &got);
     memcpy(ba + 40, &nan, 8);          /* the time (serialised layout: pcs_instance.c) */
     sum = fnv1a((const unsigned char *)ba + 40, na - 40);
@@ -806,32 +857,33 @@ static void serialised3(const char *cat, const char *pan)
     fmi3FreeInstance(b);
 }
 
-/* a pantograph: a step it cannot take is a Discard that leaves it usable */
-static void pantograph3(const char *dir)
+/* a step it cannot take is a Discard that leaves it usable */
+static void discards3(const Model *m)
 {
-    fmi3Instance c = instantiate3(dir, fmi3False);
-    fmi3ValueReference F = PAN_FORCE;
-    fmi3Float64 f = 100.0, huge = 1e300, nan = NAN;
+    fmi3Instance c = instantiate3(m->dir, fmi3False);
+    fmi3ValueReference F = m->input;
+    fmi3Float64 f = m->force, huge = 1e300, nan = NAN;
     if (!c) return;
     start3(c);
-    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3OK, "fmi3 pantograph SetFloat64");
-    check(step3(c, 0.0, 2e6), fmi3Discard, "fmi3 pantograph DoStep of 2e6 s");
-    check(step3(c, 0.0, INFINITY), fmi3Discard, "fmi3 pantograph DoStep of an infinite h");
+    check(fmi3SetFloat64(c, &F, 1, &f, 1), fmi3OK, "fmi3 SetFloat64 contact force");
+    check(step3(c, 0.0, 2e6), fmi3Discard, "fmi3 DoStep of 2e6 s");
+    check(step3(c, 0.0, INFINITY), fmi3Discard, "fmi3 DoStep of an infinite h");
     fmi3SetFloat64(c, &F, 1, &huge, 1);
-    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 pantograph DoStep under 1e300 N");
+    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 DoStep under 1e300 N");
     fmi3SetFloat64(c, &F, 1, &nan, 1);
-    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 pantograph DoStep under a NaN force");
+    check(step3(c, 0.0, DT), fmi3Discard, "fmi3 DoStep under a NaN force");
     fmi3SetFloat64(c, &F, 1, &f, 1);
-    check(step3(c, 0.0, DT), fmi3OK, "fmi3 pantograph DoStep after the Discards");
+    check(step3(c, 0.0, DT), fmi3OK, "fmi3 DoStep after the Discards");
     fmi3FreeInstance(c);
 }
 
 /* a Reset that fails (data file gone) leaves an instance that refuses everything but Reset
    and FreeInstance, without touching the missing model */
-static void failed_reset3(const char *dir)
+static void failed_reset3(const Model *m)
 {
+    const char *dir = m->dir;
     fmi3Instance c = instantiate3(dir, fmi3False);
-    fmi3ValueReference z = CAT_HEIGHT, t0 = 0;
+    fmi3ValueReference z = m->output, t0 = 0;
     fmi3Float64 x = 0.0;
     fmi3FMUState st = NULL;
     fmi3Byte blob[64] = {0};
@@ -860,34 +912,106 @@ static void failed_reset3(const char *dir)
     fmi3FreeInstance(c);
 }
 
-static void fmi3_sequences(const char *cat, const char *pan, const char *percent_dir)
+/* another GUID / instantiationToken than the binary's (one digit changed, empty, NULL):
+   NULL, with one message naming both */
+static void tokens(const Model *m)
 {
-    fmi3Instance c;
-    null_instance3(cat);
-    c = instantiate3(percent_dir, fmi3False);
-    check_true(c != NULL, "fmi3 a resource path holding %41 is taken as it is");
-    fmi3FreeInstance(c);
-    phases3(cat);
-    arguments3(cat);
-    start_time3(cat);
-    serialised3(cat, pan);
-    pantograph3(pan);
-    failed_reset3(cat);
+    char wrong[128];
+    const char *given[] = {wrong, "", NULL};
+    char what[160];
+    size_t k;
+    snprintf(wrong, sizeof wrong, "%s", pcs_instantiation_token);
+    wrong[1] = wrong[1] == '0' ? '1' : '0';
+    for (k = 0; k < 3; k++) {
+        const char *label = k == 0 ? "another" : k == 1 ? "an empty" : "a NULL";
+        last_log[0] = '\0';
+        snprintf(what, sizeof what, "fmi2 Instantiate with %s GUID: NULL", label);
+        check_true(instantiate2_as(m->dir, &CB_A, given[k]) == NULL, what);
+        snprintf(what, sizeof what, "fmi2 Instantiate with %s GUID: the message names both",
+                 label);
+        check_true(strstr(last_log, pcs_instantiation_token) != NULL
+                   && strstr(last_log, given[k] ? given[k] : "NULL") != NULL, what);
+        last_log[0] = '\0';
+        snprintf(what, sizeof what, "fmi3 InstantiateCoSimulation with %s instantiationToken: "
+                 "NULL", label);
+        check_true(instantiate3_as(m->dir, fmi3False, given[k]) == NULL, what);
+        snprintf(what, sizeof what, "fmi3 InstantiateCoSimulation with %s instantiationToken: "
+                 "the message names both", label);
+        check_true(strstr(last_log, pcs_instantiation_token) != NULL
+                   && strstr(last_log, given[k] ? given[k] : "NULL") != NULL, what);
+    }
+    check_true(pools[0].live == 0 && pools[0].foreign == 0, "fmi2 a refused token leaves no "
+               "block behind");
+}
+
+/* a pantograph's start_mode, the only value it takes (read through FMI 2.0, whose Get is
+   allowed when instantiated); the values it refuses around it */
+static int read_int_param(Model *m)
+{
+    fmi2Component c = instantiate2(m->dir, &CB_A);
+    fmi2ValueReference vr = m->int_param;
+    fmi2Integer v = 0;
+    if (!c) return -1;
+    if (fmi2GetInteger(c, &vr, 1, &v) != fmi2OK) v = -1;
+    fmi2FreeInstance(c);
+    if (v < 0) return -1;
+    m->int_valid = v;
+    m->int_bad[0] = v - 1;
+    m->int_bad[1] = v + 1;
+    m->int_bad[2] = 0x7FFFFFFF;
+    return 0;
+}
+
+/* both walks over one model; other: another model (foreign FMU states) */
+static void walk(Model *m, const Model *other)
+{
+    scope = m->name;
+    if (m->int_fixed && read_int_param(m) != 0) {
+        check_true(0, "the Integer parameter read when instantiated");
+        return;
+    }
+    tokens(m);
+    before_initialisation2(m);
+    steps2(m);
+    failed_reset2(m);
+    two_instances2(m, other);
+    null_instance3(m);
+    phases3(m);
+    arguments3(m);
+    start_time3(m);
+    serialised3(m, other);
+    discards3(m);
+    failed_reset3(m);
 }
 
 int main(int argc, char **argv)
 {
+    size_t i, k;
+    int j;
+    fmi3Instance c;
     if (argc >= 2 && strcmp(argv[1], "data") == 0) return probe_data(argc - 2, argv + 2);
-    if (argc != 5 || strcmp(argv[1], "conformance") != 0) {
+    if (argc < 4 || strcmp(argv[1], "conformance") != 0) {
         fprintf(stderr, "usage: see the comment at the top of native_probe.c\n");
         return 2;
     }
+    for (j = 3; j < argc; j++) {
+        const char *eq = strchr(argv[j], '=');
+        for (k = 0; eq && k < N_MODELS; k++)
+            if (strlen(MODELS[k].name) == (size_t)(eq - argv[j])
+                && strncmp(argv[j], MODELS[k].name, (size_t)(eq - argv[j])) == 0)
+                MODELS[k].dir = eq + 1;
+    }
+    for (k = 0; k < N_MODELS; k++)
+        if (!MODELS[k].dir) {
+            fprintf(stderr, "no folder given for model %s\n", MODELS[k].name);
+            return 2;
+        }
     null_instance2();
-    before_initialisation2(argv[2]);
-    steps2(argv[2]);
-    failed_reset2(argv[2]);
-    two_instances2(argv[2], argv[3]);
-    fmi3_sequences(argv[2], argv[3], argv[4]);
+    scope = "linear";
+    c = instantiate3(argv[2], fmi3False);
+    check_true(c != NULL, "fmi3 a resource path holding %41 is taken as it is");
+    fmi3FreeInstance(c);
+    for (i = 0; i < N_MODELS; i++) walk(&MODELS[i], &MODELS[(i + 1) % N_MODELS]);
     printf("failures: %d\n", failures);
     return failures;
 }
