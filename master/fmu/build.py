@@ -151,6 +151,9 @@ def _build_one(module: str, source: str, project_files: list[Path], dest: Path,
     made = builder.build_FMU(script, dest=script_dir / "out", project_files=project_files,
                              **build.options)
     install_export_library(Path(made), library, fmi)
+    from pantocosim.master.fmu.check import check_binary_fmu   # check imports this module
+
+    check_binary_fmu(Path(made), "build-fmus", str(dest))      # as built: runs here or fails
     tmp = dest.with_name(dest.stem + ".part.fmu")  # moved whole beside dest, then into place
     shutil.move(str(made), tmp)
     tmp.replace(dest)

@@ -272,8 +272,13 @@ class FmuInstance:
         self.api = APIS[self.md.fmiVersion]
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.slave = self.api.make(self.md, unzip, instance_name)
         _LOGS[instance_name] = []
+        try:
+            self.slave = self.api.make(self.md, unzip, instance_name)
+        except Exception as exc:     # fmpy: no library for this platform, one that fails to load
+            raise FmuError(f"{self.name} ({self.path}): its binary cannot be loaded: "
+                           f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
+                           instance=self.name) from None
         self.fatal = False
         self._call("instantiate", lambda: self.api.instantiate(self.slave, instance_name))
         self.t = 0.0
