@@ -45,7 +45,7 @@ from pantocosim.fmi.pantograph_ports import VARIABLES as PANTOGRAPH_VARIABLES
 from pantocosim.fmi.slave_base import bundled_stamp
 from pantocosim.interaction.pantograph_start import static_start_on_laws
 from pantocosim.master.fmu.build import CATENARY_FMU, FMU_NAMES, build_fmus
-from pantocosim.master.fmu.check import check_binary_fmu
+from pantocosim.master.fmu.binary_check import check_binary_fmu
 from pantocosim.master.fmu.runtime import fmi_version
 from pantocosim.master.run.checks import analysis_window
 from pantocosim.master.scenario import load_scenario, require_port_contact

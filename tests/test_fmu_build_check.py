@@ -42,3 +42,27 @@ def test_a_run_refuses_an_fmu_whose_binary_cannot_be_loaded(tmp_path):
     message = str(refused.value)
     assert "pantograph_1" in message and str(fmu) in message
     assert "its binary cannot be loaded" in message and len(message.splitlines()) == 1
+
+
+def test_an_fmu_built_after_a_python_fmu_ran_in_the_process_has_its_binary(tmp_path):
+    """A Python FMU run in a process puts its own copy of pythonfmu first on sys.path; an
+    FMU built afterwards in that process still takes the installed builder and its
+    binaries."""
+    import subprocess
+    import sys
+
+    (first,) = build.build_fmus(tmp_path / "a", only=["en50318-2mass"], quiet=True)
+    script = (
+        "import zipfile\n"
+        "from pathlib import Path\n"
+        "from pantocosim.master.fmu.runtime import FmuInstance\n"
+        f"FmuInstance(Path({str(first)!r}), 'p1')\n"
+        "from pantocosim.master.fmu.build import build_fmus\n"
+        f"(later,) = build_fmus(Path({str(tmp_path / 'b')!r}), only=['dsa380-rigid'],"
+        " quiet=True)\n"
+        "print(sorted(n for n in zipfile.ZipFile(later).namelist()"
+        " if n.startswith('binaries/')))\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)          # a fresh process: pytest's has pythonfmu
+    assert done.returncode == 0, done.stderr
+    assert "binaries/linux64/Dsa380Rigid.so" in done.stdout, done.stdout

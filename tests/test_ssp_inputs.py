@@ -104,7 +104,7 @@ def test_the_ssp_command_refuses_an_fmu_that_cannot_run_or_lies(tmp_path, case, 
 
 
 def test_a_consistent_fmu_passes_the_checks(tmp_path):
-    from pantocosim.master.fmu.check import check_binary_fmu
+    from pantocosim.master.fmu.binary_check import check_binary_fmu
 
     check_binary_fmu(fake_fmu(tmp_path / "a.fmu", slave="class Panto(X):\n    pass\n"), "fmu")
     check_binary_fmu(fake_fmu(tmp_path / "b.fmu", version="3.0", binaries={

@@ -35,6 +35,7 @@ from pantocosim.core.registry import Registry
 from pantocosim.core.stamp import UNBUNDLED, package_stamp
 from pantocosim.fmi.front import FRONTS
 from pantocosim.fmi.slave_base import STAMP_FILE, bundled_stamp
+from pantocosim.master.fmu.binary_check import check_binary_fmu
 from pantocosim.master.fmu.embedding import compile_export_library, install_export_library
 
 #: pantograph FMU name (the preset) -> slave class name
@@ -151,8 +152,6 @@ def _build_one(module: str, source: str, project_files: list[Path], dest: Path,
     made = builder.build_FMU(script, dest=script_dir / "out", project_files=project_files,
                              **build.options)
     install_export_library(Path(made), library, fmi)
-    from pantocosim.master.fmu.check import check_binary_fmu   # check imports this module
-
     check_binary_fmu(Path(made), "build-fmus", str(dest))      # as built: runs here or fails
     tmp = dest.with_name(dest.stem + ".part.fmu")  # moved whole beside dest, then into place
     shutil.move(str(made), tmp)

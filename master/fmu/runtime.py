@@ -27,6 +27,11 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse.linalg  # noqa: F401
 import numba  # noqa: F401
+# So are the installed pythonfmu and pythonfmu3: a Python FMU loaded in this process puts its
+# resources, with its own copy of them (no binaries inside), first on sys.path, and an FMU
+# built later in the process would take that copy's builder and carry no binary.
+import pythonfmu  # noqa: F401
+import pythonfmu3  # noqa: F401
 
 from pantocosim.core.errors import PantocosimError
 from pantocosim.core.registry import Registry

@@ -26,7 +26,8 @@ import numpy as np
 from pantocosim.catenary.analysis import central_window
 from pantocosim.core.errors import ParameterError
 from pantocosim.fmi.catenary_ports import MAX_SUPPORTS
-from pantocosim.master.fmu.check import check_binary_fmu, read_fmu
+from pantocosim.master.fmu.binary_check import check_binary_fmu
+from pantocosim.master.fmu.check import read_fmu
 from pantocosim.master.ssp import scenario_support_x
 from pantocosim.master.results.statistics import contact_statistics
 
@@ -68,7 +69,7 @@ def refuse(module: str, exc: Exception):
 
 def check_fmu(module: str, fmu: str | Path, field: str) -> None:
     """Refuse (:func:`refuse`) an FMU file that cannot run here or is not what its model
-    description says (:func:`pantocosim.master.fmu.check.check_binary_fmu`)."""
+    description says (:func:`pantocosim.master.fmu.binary_check.check_binary_fmu`)."""
     try:
         read_fmu(Path(fmu), field, None)
         check_binary_fmu(Path(fmu), field)
