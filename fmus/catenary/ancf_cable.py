@@ -26,7 +26,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .structure import scatter_add
+from ..core.scatter import scatter_add
+
 
 #: 5-point Gauss-Legendre on [0, 1]: exact for the degree-8 integrands of force and tangent
 _GX, _GW = np.polynomial.legendre.leggauss(5)

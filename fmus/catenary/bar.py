@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .structure import scatter_add
+from ..core.scatter import scatter_add
+
 
 
 def mass_matrix(mass: float) -> np.ndarray:

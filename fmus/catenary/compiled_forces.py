@@ -22,6 +22,7 @@ from numba import njit
 
 from ..core.affine_kernels import sym_product
 from ..core.newmark_residual import iterate_kinematics, weighted_residual
+from ..core.scatter import scatter_add
 from .ancf_cable import GAUSS_W, GAUSS_XI, CableSet, cable_forces
 from .bar import BarSet, bar_forces
 from .ground_spring import GroundSprings
@@ -148,7 +149,7 @@ def _cables_into(x, cab, want_K, f, K, gx, gw):
         for i in range(12):
             f[dofs[e, i]] += fe[e, i]
     if want_K:
-        _scatter_blocks(K, pos, Ke.reshape(ne * 144))
+        scatter_add(K, pos, Ke.reshape(ne * 144))
 
 
 @njit(cache=True)
@@ -165,7 +166,7 @@ def _bars_into(x, bar, want_K, f, K):
         for i in range(6):
             f[dofs[b, i]] += fb[b, i]
     if want_K and nb:
-        _scatter_blocks(K, pos, Kb.reshape(nb * 36))
+        scatter_add(K, pos, Kb.reshape(nb * 36))
 
 
 @njit(cache=True)
@@ -175,16 +176,7 @@ def _springs_into(x, spr, want_K, f, K):
     for i in range(d.shape[0]):
         f[d[i]] += k[i] * (x[d[i]] - anchor[i])
     if want_K:
-        _scatter_blocks(K, pos, k)
-
-
-@njit(cache=True)
-def _scatter_blocks(out, idx, vals):
-    """out[idx[i]] += vals[i] for idx[i] >= 0 (:func:`~.structure.scatter_add`)."""
-    for i in range(idx.shape[0]):
-        j = idx[i]
-        if j >= 0:
-            out[j] += vals[i]
+        scatter_add(K, pos, k)
 
 
 @njit(cache=True)

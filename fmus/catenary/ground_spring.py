@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .structure import scatter_add
+from ..core.scatter import scatter_add
+
 
 
 class GroundSprings:

@@ -25,10 +25,10 @@ from ..core.banded import BandedCholesky
 from ..core.errors import ConvergenceError
 from ..core.lowrank import ColumnCache, LowRankSolve
 from ..core.model import Evaluation
+from ..core.scatter import scatter_add
 from .linear_droppers import LinearDroppers
 from .model import CatenaryModel
 from .statics import point_load_vector
-from .structure import scatter_add
 
 
 class LinearCatenary(CatenaryModel):

@@ -33,13 +33,13 @@ from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
 from ..core.newmark_residual import iterate_kinematics, weighted_residual
+from ..core.scatter import scatter_add
 from .compiled_forces import CompiledForces, _inertia_and_rest
 from .contact_point import ContactLocator, ContactPoint
 from .definition import CatenaryDefinition, load_catenary
 from .mesh import CatenaryMesh, build_mesh
 from .statics import (InitialConfiguration, point_load_vector, solve_initial_configuration,
                       solve_static)
-from .structure import scatter_add
 
 
 #: the fill above which a band diagonal of M or C is multiplied whole in the residual (the

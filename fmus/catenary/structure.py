@@ -25,14 +25,6 @@ import scipy.sparse as sp
 from numba import njit
 
 
-@njit(cache=True)
-def scatter_add(out, idx, vals):
-    """out[idx[i]] += vals[i] for idx[i] >= 0 (idx and vals flattened alike)."""
-    for i in range(idx.shape[0]):
-        k = idx[i]
-        if k >= 0:
-            out[k] += vals[i]
-
 
 @njit(cache=True)
 def _band_storage(data, src, dst, rows, n):

@@ -359,7 +359,7 @@ class AffineHHT:
         c_f = self._coef[2]
         corr = self._corr
         for (dofs, w), Fk in zip(self._loads, F):
-            kern.scatter_add(dofs, w, c_f * Fk, corr)
+            kern.scatter_scaled(dofs, w, c_f * Fk, corr)
         if self._removed is not None:
             rows, s = self._removed
             self.form.unilateral.vectors.combine(s * b_delta[rows], rows, out=corr)

@@ -147,7 +147,7 @@ def _advance_products(P, P_next, KDelta, MD, h, cq, cv, c_a, c_v):
 
 
 @njit(cache=True)
-def scatter_add(dofs, weights, c, out):
+def scatter_scaled(dofs, weights, c, out):
     """out[dofs] += c * weights (repeated dofs add up)."""
     for i in range(dofs.shape[0]):
         out[dofs[i]] += c * weights[i]

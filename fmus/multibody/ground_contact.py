@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.scatter import scatter_add
 from .component import Component
-from .pattern import scatter_add
 
 
 class GroundContact(Component):

@@ -17,6 +17,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numba import njit
 
+from ..core.scatter import scatter_add
+
+
 
 @njit(cache=True)
 def _find(indptr, indices, rows, cols, out):
@@ -31,15 +34,6 @@ def _find(indptr, indices, rows, cols, out):
             else:
                 hi = mid
         out[k] = lo if lo < indptr[r + 1] and indices[lo] == c else -1
-
-
-@njit(cache=True)
-def scatter_add(data, pos, vals):
-    """data[pos[k]] += vals[k] for pos[k] >= 0 (pos and vals flattened alike)."""
-    for k in range(pos.shape[0]):
-        p = pos[k]
-        if p >= 0:
-            data[p] += vals[k]
 
 
 def factorize_csr(S):

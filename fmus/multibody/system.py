@@ -31,9 +31,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from pantocosim.core.model import Evaluation, SecondOrderModel
+from pantocosim.core.scatter import scatter_add
 
 from .constraint_set import ConstraintSet, orthonormality
-from .pattern import Pattern, PatternMatrix, factorize_csr, scatter_add
+from .pattern import Pattern, PatternMatrix, factorize_csr
 from .triplets import Triplets
 
 NODE_DOFS = 12
