@@ -89,7 +89,7 @@ def test_no_host_process_aborts_at_exit(fmus, host, tmp_path):  # noqa: F811
         script.call("step", "A", repr(k * 1e-3), 1e-3)
     script.call("terminate", "A")
     script.call("free", "A")
-    outcomes["c_host"] = _run_many([[str(host)]] * PROCESSES["c_host"], tmp_path,
+    outcomes["c_host"] = _run_many([[str(host), "script"]] * PROCESSES["c_host"], tmp_path,
                                    env=clean_env(tmp_path), stdin=script.text())
     outcomes["libcosim"] = _run_many([[sys.executable, "-c", LIBCOSIM_RUN, str(fmu)]] *
                                      PROCESSES["libcosim"], tmp_path)
