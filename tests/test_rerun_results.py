@@ -97,8 +97,12 @@ def test_a_ctrl_c_while_the_staging_folder_is_made_leaves_it_locked(tmp_path, mo
 
     monkeypatch.setattr(output_folder, "own", interrupted_own)
     out = tmp_path / "out"
-    with pytest.raises(KeyboardInterrupt) as stopped:
-        OutputFolder(out)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # xdist ignores it
+    try:
+        with pytest.raises(KeyboardInterrupt) as stopped:
+            OutputFolder(out)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     (staging,) = made
     assert (staging / OWNER).is_file()
     del stopped
