@@ -79,3 +79,20 @@ def test_scaling_line_reports_growth_and_modes():
              "growth_per_doubling": [2.0], "growth_first_to_last": 2.0}
     assert "10 -> 20 spans 2.00x" in bench.scaling_line("modal", short)
     assert bench.SCALING_SPANS_OF["modal"][-1] < bench.SCALING_SPANS[-1]
+
+
+def test_a_runs_peak_memory_is_its_own_not_its_parents():
+    """A run started by a large process (the bench, a campaign driver) reports its own peak
+    resident memory: ru_maxrss carries the parent's across exec, VmHWM does not."""
+    import subprocess
+    import sys
+
+    parent = bytearray(500 * 2**20)
+    parent[::4096] = b"\1" * len(parent[::4096])            # resident, not only reserved
+    code = ("import resource\nfrom pantocosim.master.run.outcome import peak_memory_mb\n"
+            "print(peak_memory_mb(), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)")
+    own, inherited = map(float, subprocess.run([sys.executable, "-c", code], check=True,
+                                               capture_output=True, text=True).stdout.split())
+    assert inherited > 500.0                                 # the premise: ru_maxrss inherits
+    assert 10.0 < own < 400.0
+    del parent

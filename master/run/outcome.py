@@ -121,12 +121,9 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
         summary["coupling_iterations_max"] = int(np.max(coupling))
     if result.coupling_tolerance is not None:
         summary["coupling_tolerance_n"] = float(result.coupling_tolerance)
-    try:
-        import resource
-
-        summary["peak_memory_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    except (ImportError, OSError):  # pragma: no cover - not on every platform
-        pass
+    peak = peak_memory_mb()
+    if peak is not None:
+        summary["peak_memory_mb"] = peak
     summary["completed"] = result.error is None
     if result.error is not None:
         summary["error"] = str(result.error)
@@ -170,3 +167,20 @@ def finish(result: RunResult, out_dir: Path | None, plots: bool = True,
         with writing("file", out / "summary.json"):
             write_json(out / "summary.json", summary)
     return summary
+
+
+def peak_memory_mb() -> float | None:
+    """This process's peak resident memory in MB: ``VmHWM`` of /proc/self/status on Linux
+    (``ru_maxrss`` keeps the peak of the process that started this one, a bench or a
+    campaign driver, across exec), ``ru_maxrss`` elsewhere; None where neither exists."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not on every platform
+        return None
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
