@@ -1,11 +1,9 @@
 #!/usr/bin/env python3
-"""The tables of docs/performance.md from the JSON files ``pantocosim bench`` wrote:
-the en50318-300 figures (nonlinear rows from ``docs/bench.json``, linear and modal rows from
-``docs/bench-fast-models.json``) and the growth with the number of spans
-(``docs/bench.json``).
+"""The tables of docs/performance.md from the JSON file ``pantocosim bench --out`` wrote
+(``docs/bench.json``): the en50318-300 figures of the nonlinear, linear and modal models and
+the growth with the number of spans.
 
-    python scripts/performance_tables.py [--bench docs/bench.json]
-        [--fast docs/bench-fast-models.json] [--page docs/performance.md]
+    python scripts/performance_tables.py [--bench docs/bench.json] [--page docs/performance.md]
 
 It prints the tables and writes them between the page's markers; a figure the JSON does
 not hold (the step percentiles of an older bench) is a dash.
@@ -20,10 +18,10 @@ from pathlib import Path
 from _tables import markdown_table, write_between
 
 ROOT = Path(__file__).resolve().parents[1]
-#: (row label of the first row, JSON file option, case) of the en50318-300 table
-MODELS = (("nonlinear", "bench", "en50318-300"),
-          ("linear", "fast", "en50318-300-linear"),
-          ("modal, 100 Hz", "fast", "en50318-300-modal"))
+#: (row label of the first row, case) of the en50318-300 table
+MODELS = (("nonlinear", "en50318-300"),
+          ("linear", "en50318-300-linear"),
+          ("modal, 100 Hz", "en50318-300-modal"))
 #: coupling key of the bench JSON -> its label
 COUPLINGS = {"monolithic": "monolithic", "explicit": "explicit (FMUs)",
              "implicit": "implicit (FMUs)"}
@@ -40,12 +38,11 @@ def _ms(value) -> str:
     return f"{value:.2f}" if value < 10 else f"{value:.1f}"
 
 
-def figures_table(bench: dict, fast: dict) -> str:
+def figures_table(bench: dict) -> str:
     """The en50318-300 table: one row per catenary model and coupling."""
-    files = {"bench": bench, "fast": fast}
     rows = []
-    for label, source, case in MODELS:
-        runs = files[source]["cases"][case]
+    for label, case in MODELS:
+        runs = bench["cases"][case]
         for i, (key, coupling) in enumerate(COUPLINGS.items()):
             r = runs[key]
             model = f"{label} ({r['catenary_dofs']})" if i == 0 else label.split(",")[0]
@@ -57,7 +54,8 @@ def figures_table(bench: dict, fast: dict) -> str:
 
 def spans_table(bench: dict) -> str:
     """Wall time per simulated second against the number of spans (AVE line, monolithic)."""
-    cost, dofs = bench["scaling_cost_per_simulated_s"], bench["scaling_catenary_dofs"]
+    nonlinear = bench["scaling"]["nonlinear"]
+    cost, dofs = nonlinear["cost_per_simulated_s"], nonlinear["catenary_dofs"]
     rows = [(spans, f"{dofs[spans]:,}", f"{cost[spans]:.1f} s")
             for spans in sorted(cost, key=int)]
     return markdown_table(SPANS_HEAD, rows)
@@ -66,12 +64,10 @@ def spans_table(bench: dict) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--bench", type=Path, default=ROOT / "docs" / "bench.json")
-    p.add_argument("--fast", type=Path, default=ROOT / "docs" / "bench-fast-models.json")
     p.add_argument("--page", type=Path, default=ROOT / "docs" / "performance.md")
     args = p.parse_args(argv)
     bench = json.loads(args.bench.read_text())
-    fast = json.loads(args.fast.read_text())
-    tables = {"figures": figures_table(bench, fast), "spans": spans_table(bench)}
+    tables = {"figures": figures_table(bench), "spans": spans_table(bench)}
     for name, text in tables.items():
         print(text)
         write_between(args.page, (f"<!-- {name}:start -->", f"<!-- {name}:end -->"), text)

@@ -210,8 +210,8 @@ def test_factor_policy_study(tmp_path):
 
 def test_performance_page_tables_are_the_bench_files(tmp_path):
     """docs/performance.md's tables are what scripts/performance_tables.py writes from
-    docs/bench.json and docs/bench-fast-models.json: rewriting them changes nothing, and a
-    changed figure in a bench file changes the page."""
+    docs/bench.json: rewriting them changes nothing, and a changed figure in the bench file
+    changes the page."""
     page = tmp_path / "performance.md"
     shutil.copy(ROOT / "docs" / "performance.md", page)
     script("performance_tables.py", "--page", page, cwd=tmp_path)
