@@ -26,7 +26,7 @@ from pantocosim.master.run.setup import scenario_pantograph
 from pantocosim.master.scenario import load_scenario
 from test_fmu_cosim import cli, scenario_with
 from test_native_fmus import DISCARD, ERROR, OK, host, required, run_host  # noqa: F401
-from test_native_fmus import rewritten, slave, status_of
+from test_native_fmus import assert_states_roll_back, rewritten, slave, status_of
 
 pytestmark = pytest.mark.slow
 
@@ -188,23 +188,8 @@ def test_fmu_states_roll_back_and_serialize(exported):
     _, folder, _ = exported
     fmu, vr = slave(folder, IDENTIFIER)
     F, out = [vr["contact_force"]], [vr["contact_height"], vr["contact_velocity"]]
-    fmu.setReal(F, [130.0])
-    fmu.doStep(0.0, DT)
-    state = fmu.getFMUstate()
-    blob = fmu.serializeFMUstate(state)
-    runs = []
-    for _ in range(2):
-        for i in range(1, 20):
-            fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
-            fmu.doStep(i * DT, DT)
-        runs.append(fmu.getReal(out))
-        fmu.setFMUstate(state)
-    fmu.setFMUstate(fmu.deSerializeFMUstate(blob))
-    for i in range(1, 20):
-        fmu.setReal(F, [130.0 + 40.0 * np.sin(i / 3.0)])
-        fmu.doStep(i * DT, DT)
-    assert runs[0] == runs[1] == fmu.getReal(out)
-    assert runs[0][0] != pytest.approx(0.0)
+    _, _, heights = assert_states_roll_back(fmu, F, out, 20)
+    assert heights[0] != pytest.approx(0.0)
 
 
 def test_fmi3_fmu_validates_and_gives_the_fmi2_numbers(exported, tmp_path):
