@@ -335,6 +335,17 @@ static unsigned long long fnv1a(const unsigned char *p, size_t n)
     return h;
 }
 
+/* a serialised state given a NaN time and the checksum that matches it (the layout of
+   pcs_instance.c: the FNV-1a at byte 32 covers the time at byte 40 and the state after it) */
+static void with_nan_time(unsigned char *state, size_t n)
+{
+    double nan = NAN;
+    unsigned long long sum;
+    memcpy(state + 40, &nan, 8);
+    sum = fnv1a(state + 40, n - 40);
+    memcpy(state + 32, &sum, 8);
+}
+
 /* the other model's serialised state into this one; a state of this one with a NaN time
    and a checksum that matches it */
 static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
@@ -343,8 +354,6 @@ static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
     size_t na = 0, nb = 0;
     fmi2Byte *ba, *bb;
     fmi2FMUstate got = NULL;
-    double nan = NAN;
-    unsigned long long sum;
     fmi2SerializedFMUstateSize(a, sa, &na);
     fmi2SerializedFMUstateSize(b, sb, &nb);
     ba = (fmi2Byte *)calloc(na, 1);
@@ -353,9 +362,7 @@ static void foreign_states2(fmi2Component a, fmi2FMUstate sa, fmi2Component b,
     fmi2SerializeFMUstate(b, sb, bb, nb);
     check(fmi2DeSerializeFMUstate(a, bb, nb, &got), fmi2Error, "fmi2 DeSerializeFMUstate of "
           "another model's state");
-    memcpy(ba + 40, &nan, 8);          /* the time (serialised layout: pcs_instance.c) */
-    sum = fnv1a((const unsigned char *)ba + 40, na - 40);
-    memcpy(ba + 32, &sum, 8);
+    with_nan_time((unsigned char *)ba, na);
     check(fmi2DeSerializeFMUstate(a, ba, na, &got), fmi2Error, "fmi2 DeSerializeFMUstate of a "
           "state with a NaN time");
     check_true(got == NULL, "fmi2 no state from a refused one");
@@ -791,8 +798,6 @@ static void serialised3(const Model *m, const Model *other)
     fmi3FMUState sa = NULL, sb = NULL, got = NULL;
     fmi3Byte *ba, *bb, junk[64];
     size_t na = 0, nb = 0;
-    double nan = NAN;
-    unsigned long long sum;
     if (!a || !b) {
         check_true(0, "fmi3 two instances");
         return;
@@ -843,9 +848,7 @@ static void serialised3(const Model *m, const Model *other)
     check(fmi3SetFMUState(b, got), fmi3Error, "fmi3 SetFMUState of this model's state into "
           "the other");
     fmi3FreeFMUState(a, &got);
-    memcpy(ba + 40, &nan, 8);          /* the time (serialised layout: pcs_instance.c) */
-    sum = fnv1a((const unsigned char *)ba + 40, na - 40);
-    memcpy(ba + 32, &sum, 8);
+    with_nan_time((unsigned char *)ba, na);
     check(fmi3DeserializeFMUState(a, ba, na, &got), fmi3Error, "fmi3 DeserializeFMUState of a "
           "state with a NaN time");
     check_true(got == NULL, "fmi3 no state from a NaN time");
