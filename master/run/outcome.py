@@ -11,6 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
+try:
+    import resource
+except ImportError:  # pragma: no cover - not on every platform
+    resource = None
+
 from pantocosim.core.errors import Interrupted
 from pantocosim.master.results import plots as P
 from pantocosim.master.output_folder import writing
@@ -179,8 +184,6 @@ def peak_memory_mb() -> float | None:
                 return float(line.split()[1]) / 1024.0
     except OSError:
         pass
-    try:
-        import resource
-    except ImportError:  # pragma: no cover - not on every platform
+    if resource is None:  # pragma: no cover - not on every platform
         return None
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
