@@ -32,7 +32,6 @@ from numba import njit
 from ..core.banded import BandedCholesky, SparseBand
 from ..core.errors import ParameterError
 from ..core.model import Evaluation, SecondOrderModel
-from ..core.newmark_residual import iterate_kinematics, weighted_residual
 from ..core.scatter import scatter_add
 from .compiled_forces import CompiledForces, _inertia_and_rest
 from .contact_point import ContactLocator, ContactPoint
@@ -291,14 +290,13 @@ class CatenaryModel(SecondOrderModel):
                                            self._dropper_C, f, S.free, self.weight, loads)
         return self._evaluation(Ma, f_rest, K, slack_now)
 
-    #: :meth:`iterate` in one compiled call (:class:`CompiledForces`)
-    fused_iterate = True
+    @property
+    def fused_iterate(self) -> bool:
+        """:meth:`iterate` in one compiled call (:class:`CompiledForces`) when every part
+        of the structure has a compiled kernel."""
+        return self._compiled is not None
 
     def iterate(self, t, q, q_p, v_p, c_a, c_v, c_f, hist, inputs, tangent):
-        if self._compiled is None:
-            a, v = iterate_kinematics(q, q_p, v_p, c_a, c_v)
-            ev = self.evaluate(t, q, v, a, inputs, tangent)
-            return (ev, a, v) + weighted_residual(ev.f_inertia, ev.f_rest, hist, c_f)
         a, v, Ma, f_rest, R, r_max, scale, K, slack_now = self._compiled.iterate(
             q, q_p, v_p, c_a, c_v, c_f, hist, tangent, self._M_band, self._C_band,
             self._slack_committed, self._dropper_free, self._dropper_C, self.weight,

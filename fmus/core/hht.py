@@ -304,7 +304,7 @@ class HHTIntegrator:
         self._linear: ClosedFormStep | None = None
         self._linear_info = StepReport(iterations=1)
         #: the model evaluates an iterate's residual itself (:meth:`~.model.SecondOrderModel.iterate`)
-        self._fused = bool(type(model).fused_iterate)
+        self._fused = bool(model.fused_iterate)
         self._bind_linear()
 
     def _bind_linear(self) -> None:
