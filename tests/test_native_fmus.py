@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 from tooling import required
 
+from pantocosim.master.native.build import CFLAGS
+
 ROOT = Path(__file__).resolve().parents[1]
-CFLAGS = ["-std=c99", "-O3", "-ffp-contract=off", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 STEPS, DT = 600, 0.001
 
 
@@ -51,12 +52,10 @@ def exported(prepared, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
-    from pantocosim.master.native.host import HOST_NAME, host_sources
+    from pantocosim.master.native.host import build_host
 
-    exe = tmp_path_factory.mktemp("host") / HOST_NAME
-    subprocess.run([required("gcc", "gcc"), *CFLAGS, "-o", str(exe),
-                    *map(str, host_sources()), "-ldl", "-lm"], check=True)
-    return exe
+    required("gcc", "gcc")
+    return build_host(tmp_path_factory.mktemp("host"))
 
 
 def run_host(exe, args, tmp_path, wrapper=()):

@@ -110,15 +110,10 @@ def objdump_fma(lib) -> int:
 
 
 def host_exe(tmp_path):
-    from test_native_fmus import CFLAGS
+    from pantocosim.master.native.host import build_host
 
-    from pantocosim.master.native.host import HOST_NAME, host_sources
-
-    exe = tmp_path / HOST_NAME
-    if not exe.exists():
-        subprocess.run([required("gcc", "gcc"), *CFLAGS, "-o", str(exe),
-                        *map(str, host_sources()), "-ldl", "-lm"], check=True)
-    return exe
+    required("gcc", "gcc")
+    return build_host(tmp_path)
 
 
 # ----------------------------------------------- the binaries this machine runs, bit for bit
